@@ -1,0 +1,660 @@
+"""Raw session reader: session.yaml and impacts.csv of one test session folder."""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import hashlib
+import io
+import math
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path, PurePosixPath, PureWindowsPath
+
+import yaml
+
+__all__ = [
+    "SessionError",
+    "SessionWarning",
+    "BallType",
+    "SessionMeta",
+    "ImpactRow",
+    "Session",
+    "read_session",
+    "file_sha256",
+    "REQUIRED_COLUMNS",
+    "OPTIONAL_COLUMNS",
+    "GATE_COLUMNS",
+]
+
+SESSION_FILE = "session.yaml"
+IMPACTS_FILE = "impacts.csv"
+
+GATE_COLUMNS = ("gate_in_1_s", "gate_in_2_s", "gate_out_2_s", "gate_out_1_s")
+REQUIRED_COLUMNS = ("impact_id", "ball", "trace") + GATE_COLUMNS
+OPTIONAL_COLUMNS = ("mass_g", "note")
+
+IMPACT_ID_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
+ISO_DATE_PATTERN = re.compile(r"\d{4}-\d{2}-\d{2}")
+
+MASS_MIN_G = 1.0  # [g] exclusive lower bound of a plausible ball mass
+MASS_MAX_G = 1000.0  # [g] exclusive upper bound of a plausible ball mass
+MASS_TYPICAL_MIN_G = 40.0  # [g] below this a warning (tennis balls are 56-59.4 g)
+MASS_TYPICAL_MAX_G = 70.0  # [g] above this a warning
+DEFAULT_MAINS_HZ = 50.0  # [Hz] default `daq.mains_hz`
+FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the timer sanity bound
+MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
+
+_KNOWN_SECTION_KEYS = {
+    "plate": {"polarity"},
+    "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
+    "gates": {"spacing_m", "resolution_s"},
+}
+_KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m"}
+
+
+class SessionError(ValueError):
+    """Session-level fault; ``str(e)`` is the one-line message for the user."""
+
+
+class SessionWarning(UserWarning):
+    """Usable but suspect session metadata (e.g. a ball mass outside 40-70 g)."""
+
+
+@dataclass(frozen=True)
+class BallType:
+    """One ball type of a session (a key of ``balls`` in session.yaml)."""
+
+    key: str
+    label: str
+    mass_kg: float  # [kg]
+    diameter_m: float | None  # [m], None when not given
+    kb0_N_m: float | None  # [N/m] fixed kB(0) of the model, None = estimate it
+
+
+@dataclass(frozen=True)
+class SessionMeta:
+    """Rig and ball metadata of a session (session.yaml)."""
+
+    session_id: str
+    date: str  # ISO date, YYYY-MM-DD
+    operator: str
+    description: str
+    polarity: int  # +1: compressive force gives positive voltage, -1: negative
+    sample_rate_hz: float  # [Hz] default for traces without one
+    adc_range_v: tuple[float, float]  # [V] ADC input range (lo, hi)
+    gate_spacing_m: float  # [m] distance between gate 1 and gate 2
+    gate_resolution_s: float  # [s] timer resolution
+    balls: dict[str, BallType]
+    mains_hz: float  # [Hz] mains frequency, optional `daq.mains_hz`, default 50
+    synthetic: bool  # optional top-level `synthetic`, default False
+    raw: dict  # the parsed YAML, for the archive
+
+
+@dataclass
+class ImpactRow:
+    """One row of impacts.csv."""
+
+    impact_id: str
+    ball: str
+    trace: str  # trace path as written, relative to the session folder
+    gate_in_1_s: float  # [s] NaN when empty or unreadable
+    gate_in_2_s: float  # [s]
+    gate_out_2_s: float  # [s]
+    gate_out_1_s: float  # [s]
+    mass_kg: float  # [kg] row override (mass_g column) or the ball type's mass
+    note: str
+    line: int  # 1-based line number in impacts.csv (header is line 1)
+    problems: list[str] = field(default_factory=list)  # impact-level faults, empty if none
+
+
+@dataclass
+class Session:
+    """A raw session folder: metadata and the impact rows."""
+
+    path: Path
+    meta: SessionMeta
+    impacts: list[ImpactRow]
+
+    def trace_path(self, row: ImpactRow) -> Path:
+        """
+        Path of an impact's trace file.
+
+        Parameters
+        ----------
+        row : ImpactRow
+            An impact of this session.
+
+        Returns
+        -------
+        Path
+            ``self.path / row.trace`` (backslashes in the written path are
+            taken as folder separators).
+        """
+        return self.path / _normalise_trace(row.trace)
+
+
+# --------------------------------------------------------------------------- YAML
+
+
+class _SessionYamlLoader(yaml.SafeLoader):
+    """Safe loader that keeps dates as strings and rejects duplicate keys."""
+
+
+_SessionYamlLoader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:timestamp"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+
+
+def _construct_mapping_no_duplicates(loader, node):
+    loader.flatten_mapping(node)
+    seen: dict = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        try:
+            first = seen.get(key)
+        except TypeError:  # unhashable key: construct_mapping reports it
+            continue
+        if first is not None:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key {key!r} (first given on line {first})", key_node.start_mark
+            )
+        seen[key] = key_node.start_mark.line + 1
+    return loader.construct_mapping(node, deep=True)
+
+
+_SessionYamlLoader.add_constructor("tag:yaml.org,2002:map", _construct_mapping_no_duplicates)
+
+
+def _decode_utf8(data: bytes, file: str) -> str:
+    """Decode UTF-8 (a BOM is dropped); SessionError naming the line of a bad byte."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise SessionError(
+            f"{file}: line {line}: not valid UTF-8 (byte 0x{data[exc.start]:02x}); save the file as UTF-8"
+        ) from None
+
+
+def _read_bytes(path: Path, file: str, what: str) -> bytes:
+    if not path.exists():
+        raise SessionError(f"{file}: file not found ({what})")
+    if not path.is_file():
+        raise SessionError(f"{file}: is not a file ({what})")
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except OSError as exc:
+        raise SessionError(f"{file}: cannot read: {exc.strerror or exc}") from None
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _load_yaml(path: Path, file: str) -> dict:
+    text = _decode_utf8(_read_bytes(path, file, "every session folder needs a session.yaml"), file)
+    try:
+        data = yaml.load(text, Loader=_SessionYamlLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"line {mark.line + 1}: " if mark is not None else ""
+        problem = exc.problem or exc.context or "syntax error"
+        raise SessionError(f"{file}: {where}invalid YAML: {_one_line(problem)}") from None
+    except yaml.YAMLError as exc:
+        raise SessionError(f"{file}: invalid YAML: {_one_line(exc)}") from None
+    if data is None:
+        raise SessionError(f"{file}: file is empty (expected a mapping with session_id, date, plate, daq, gates, balls)")
+    if not isinstance(data, dict):
+        raise SessionError(f"{file}: top level must be a mapping of keys (session_id, date, ...), got a {type(data).__name__}")
+    return data
+
+
+# ------------------------------------------------------------------ value checks
+
+
+def _require(mapping: dict, key: str, dotted: str, file: str):
+    if key not in mapping or mapping[key] is None:
+        raise SessionError(f"{file}: missing required key '{dotted}'")
+    return mapping[key]
+
+
+def _section(data: dict, key: str, file: str) -> dict:
+    value = _require(data, key, key, file)
+    if not isinstance(value, dict):
+        raise SessionError(f"{file}: key '{key}' must be a mapping, got {value!r}")
+    return value
+
+
+def _to_float(value) -> float | None:
+    """Float of a YAML number (or a numeric string such as '1e-6'); None if not numeric/finite."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        number = float(value)
+    elif isinstance(value, str):
+        try:
+            number = float(value.strip())
+        except ValueError:
+            return None
+    else:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _number(value, dotted: str, file: str, *, positive: bool = False) -> float:
+    number = _to_float(value)
+    if number is None or (positive and number <= 0):
+        kind = "a positive number" if positive else "a number"
+        raise SessionError(f"{file}: key '{dotted}' must be {kind}, got {value!r}")
+    return number
+
+
+def _text(value, dotted: str, file: str) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, (dict, list)):
+        raise SessionError(f"{file}: key '{dotted}' must be text, got {value!r}")
+    return str(value)
+
+
+def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> None:
+    unknown = [str(k) for k in mapping if k not in known]
+    if unknown:
+        warnings.warn(
+            f"{file}: unknown key(s) {', '.join(repr(f'{prefix}.{k}') for k in unknown)} "
+            f"(kept in raw, not used; known: {', '.join(sorted(known))})",
+            SessionWarning,
+            stacklevel=4,
+        )
+
+
+def _parse_ball(key: str, spec, file: str) -> BallType:
+    prefix = f"balls.{key}"
+    if not isinstance(spec, dict):
+        raise SessionError(f"{file}: key '{prefix}' must be a mapping with at least mass_g, got {spec!r}")
+    mass_g = _number(_require(spec, "mass_g", f"{prefix}.mass_g", file), f"{prefix}.mass_g", file)
+    if not MASS_MIN_G < mass_g < MASS_MAX_G:
+        raise SessionError(
+            f"{file}: key '{prefix}.mass_g' must be in ({MASS_MIN_G:g}, {MASS_MAX_G:g}) g, got {spec['mass_g']!r}"
+        )
+    if not MASS_TYPICAL_MIN_G <= mass_g <= MASS_TYPICAL_MAX_G:
+        warnings.warn(
+            f"{file}: key '{prefix}.mass_g' = {mass_g:g} g is outside the usual "
+            f"{MASS_TYPICAL_MIN_G:g}-{MASS_TYPICAL_MAX_G:g} g of a tennis ball",
+            SessionWarning,
+            stacklevel=3,
+        )
+    diameter_m = None
+    if spec.get("diameter_mm") is not None:
+        diameter_m = _number(spec["diameter_mm"], f"{prefix}.diameter_mm", file, positive=True) / 1000.0
+    kb0_N_m = None
+    if spec.get("kb0_kN_m") is not None:
+        kb0_N_m = _number(spec["kb0_kN_m"], f"{prefix}.kb0_kN_m", file, positive=True) * 1000.0
+    label = _text(spec.get("label"), f"{prefix}.label", file) or key
+    _warn_unknown(spec, _KNOWN_BALL_KEYS, prefix, file)
+    return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m)
+
+
+def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
+    # session_id
+    session_id_value = _require(data, "session_id", "session_id", file)
+    if isinstance(session_id_value, (dict, list, bool)):
+        raise SessionError(f"{file}: key 'session_id' must be text, got {session_id_value!r}")
+    session_id = str(session_id_value)
+    if session_id != folder_name:
+        hint = " (quote it in the YAML)" if not isinstance(session_id_value, str) else ""
+        raise SessionError(
+            f"{file}: key 'session_id' is {session_id!r} but the session folder is named {folder_name!r}; "
+            f"they must be equal{hint}"
+        )
+    # date
+    date_value = _require(data, "date", "date", file)
+    date = str(date_value).strip() if isinstance(date_value, str) else None
+    ok = date is not None and ISO_DATE_PATTERN.fullmatch(date) is not None
+    if ok:
+        try:
+            datetime.date.fromisoformat(date)
+        except ValueError:
+            ok = False
+    if not ok:
+        raise SessionError(f"{file}: key 'date' must be an ISO date YYYY-MM-DD, got {date_value!r}")
+
+    plate = _section(data, "plate", file)
+    polarity_value = _require(plate, "polarity", "plate.polarity", file)
+    polarity_number = _to_float(polarity_value)
+    if polarity_number not in (1.0, -1.0):
+        raise SessionError(f"{file}: key 'plate.polarity' must be 1 or -1, got {polarity_value!r}")
+    _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
+
+    daq = _section(data, "daq", file)
+    sample_rate_hz = _number(
+        _require(daq, "sample_rate_hz", "daq.sample_rate_hz", file), "daq.sample_rate_hz", file, positive=True
+    )
+    adc_value = _require(daq, "adc_range_v", "daq.adc_range_v", file)
+    adc = [_to_float(v) for v in adc_value] if isinstance(adc_value, (list, tuple)) else []
+    if len(adc) != 2 or None in adc or not adc[0] < adc[1]:
+        raise SessionError(
+            f"{file}: key 'daq.adc_range_v' must be two numbers [lo, hi] with lo < hi, got {adc_value!r}"
+        )
+    mains_hz = DEFAULT_MAINS_HZ
+    if daq.get("mains_hz") is not None:
+        mains_hz = _number(daq["mains_hz"], "daq.mains_hz", file, positive=True)
+    _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
+
+    gates = _section(data, "gates", file)
+    spacing_m = _number(_require(gates, "spacing_m", "gates.spacing_m", file), "gates.spacing_m", file, positive=True)
+    if spacing_m > MAX_GATE_SPACING_M:
+        warnings.warn(
+            f"{file}: key 'gates.spacing_m' = {spacing_m:g} m is larger than {MAX_GATE_SPACING_M:g} m "
+            "(is it given in mm?)",
+            SessionWarning,
+            stacklevel=3,
+        )
+    resolution_s = _number(
+        _require(gates, "resolution_s", "gates.resolution_s", file), "gates.resolution_s", file, positive=True
+    )
+    # A ball at FAST_BALL_SPEED_M_S crosses the gate spacing in spacing/speed; a timer
+    # tick as long as that cannot time anything (this is a unit mistake, e.g. us as s).
+    transit_fast_s = spacing_m / FAST_BALL_SPEED_M_S
+    if resolution_s >= transit_fast_s:
+        raise SessionError(
+            f"{file}: key 'gates.resolution_s' must be much smaller than the gate transit time "
+            f"(< {transit_fast_s:g} s for spacing {spacing_m:g} m), got {gates['resolution_s']!r}"
+        )
+    if resolution_s > 0.01 * transit_fast_s:
+        warnings.warn(
+            f"{file}: key 'gates.resolution_s' = {resolution_s:g} s gives more than 1 % speed error "
+            f"for a {FAST_BALL_SPEED_M_S:g} m/s ball over {spacing_m:g} m",
+            SessionWarning,
+            stacklevel=3,
+        )
+    _warn_unknown(gates, _KNOWN_SECTION_KEYS["gates"], "gates", file)
+
+    balls_value = _require(data, "balls", "balls", file)
+    if not isinstance(balls_value, dict) or not balls_value:
+        raise SessionError(f"{file}: key 'balls' must be a mapping of ball types (key: {{mass_g: ...}}), got {balls_value!r}")
+    balls: dict[str, BallType] = {}
+    for key_value, spec in balls_value.items():
+        key = str(key_value)
+        if not IMPACT_ID_PATTERN.fullmatch(key):
+            raise SessionError(f"{file}: ball key {key!r} under 'balls' must match [A-Za-z0-9_-]+")
+        if key in balls:
+            raise SessionError(f"{file}: ball key {key!r} is given twice under 'balls'")
+        balls[key] = _parse_ball(key, spec, file)
+
+    synthetic = data.get("synthetic", False)
+    if synthetic is None:
+        synthetic = False
+    if not isinstance(synthetic, bool):
+        raise SessionError(f"{file}: key 'synthetic' must be true or false, got {synthetic!r}")
+
+    return SessionMeta(
+        session_id=session_id,
+        date=date,
+        operator=_text(data.get("operator"), "operator", file),
+        description=_text(data.get("description"), "description", file),
+        polarity=int(polarity_number),
+        sample_rate_hz=sample_rate_hz,
+        adc_range_v=(adc[0], adc[1]),
+        gate_spacing_m=spacing_m,
+        gate_resolution_s=resolution_s,
+        balls=balls,
+        mains_hz=mains_hz,
+        synthetic=synthetic,
+        raw=data,
+    )
+
+
+# ------------------------------------------------------------------ impacts.csv
+
+
+def _normalise_trace(trace: str) -> str:
+    return trace.replace("\\", "/")
+
+
+def _parse_gate(cell: str, column: str, problems: list[str]) -> float:
+    text = cell.strip()
+    if not text:
+        problems.append(f"missing gate time {column}")
+        return math.nan
+    try:
+        value = float(text)
+    except ValueError:
+        problems.append(f"non-numeric gate time {column}: {text!r}")
+        return math.nan
+    if not math.isfinite(value):
+        problems.append(f"non-finite gate time {column}: {text!r}")
+        return math.nan
+    if value < 0:
+        problems.append(f"negative gate time {column}: {text}")
+    return value
+
+
+def _check_gate_order(gates: dict[str, float], cells: dict[str, str], problems: list[str]) -> None:
+    pairs = (
+        ("gate_in_1_s", "gate_in_2_s", True),
+        ("gate_in_2_s", "gate_out_2_s", False),
+        ("gate_out_2_s", "gate_out_1_s", True),
+    )
+    for first, second, strict in pairs:
+        a, b = gates[first], gates[second]
+        if math.isnan(a) or math.isnan(b):
+            continue
+        if (a >= b) if strict else (a > b):
+            relation = "earlier than" if strict else "no later than"
+            problems.append(
+                f"gate times out of order: {first} ({cells[first].strip()}) must be {relation} "
+                f"{second} ({cells[second].strip()})"
+            )
+
+
+def _parse_mass(cell: str, ball: BallType, problems: list[str], where: str) -> float:
+    text = cell.strip()
+    if not text:
+        return ball.mass_kg
+    try:
+        mass_g = float(text)
+    except ValueError:
+        problems.append(f"non-numeric mass_g: {text!r}")
+        return math.nan
+    if not math.isfinite(mass_g):
+        problems.append(f"non-finite mass_g: {text!r}")
+        return math.nan
+    if mass_g <= 0:
+        problems.append(f"non-positive mass_g: {text}")
+        return math.nan
+    if not MASS_MIN_G < mass_g < MASS_MAX_G:
+        problems.append(f"implausible mass_g: {text} (must be in ({MASS_MIN_G:g}, {MASS_MAX_G:g}) g)")
+        return math.nan
+    if not MASS_TYPICAL_MIN_G <= mass_g <= MASS_TYPICAL_MAX_G:
+        warnings.warn(
+            f"{where}: mass_g {text} g is outside the usual {MASS_TYPICAL_MIN_G:g}-{MASS_TYPICAL_MAX_G:g} g "
+            "of a tennis ball",
+            SessionWarning,
+            stacklevel=4,
+        )
+    return mass_g / 1000.0
+
+
+def _check_trace(cell: str, session_dir: Path, problems: list[str]) -> None:
+    trace = cell.strip()
+    if not trace:
+        problems.append("missing trace path")
+        return
+    normalised = _normalise_trace(trace)
+    if PurePosixPath(normalised).is_absolute() or PureWindowsPath(trace).drive:
+        problems.append(f"trace path escapes the session folder (absolute path): {trace}")
+        return
+    root = session_dir.resolve()
+    try:
+        full = (root / normalised).resolve()
+    except (OSError, RuntimeError) as exc:  # symlink loops
+        problems.append(f"trace path cannot be resolved: {trace} ({exc})")
+        return
+    if full == root or not full.is_relative_to(root):
+        problems.append(f"trace path escapes the session folder: {trace}")
+        return
+    if not full.exists():
+        problems.append(f"trace file not found: {trace}")
+    elif not full.is_file():
+        problems.append(f"trace path is not a file: {trace}")
+
+
+def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
+    path = session_dir / IMPACTS_FILE
+    file = str(path)
+    data = _read_bytes(path, file, "every session folder needs an impacts.csv")
+    if not data.strip():
+        raise SessionError(
+            f"{file}: file is empty (expected a header row with columns {', '.join(REQUIRED_COLUMNS)})"
+        )
+    text = _decode_utf8(data, file)
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    rows: list[ImpactRow] = []
+    first_line: dict[str, int] = {}
+    header: list[str] | None = None
+    index: dict[str, int] = {}
+    previous_line_num = 0
+    while True:
+        line = previous_line_num + 1
+        try:
+            record = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise SessionError(f"{file}: line {reader.line_num}: malformed CSV: {exc}") from None
+        previous_line_num = reader.line_num
+        if not record or all(not cell.strip() for cell in record) and len(record) <= 1:
+            continue  # blank line
+        if header is None:
+            header = [cell.strip() for cell in record]
+            duplicated = sorted({c for c in header if header.count(c) > 1})
+            if duplicated:
+                raise SessionError(f"{file}: line {line}: duplicate column(s) in header: {', '.join(duplicated)}")
+            missing = [c for c in REQUIRED_COLUMNS if c not in header]
+            if missing:
+                raise SessionError(
+                    f"{file}: line {line}: missing required column(s): {', '.join(missing)} "
+                    f"(header has: {', '.join(header)})"
+                )
+            unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+            if unknown:
+                warnings.warn(
+                    f"{file}: line {line}: unknown column(s) ignored: {', '.join(unknown)}",
+                    SessionWarning,
+                    stacklevel=3,
+                )
+            index = {name: i for i, name in enumerate(header)}
+            continue
+        if len(record) != len(header):
+            raise SessionError(f"{file}: line {line}: expected {len(header)} fields, got {len(record)}")
+        cells = {name: record[i] for name, i in index.items()}
+        impact_id = cells["impact_id"].strip()
+        if not IMPACT_ID_PATTERN.fullmatch(impact_id):
+            raise SessionError(
+                f"{file}: line {line}: impact_id {impact_id!r} is not valid "
+                "(allowed: letters, digits, '_' and '-', at least one)"
+            )
+        if impact_id in first_line:
+            raise SessionError(f"{file}: line {line}: impact_id {impact_id!r} duplicates line {first_line[impact_id]}")
+        first_line[impact_id] = line
+        ball_key = cells["ball"].strip()
+        if ball_key not in meta.balls:
+            raise SessionError(
+                f"{file}: line {line}: ball {ball_key!r} is not defined in {SESSION_FILE} balls "
+                f"(valid: {', '.join(meta.balls)})"
+            )
+        problems: list[str] = []
+        gates = {column: _parse_gate(cells[column], column, problems) for column in GATE_COLUMNS}
+        _check_gate_order(gates, cells, problems)
+        mass_kg = _parse_mass(cells.get("mass_g", ""), meta.balls[ball_key], problems, f"{file}: line {line}")
+        trace = cells["trace"].strip()
+        _check_trace(trace, session_dir, problems)
+        rows.append(
+            ImpactRow(
+                impact_id=impact_id,
+                ball=ball_key,
+                trace=trace,
+                gate_in_1_s=gates["gate_in_1_s"],
+                gate_in_2_s=gates["gate_in_2_s"],
+                gate_out_2_s=gates["gate_out_2_s"],
+                gate_out_1_s=gates["gate_out_1_s"],
+                mass_kg=mass_kg,
+                note=cells.get("note", "").strip(),
+                line=line,
+                problems=problems,
+            )
+        )
+    if header is None:
+        raise SessionError(
+            f"{file}: file is empty (expected a header row with columns {', '.join(REQUIRED_COLUMNS)})"
+        )
+    if not rows:
+        raise SessionError(f"{file}: no impact rows (only the header)")
+    return rows
+
+
+# ---------------------------------------------------------------------- public
+
+
+def read_session(path) -> Session:
+    """
+    Read a raw session folder (session.yaml and impacts.csv), without writing anything.
+
+    Parameters
+    ----------
+    path : str or Path
+        The session folder ``raw/<session_id>``; its name must equal ``session_id``.
+
+    Returns
+    -------
+    Session
+        Metadata (rates in [Hz], ADC range in [V], gate spacing [m], resolution [s],
+        ball masses [kg]) and one :class:`ImpactRow` per impact, gate times in [s].
+        Impact-level faults (missing/bad gate times, bad mass override, missing or
+        escaping trace path, trace file not found) are listed in ``ImpactRow.problems``.
+
+    Raises
+    ------
+    SessionError
+        A session-level fault, with a one-line message naming the file, the key or
+        line, and what is wrong.
+
+    Warns
+    -----
+    SessionWarning
+        Usable but suspect metadata (mass outside 40-70 g, unknown keys or columns).
+    """
+    session_dir = Path(path)
+    if not session_dir.is_dir():
+        raise SessionError(f"{session_dir}: session folder not found")
+    yaml_path = session_dir / SESSION_FILE
+    data = _load_yaml(yaml_path, str(yaml_path))
+    meta = _parse_meta(data, session_dir.resolve().name, str(yaml_path))
+    impacts = _read_impacts(session_dir, meta)
+    return Session(path=session_dir, meta=meta, impacts=impacts)
+
+
+def file_sha256(path) -> str:
+    """
+    SHA-256 digest of a file's bytes, for provenance in the archive.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    str
+        Hex digest (64 characters).
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
