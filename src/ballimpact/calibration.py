@@ -1,0 +1,241 @@
+"""Per-impact force-plate calibration from the impulse, and the ball's motion from the force."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import cumulative_trapezoid
+
+from .contact import contact_samples
+
+__all__ = [
+    "ContactSummary",
+    "calibration_factor",
+    "contact_summary",
+    "force_from_voltage",
+    "integrate_motion",
+    "voltage_impulse",
+]
+
+
+def _positive(name: str, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} must be positive and finite, got {value!r}")
+    return v
+
+
+def _time_and_values(time_s, values, name: str):
+    t = np.asarray(time_s, dtype=float).ravel()
+    y = np.asarray(values, dtype=float).ravel()
+    if t.shape != y.shape:
+        raise ValueError(f"time_s and {name} must have the same length, got {t.size} and {y.size}")
+    if t.size < 2:
+        raise ValueError(f"need at least 2 samples of {name}, got {t.size}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise ValueError(f"time_s and {name} must be finite")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError("time_s must be strictly increasing")
+    return t, y
+
+
+def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float) -> float:
+    """Trapezium integral of the voltage over the contact [start, end].
+
+    The pieces between the sub-sample start (end) and the neighbouring sample
+    use the linearly interpolated voltage at the start (end). The paper's
+    integral of V dt from 0 to TC (section 2 in Goodwill & Haake 2004).
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times, strictly increasing [s].
+    voltage_V : array_like
+        Conditioned voltage [V].
+    start_s, end_s : float
+        Contact start and end, inside the trace [s].
+
+    Returns
+    -------
+    float
+        Integral of V over the contact [V s].
+    """
+    t, v = _time_and_values(time_s, voltage_V, "voltage_V")
+    t_rel, v_in = contact_samples(t, v, float(start_s), float(end_s), include_ends=True)
+    return float(np.trapezoid(v_in, t_rel))
+
+
+def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg: float,
+                       vin_m_s: float, vout_m_s: float) -> float:
+    """Calibration factor kCAL of one impact from its impulse.
+
+    kCAL = m (VB + VB') / integral of V dt over the contact, trapezium rule with
+    sub-sample end pieces (section 2 in Goodwill & Haake 2004). The ball's
+    momentum changes by m (VB + VB') because the rebound is opposite to the
+    inbound direction.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times, strictly increasing [s].
+    voltage_V : array_like
+        Conditioned voltage (positive for compression) [V].
+    start_s, end_s : float
+        Contact start and end [s].
+    mass_kg : float
+        Ball mass [kg].
+    vin_m_s, vout_m_s : float
+        Inbound speed VB and rebound speed VB' (both positive) [m/s].
+
+    Returns
+    -------
+    float
+        kCAL [N/V].
+
+    Raises
+    ------
+    ValueError
+        For a non-positive mass or inbound speed, a negative rebound speed, or
+        a voltage integral that is not positive.
+    """
+    m = _positive("mass_kg", mass_kg)
+    vin = _positive("vin_m_s", vin_m_s)
+    vout = float(vout_m_s)
+    if not math.isfinite(vout) or vout < 0:
+        raise ValueError(f"vout_m_s must be non-negative and finite, got {vout_m_s!r}")
+    integral = voltage_impulse(time_s, voltage_V, start_s, end_s)
+    if not integral > 0:
+        raise ValueError(f"the voltage integral over the contact is not positive ({integral:.3g} V s)")
+    return m * (vin + vout) / integral
+
+
+def force_from_voltage(voltage_V, kcal_N_per_V: float):
+    """Force on the plate from the conditioned voltage, F = kCAL * V.
+
+    Section 2 in Goodwill & Haake 2004.
+
+    Parameters
+    ----------
+    voltage_V : float or array_like
+        Conditioned voltage [V].
+    kcal_N_per_V : float
+        Calibration factor [N/V].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Force [N].
+    """
+    k = _positive("kcal_N_per_V", kcal_N_per_V)
+    if np.ndim(voltage_V) == 0:
+        return float(voltage_V) * k
+    return np.asarray(voltage_V, dtype=float) * k
+
+
+def integrate_motion(time_s, force_N, mass_kg: float, vin_m_s: float):
+    """Velocity and displacement of the ball's centre of mass during contact.
+
+    Integrates m dv/dt = -F once from v(0) = VB and again from x(0) = 0,
+    trapezium rule (section 2 in Goodwill & Haake 2004). Velocity and
+    displacement are positive towards the plate, so x is the compression.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times, strictly increasing; the first is the contact start [s].
+    force_N : array_like
+        Force on the ball, positive pushing it away from the plate [N].
+    mass_kg : float
+        Ball mass [kg].
+    vin_m_s : float
+        Inbound speed VB at the first sample [m/s].
+
+    Returns
+    -------
+    velocity_m_s : numpy.ndarray
+        Centre-of-mass velocity towards the plate [m/s]; -VB' at the end.
+    displacement_m : numpy.ndarray
+        Centre-of-mass displacement towards the plate [m].
+    """
+    m = _positive("mass_kg", mass_kg)
+    vin = float(vin_m_s)
+    if not math.isfinite(vin):
+        raise ValueError(f"vin_m_s must be finite, got {vin_m_s!r}")
+    t, f = _time_and_values(time_s, force_N, "force_N")
+    velocity = vin - cumulative_trapezoid(f, t, initial=0.0) / m
+    displacement = cumulative_trapezoid(velocity, t, initial=0.0)
+    return velocity, displacement
+
+
+@dataclass(frozen=True)
+class ContactSummary:
+    """Scalar results of one contact.
+
+    Attributes
+    ----------
+    peak_force_N : float
+        Largest force [N] (parabola through the top three samples).
+    time_to_peak_s : float
+        Time of the largest force after the first sample [s].
+    max_displacement_m : float
+        Largest centre-of-mass displacement [m].
+    impulse_N_s : float
+        Trapezium integral of the force [N s].
+    final_velocity_m_s : float
+        Velocity at the last sample, positive towards the plate [m/s]
+        (-VB' when kCAL came from the same impulse).
+    """
+
+    peak_force_N: float
+    time_to_peak_s: float
+    max_displacement_m: float
+    impulse_N_s: float
+    final_velocity_m_s: float
+
+
+def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float) -> ContactSummary:
+    """Peak force, time to peak, largest displacement and impulse of a contact.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times from the contact start (e.g. from
+        :func:`ballimpact.contact.contact_samples`) [s].
+    force_N : array_like
+        Force on the ball [N].
+    mass_kg : float
+        Ball mass [kg].
+    vin_m_s : float
+        Inbound speed VB [m/s].
+
+    Returns
+    -------
+    ContactSummary
+        Peak force [N], time to peak from the first sample [s], largest
+        displacement [m], impulse [N s] and final velocity [m/s].
+    """
+    t, f = _time_and_values(time_s, force_N, "force_N")
+    velocity, displacement = integrate_motion(t, f, mass_kg, vin_m_s)
+    k = int(np.argmax(f))
+    peak, t_peak = float(f[k]), float(t[k])
+    if 0 < k < f.size - 1:
+        # vertex of the parabola through the top three samples (evenly spaced or not)
+        t3, f3 = t[k - 1:k + 2], f[k - 1:k + 2]
+        c2, c1, c0 = np.polyfit(t3 - t[k], f3, 2)
+        if c2 < 0:
+            dt = -c1 / (2 * c2)
+            if t3[0] - t[k] <= dt <= t3[2] - t[k]:
+                t_peak = float(t[k] + dt)
+                peak = float(c0 - c1 * c1 / (4 * c2))
+    return ContactSummary(
+        peak_force_N=peak,
+        time_to_peak_s=t_peak - float(t[0]),
+        max_displacement_m=float(np.max(displacement)),
+        impulse_N_s=float(np.trapezoid(f, t)),
+        final_velocity_m_s=float(velocity[-1]),
+    )

@@ -1,0 +1,179 @@
+"""Command line: `ballimpact simulate | validate | synth`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+
+SIMULATE_KEYS = ("vin_m_s", "contact_time_ms", "cor", "peak_force_N", "max_displacement_mm")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _nonnegative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
+    return value
+
+
+def _cmd_simulate(args) -> int:
+    from .balls import BallModelParameters
+    from .model import simulate_impact
+
+    params = BallModelParameters.from_table_units(args.mass_g, args.kb0, args.ak, args.a, args.ac)
+    vin = np.asarray(args.vin, dtype=float)
+    sim = simulate_impact(vin, params.mass_kg, params.kb0_N_m, params.ak, params.a, params.ac)
+    rows = [
+        {
+            "vin_m_s": float(v),
+            "contact_time_ms": float(tc) * 1e3,
+            "cor": float(e),
+            "peak_force_N": float(f),
+            "max_displacement_mm": float(x) * 1e3,
+        }
+        for v, tc, e, f, x in zip(
+            vin, sim.contact_time_s, sim.cor, sim.peak_force_N, sim.max_displacement_m
+        )
+    ]
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    print(
+        f"Goodwill & Haake (2004) model: m = {args.mass_g:g} g, kB(0) = {args.kb0:g} kN/m, "
+        f"AK = {args.ak:g} kN/m^(1+a), a = {args.a:g}, AC = {args.ac:g} kN s/m^3"
+    )
+    header = f"{'vin [m/s]':>10} {'TC [ms]':>9} {'COR [-]':>8} {'peak F [N]':>11} {'max x [mm]':>11}"
+    print(header)
+    for r in rows:
+        print(
+            f"{r['vin_m_s']:10.2f} {r['contact_time_ms']:9.3f} {r['cor']:8.4f} "
+            f"{r['peak_force_N']:11.1f} {r['max_displacement_mm']:11.2f}"
+        )
+    return 0
+
+
+def _cmd_validate(args) -> int:
+    from .session import SessionError
+    from .validation import format_validation, validate_session
+
+    try:
+        report = validate_session(args.session)
+    except SessionError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(format_validation(report))
+    return 1 if (args.strict and report.problems) else 0
+
+
+def _cmd_synth(args) -> int:
+    from .balls import BALLS, BallModelParameters
+    from .synth import SensorChain, SynthConfig, write_session
+
+    out = Path(args.out_dir)
+    chain_kw = {}
+    if args.sample_rate_hz is not None:
+        chain_kw["sample_rate_hz"] = args.sample_rate_hz
+    chain = SensorChain(**chain_kw)
+    balls = {k: BALLS[k].params for k in (args.balls or list(BALLS))}
+    labels = {k: BALLS[k].label for k in balls}
+    if args.params:
+        import yaml
+
+        doc = yaml.safe_load(Path(args.params).read_text(encoding="utf-8"))
+        balls, labels = {}, {}
+        for key, p in doc.items():
+            balls[key] = BallModelParameters.from_table_units(
+                p["mass_g"], p["kb0_kN_m"], p["ak_kN_m"], p["a"], p["ac_kN_s_m3"]
+            )
+            labels[key] = p.get("label", key)
+    config = SynthConfig(
+        session_id=out.name,
+        seed=args.seed,
+        balls=balls,
+        labels=labels,
+        impacts_per_ball=args.impacts_per_ball,
+        faults_per_kind=args.faults_per_kind,
+        polarity=args.polarity,
+        trace_format=args.format,
+        kb0_in_config=not args.no_kb0,
+        chain=chain,
+    )
+    try:
+        session_dir, truth = write_session(out, config)
+    except (FileExistsError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote synthetic session {session_dir} and its ground truth {truth}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="ballimpact",
+        description="Force-platform tennis ball impacts and the Goodwill & Haake (2004) ball model.",
+    )
+    parser.add_argument("--version", action="version", version=f"ballimpact {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    sim = sub.add_parser(
+        "simulate",
+        help="simulate impacts with the ball model (parameters in Table 2 units)",
+        description="Contact time, COR, peak force and largest displacement per inbound speed.",
+    )
+    sim.add_argument("--mass-g", type=_positive_float, required=True, help="ball mass [g]")
+    sim.add_argument("--kb0", type=_nonnegative_float, required=True, help="kB(0) [kN/m]")
+    sim.add_argument("--ak", type=_nonnegative_float, required=True, help="AK [kN/m^(1+a)] (Table 2: kN/m2)")
+    sim.add_argument("--a", type=_positive_float, required=True, help="stiffness exponent a [-]")
+    sim.add_argument("--ac", type=_nonnegative_float, required=True, help="AC [kN s/m^3]")
+    sim.add_argument("--vin", type=_positive_float, action="append", required=True,
+                     help="inbound speed [m/s]; repeat for several")
+    sim.add_argument("--json", action="store_true", help="print a JSON list of objects")
+    sim.set_defaults(func=_cmd_simulate)
+
+    val = sub.add_parser("validate", help="check a raw session folder without processing it")
+    val.add_argument("session", type=Path, help="session folder, e.g. raw/demo-2004")
+    val.add_argument("--strict", action="store_true", help="exit 1 when any impact has a problem")
+    val.set_defaults(func=_cmd_validate)
+
+    syn = sub.add_parser("synth", help="write a synthetic session (seeded) and its ground truth")
+    syn.add_argument("out_dir", type=Path, help="session folder to create; its name is the session id")
+    syn.add_argument("--seed", type=int, default=0)
+    syn.add_argument("--balls", nargs="+", choices=sorted(__import__("ballimpact.balls", fromlist=["BALLS"]).BALLS),
+                     help="Table 2 ball types to include (default all four)")
+    syn.add_argument("--params", type=Path, help="YAML of custom ball types: key: {mass_g, kb0_kN_m, ak_kN_m, a, ac_kN_s_m3}")
+    syn.add_argument("--impacts-per-ball", type=int, default=10)
+    syn.add_argument("--faults-per-kind", type=int, default=2)
+    syn.add_argument("--polarity", type=int, choices=(1, -1), default=1)
+    syn.add_argument("--format", choices=("csv", "tdms", "mixed"), default="csv")
+    syn.add_argument("--sample-rate-hz", type=_positive_float, default=None)
+    syn.add_argument("--no-kb0", action="store_true", help="leave kB(0) out of session.yaml (it is then extrapolated)")
+    syn.set_defaults(func=_cmd_synth)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,188 @@
+"""The ball model against the paper's own statements, analytic cases and the spec's sanity figures."""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from ballimpact.balls import BALLS
+from ballimpact.model import (
+    contact_diameter,
+    kelvin_voigt_parameters,
+    material_damping,
+    simulate_impact,
+    simulate_kelvin_voigt,
+    structural_stiffness,
+)
+
+
+def _sim(ball, vin, **kw):
+    p = BALLS[ball].params
+    return simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac, **kw)
+
+
+def test_contact_diameter_close_to_geometric_chord():
+    # Eq. (5) against the chord 2 sqrt(2 R x - x^2) of a sphere of radius 33 mm; the
+    # measured relation (Fig. 3b) lies below the chord at small x, near it at 10-15 mm
+    x = np.array([10e-3, 15e-3])
+    chord = 2 * np.sqrt(2 * 0.033 * x - x**2)
+    assert_allclose(contact_diameter(x), chord, rtol=0.05)
+    assert contact_diameter(0.0) == 0.0
+    assert contact_diameter(-1e-3) == 0.0
+
+
+def test_material_damping_is_area_law():
+    x = 0.01
+    assert_allclose(material_damping(x, 3500.0), 3500.0 * contact_diameter(x) ** 2, rtol=1e-12)
+
+
+def test_spec_sanity_figures_ball1_20ms():
+    # shared/spec/model.md: an independent implementation gives TC 3.7 ms, COR 0.63,
+    # peak 840 N, largest displacement 18.6 mm for ball 1 at 20 m/s.
+    r = _sim("pressurised", 20.0)
+    assert_allclose(r.contact_time_s, 3.7e-3, rtol=0.03)
+    assert_allclose(r.cor, 0.63, atol=0.01)
+    assert_allclose(r.peak_force_N, 840.0, rtol=0.03)
+    assert_allclose(r.max_displacement_m, 18.6e-3, rtol=0.02)
+
+
+@pytest.mark.parametrize("ball", ["pressurised", "punctured"])
+def test_momentum_flux_dominates_first_06_ms(ball):
+    # Section 5 / Fig. 10: the momentum flux is the main component for t < ~0.6 ms,
+    # the structural stiffness at the largest displacement.
+    r = _sim(ball, 20.0, record=True)
+    t = r.time_s
+    fm, fs, fd = r.momentum_flux_force_N, r.stiffness_force_N, r.damping_force_N
+    loaded = (t > 0.12e-3) & (t < 0.45e-3)  # after the cloth phase (x > 2 mm at 20 m/s)
+    assert np.all(fm[loaded] > fs[loaded]) and np.all(fm[loaded] > fd[loaded])
+    late = (t > 0.8e-3) & (t < 1.2e-3)
+    assert np.all(fm[late] < fs[late])
+    i = np.nanargmax(r.displacement_m)
+    assert fs[i] > fd[i] and fs[i] > fm[i]
+    # the crossover lies near 0.6 ms
+    cross = t[np.argmax((t > 0.2e-3) & (fs > fm))]
+    assert 0.4e-3 < cross < 0.8e-3
+
+
+def test_momentum_flux_similar_for_stiffest_and_softest_ball():
+    # Fig. 10: the flux components of balls 1 and 4 are "very similar" early on
+    r1 = _sim("pressurised", 20.0, record=True)
+    r4 = _sim("punctured", 20.0, record=True)
+    n = min(r1.time_s.size, r4.time_s.size)
+    early = (r1.time_s[:n] > 0.25e-3) & (r1.time_s[:n] < 0.5e-3)
+    assert_allclose(r1.momentum_flux_force_N[:n][early], r4.momentum_flux_force_N[:n][early], rtol=0.1)
+
+
+def test_stiffness_order_as_fig8():
+    x = np.array([2e-3, 20e-3])
+    k = {b: structural_stiffness(x, BALLS[b].params.kb0_N_m, BALLS[b].params.ak, BALLS[b].params.a) for b in BALLS}
+    # at large displacement ball 1 is stiffest, ball 3 next, balls 2 and 4 similar and lowest
+    assert k["pressurised"][1] > k["oversize"][1] > max(k["pressureless"][1], k["punctured"][1])
+    assert_allclose(k["pressureless"][1], k["punctured"][1], rtol=0.05)
+    # at small displacement the punctured ball is the least stiff, the pressureless one high
+    assert k["punctured"][0] == min(v[0] for v in k.values())
+    assert k["pressureless"][0] == max(v[0] for v in k.values())
+
+
+def test_linear_spring_has_analytic_period():
+    # No cloth, no buckling, no damping, no momentum flux, AK = 0: a linear spring,
+    # TC = pi sqrt(m/k) and COR = 1 (to the accuracy of the central difference).
+    m, k, vin = 0.0577, 40e3, 20.0
+    r = simulate_impact(vin, m, k, 0.0, 1.0, 0.0, cloth_displacement_m=0.0, buckling_time_s=0.0,
+                        rho_area_kg_m2=0.0, dt_s=1e-6)
+    assert_allclose(r.contact_time_s, np.pi * np.sqrt(m / k), rtol=2e-3)
+    assert_allclose(r.cor, 1.0, atol=2e-3)
+    assert_allclose(r.max_displacement_m, vin * np.sqrt(m / k), rtol=1e-3)
+    assert_allclose(r.peak_force_N, vin * np.sqrt(m * k), rtol=1e-3)
+
+
+def test_vectorised_equals_one_by_one():
+    p = BALLS["oversize"].params
+    vin = np.array([14.0, 19.0, 26.0, 30.0])
+    ak = np.array([3000e3, 3600e3, 4000e3, 3600e3])
+    batch = simulate_impact(vin, p.mass_kg, p.kb0_N_m, ak, p.a, p.ac)
+    for i in range(vin.size):
+        one = simulate_impact(vin[i], p.mass_kg, p.kb0_N_m, ak[i], p.a, p.ac)
+        assert_allclose(batch.contact_time_s[i], one.contact_time_s, rtol=1e-12)
+        assert_allclose(batch.cor[i], one.cor, rtol=1e-12)
+        assert_allclose(batch.peak_force_N[i], one.peak_force_N, rtol=1e-12)
+
+
+def test_broadcast_shape():
+    p = BALLS["pressurised"].params
+    r = simulate_impact(np.array([[15.0], [25.0]]), p.mass_kg, p.kb0_N_m, np.array([1e7, 1.6e7, 2e7]), p.a, p.ac)
+    assert r.contact_time_s.shape == (2, 3)
+    # stiffer balls have shorter contacts, faster impacts too
+    assert np.all(np.diff(r.contact_time_s, axis=1) < 0)
+    assert np.all(np.diff(r.contact_time_s, axis=0) < 0)
+
+
+def test_contact_time_and_cor_are_smooth_in_parameters():
+    # model.md pitfall: without an interpolated end, TC moves in steps of dt
+    p = BALLS["pressurised"].params
+    ak = p.ak * (1 + np.linspace(0, 1e-3, 11))
+    r = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, ak, p.a, p.ac)
+    dtc = np.diff(r.contact_time_s)
+    assert np.all(dtc < 0)  # strictly monotone: no flat steps
+    assert np.ptp(dtc) < 0.5 * abs(np.mean(dtc))  # and nearly linear at this scale
+    ac = p.ac * (1 + np.linspace(0, 1e-3, 11))
+    e = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, p.ak, p.a, ac).cor
+    assert np.all(np.diff(e) < 0)
+
+
+def test_cor_decreases_with_speed_and_damping():
+    r = _sim("pressurised", np.linspace(14, 30, 5))
+    assert np.all(np.diff(r.cor) < 0)
+    assert np.all((r.cor > 0) & (r.cor < 1))
+
+
+def test_time_step_convergence():
+    coarse = _sim("pressureless", 22.0)
+    fine = _sim("pressureless", 22.0, dt_s=2.5e-6)
+    assert_allclose(coarse.contact_time_s, fine.contact_time_s, rtol=0.01)
+    assert_allclose(coarse.cor, fine.cor, rtol=0.02)
+
+
+def test_kelvin_voigt_parameters_eqs_2_3():
+    kb, cb = kelvin_voigt_parameters(0.0577, 4e-3, 0.7)
+    assert_allclose(kb, 0.0577 * np.pi**2 / 16e-6, rtol=1e-12)
+    assert_allclose(cb, -2 * 0.0577 * np.log(0.7) / 4e-3, rtol=1e-12)
+
+
+def test_kelvin_voigt_tensile_force_near_end():
+    # Fig. 2b: with constant kB and cB the force turns tensile in the last part of contact
+    r = _sim("pressurised", 28.0)
+    m = BALLS["pressurised"].params.mass_kg
+    kb, cb = kelvin_voigt_parameters(m, r.contact_time_s, r.cor)
+    t = np.linspace(0, 1.2 * r.contact_time_s, 4000)
+    x, v, f = simulate_kelvin_voigt(t, 28.0, m, kb, cb)
+    inside = np.isfinite(f)
+    tensile = t[inside & (f < 0)]
+    assert tensile.size > 0
+    t_end = t[inside][-1]
+    assert tensile.min() > 0.5 * t_end  # only near the end
+    assert (t_end - tensile.min()) < 0.3 * t_end
+    # displacement is zero at start and end, velocity starts at vin
+    assert_allclose(x[0], 0.0, atol=1e-12)
+    assert_allclose(v[0], 28.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"vin_m_s": -1.0}, "vin_m_s must be positive"),
+        ({"mass_kg": 0.0}, "mass_kg must be positive"),
+        ({"a": np.nan}, "a must be positive"),
+        ({"ak": -5.0}, "ak must be non-negative"),
+    ],
+)
+def test_simulate_validates_arguments(kwargs, match):
+    args = dict(vin_m_s=20.0, mass_kg=0.0577, kb0_N_m=21e3, ak=16e6, a=1.65, ac=3.5e3)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        simulate_impact(**args)
+
+
+def test_unended_impact_warns_and_gives_nan():
+    with pytest.warns(RuntimeWarning, match="did not end"):
+        r = simulate_impact(20.0, 0.0577, 10.0, 0.0, 1.0, 0.0, max_contact_time_s=2e-3)
+    assert np.isnan(r.contact_time_s)
