@@ -360,6 +360,7 @@ CSV_FAULTS = [
      r"impacts\.csv: line 3: expected 9 fields, got 7"),
     (HEADER + "\n" + GOOD_ROWS[0] + ",extra\n", r"impacts\.csv: line 2: expected 9 fields, got 10"),
     (HEADER + ",note\n" + GOOD_ROWS[0] + ",x\n", r"impacts\.csv: line 1: duplicate column\(s\) in header: note"),
+    (HEADER + "\n" + GOOD_ROWS[0] + '\nb1-02,"pressurised"x,t.csv,0,1,2,3,,\n', r"impacts\.csv: line 3: malformed CSV: "),
 ]
 
 
@@ -413,6 +414,8 @@ IMPACT_FAULTS = [
     (dict(mass_g="heavy"), ["non-numeric mass_g: 'heavy'"]),
     (dict(mass_g="0"), ["non-positive mass_g: 0"]),
     (dict(mass_g="-57"), ["non-positive mass_g: -57"]),
+    (dict(mass_g="1500"), ["implausible mass_g: 1500 (must be in (1, 1000) g)"]),
+    (dict(mass_g="inf"), ["non-finite mass_g: 'inf'"]),
     (dict(trace=""), ["missing trace path"]),
     (dict(trace="../x.csv"), ["trace path escapes the session folder: ../x.csv"]),
     (dict(trace="traces/../../x.csv"), ["trace path escapes the session folder: traces/../../x.csv"]),

@@ -143,6 +143,8 @@ def make_trace(*, sample_rate_hz=66964.3, half_sine_s=4.0e-3, cloth_s=0.0, cloth
     """
     rng = np.random.default_rng(seed)
     fs = float(sample_rate_hz)
+    if not (cloth_s > 0 and cloth_fraction > 0):
+        cloth_s, cloth_fraction = 0.0, 0.0
     tc = cloth_s + half_sine_s
     n = int(round((pre_s + tc + post_s) * fs))
     t = np.arange(n) / fs

@@ -51,6 +51,7 @@ THRESHOLD_FRACTION = 0.03  # contact threshold as a fraction of the peak [-]
 EDGE_BAND = (0.03, 0.20)  # fractions of the peak between which edges are fitted by a line [-]
 FOOT_SIGMA = 4.0  # cloth-foot samples are above this many noise standard deviations [-]
 FOOT_MAX_SAMPLES = 8  # foot samples used by the hinge fit [samples]
+FOOT_MIN_SAMPLES = 2  # a shorter foot is taken as part of the steep edge [samples]
 FOOT_PRE_SAMPLES = 4  # samples before the foot used by the hinge fit [samples]
 HINGE_GRID_PER_SAMPLE = 50  # hinge corner search steps per sample [-]
 SECOND_IMPACT_FRACTION = 0.05  # another impact reaches this fraction of the main peak [-]
@@ -419,23 +420,21 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         u_edge = float(j_lo + 1)
     u_edge = min(max(u_edge, j_lo - max(n_band, 2), 0.0), float(j_lo + 1))
 
-    # --- walk back over the cloth foot
+    # --- walk back over the foot: the samples below the edge band but above the noise
     u_start = u_edge
-    i_last = min(int(math.ceil(u_edge)) - 1, peak_index - 1)
     foot_thr = FOOT_SIGMA * sigma
-    if i_last >= 0 and xs[i_last] > foot_thr:
-        quiet = np.flatnonzero(xs[:i_last + 1] <= foot_thr)
+    if j_lo >= 0 and xs[j_lo] > foot_thr:
+        quiet = np.flatnonzero(xs[:j_lo + 1] <= foot_thr)
         i0 = int(quiet[-1]) + 1 if quiet.size else 0
         if i0 == 0:
             if "contact_at_trace_start" not in flags:
                 flags.append("contact_at_trace_start")
             u_start = 0.0
-        else:
+        elif j_lo - i0 + 1 >= FOOT_MIN_SAMPLES:
             flags.append("cloth_foot")
             wl = max(i0 - FOOT_PRE_SAMPLES, 0)
-            wr = min(i_last, i0 + FOOT_MAX_SAMPLES - 1)
+            wr = min(j_lo, i0 + FOOT_MAX_SAMPLES - 1)
             u_start = _hinge_corner(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
-    u_start = min(u_start, u_edge)
 
     # --- falling edge: lowest contiguous part of the edge between lo and hi
     after = np.flatnonzero(xs[peak_index + 1:] < lo)

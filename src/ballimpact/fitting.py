@@ -581,13 +581,28 @@ def fit_ball_model(
             )
         if boot.shape[0] >= 10:
             q = 100 * np.array([0.5 - confidence / 2, 0.5 + confidence / 2])
+            # Case resampling underestimates the spread with few impacts: its variance
+            # is low by about (n - p) / n for p fitted parameters. Widen the percentile
+            # interval about the estimate by sqrt(n / (n - p)) (p = 3; p = 2 for the
+            # kB(0) line), in the log scale for the positive AK, AC and kB(0).
+            widen3 = np.sqrt(n / max(n - 3, 1))
+            widen2 = np.sqrt(n / max(n - 2, 1))
             for j, key in enumerate(("kb0", "ak", "a", "ac")):
                 if key == "kb0" and kb0_fit is None:
                     continue
-                lo, hi = np.percentile(boot[:, j], q)
-                lo_hi[key] = (float(lo), float(hi))
+                est = {"kb0": kb0, "ak": ak, "a": a, "ac": ac}[key]
+                w = widen2 if key == "kb0" else widen3
+                if key == "a":
+                    lo, hi = est + w * (np.percentile(boot[:, j], q) - est)
+                else:
+                    lg = np.log(est) + w * (np.log(np.percentile(boot[:, j], q)) - np.log(est))
+                    lo, hi = np.exp(lg)
+                lo_hi[key] = (float(min(lo, est)), float(max(hi, est)))
             corr = float(np.corrcoef(boot[:, 1], boot[:, 2])[0, 1])
-            method = f"percentile bootstrap over impacts ({boot.shape[0]} resamples)"
+            method = (
+                f"percentile bootstrap over impacts ({boot.shape[0]} resamples), "
+                f"widened by sqrt(n/(n-p)) = {widen3:.2f} for n = {n} impacts"
+            )
 
     return BallFit(
         mass_kg=float(np.mean(mass)),

@@ -207,9 +207,13 @@ def _load_yaml(path: Path, file: str) -> dict:
     except yaml.YAMLError as exc:
         raise SessionError(f"{file}: invalid YAML: {_one_line(exc)}") from None
     if data is None:
-        raise SessionError(f"{file}: file is empty (expected a mapping with session_id, date, plate, daq, gates, balls)")
+        raise SessionError(
+            f"{file}: file is empty (expected a mapping with session_id, date, plate, daq, gates, balls)"
+        )
     if not isinstance(data, dict):
-        raise SessionError(f"{file}: top level must be a mapping of keys (session_id, date, ...), got a {type(data).__name__}")
+        raise SessionError(
+            f"{file}: top level must be a mapping of keys (session_id, date, ...), got a {type(data).__name__}"
+        )
     return data
 
 
@@ -376,7 +380,9 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
 
     balls_value = _require(data, "balls", "balls", file)
     if not isinstance(balls_value, dict) or not balls_value:
-        raise SessionError(f"{file}: key 'balls' must be a mapping of ball types (key: {{mass_g: ...}}), got {balls_value!r}")
+        raise SessionError(
+            f"{file}: key 'balls' must be a mapping of ball types (key: {{mass_g: ...}}), got {balls_value!r}"
+        )
     balls: dict[str, BallType] = {}
     for key_value, spec in balls_value.items():
         key = str(key_value)
@@ -539,7 +545,7 @@ def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
             if missing:
                 raise SessionError(
                     f"{file}: line {line}: missing required column(s): {', '.join(missing)} "
-                    f"(header has: {', '.join(header)})"
+                    f"(header has: {_one_line(', '.join(header))})"
                 )
             unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
             if unknown:

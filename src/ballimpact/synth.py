@@ -136,6 +136,9 @@ class SynthConfig:
         Plate polarity, +1 or -1.
     trace_format : str
         "csv", "tdms" or "mixed" (every fourth trace TDMS, every third CSV with a time_s column).
+    total_impacts : int, optional
+        When given, the number of good impacts is chosen so that the session holds
+        exactly this many impacts (faults included), spread evenly over the balls.
     kb0_in_config : bool
         Write each ball's kB(0) into session.yaml (kb0_source = config).
     chain : SensorChain
@@ -155,6 +158,7 @@ class SynthConfig:
     faults_per_kind: int = 2
     polarity: int = 1
     trace_format: str = "csv"
+    total_impacts: int | None = None
     kb0_in_config: bool = True
     chain: SensorChain = field(default_factory=SensorChain)
     date: str = "2026-11-21"
@@ -299,9 +303,19 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
     plan = []
     ball_keys = list(config.balls)
     lo, hi = config.vin_range_m_s
-    for key in ball_keys:
-        speeds = np.linspace(lo, hi, config.impacts_per_ball)
-        jitter = (hi - lo) / max(config.impacts_per_ball, 2) * 0.3
+    n_faults = config.faults_per_kind * len(FAULT_KINDS)
+    if config.total_impacts is not None:
+        n_good = config.total_impacts - n_faults
+        if n_good < len(ball_keys):
+            raise ValueError(
+                f"total_impacts={config.total_impacts} leaves fewer good impacts than ball types"
+            )
+        per_ball = [n_good // len(ball_keys) + (i < n_good % len(ball_keys)) for i in range(len(ball_keys))]
+    else:
+        per_ball = [config.impacts_per_ball] * len(ball_keys)
+    for key, n_ball in zip(ball_keys, per_ball):
+        speeds = np.linspace(lo, hi, n_ball)
+        jitter = (hi - lo) / max(n_ball, 2) * 0.3
         speeds = np.clip(speeds + rng.uniform(-jitter, jitter, speeds.size), lo, hi)
         plan += [(key, float(v), "") for v in speeds]
     k = 0

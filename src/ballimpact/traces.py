@@ -147,16 +147,16 @@ def _raise_bad_line(data: list[str], columns: list[str], first_line: int, file: 
 
 
 def _decimal_quantum(texts: list[str]) -> float:
-    """Largest printing resolution [s] among number strings ('0.000015' -> 1e-6)."""
-    quantum = 0.0
+    """Median printing resolution of number strings ('0.000015' -> 1e-6), 0 if none."""
+    quanta = []
     for text in texts:
         try:
             exponent = Decimal(text.strip()).as_tuple().exponent
         except InvalidOperation:
             continue
         if isinstance(exponent, int):
-            quantum = max(quantum, 10.0**exponent)
-    return quantum
+            quanta.append(10.0**exponent)
+    return float(np.median(quanta)) if quanta else 0.0
 
 
 def _time_column_rate(time: np.ndarray, time_texts: list[str], first_line: int, file: str) -> float:
@@ -171,8 +171,12 @@ def _time_column_rate(time: np.ndarray, time_texts: list[str], first_line: int, 
         )
     median_step = float(np.median(step))
     # Values printed with few decimals jitter by up to one printed digit: allow for it.
-    probe = time_texts[:_QUANTUM_PROBE_LINES] + time_texts[-_QUANTUM_PROBE_LINES:]
-    tolerance = UNIFORM_SAMPLING_RTOL * median_step + _decimal_quantum(probe)
+    # (a robust value at each end: the end with the largest |t| has the coarsest digits
+    # in %g formats, and an occasional short repr such as '0.0' must not count)
+    quantum = max(
+        _decimal_quantum(time_texts[:_QUANTUM_PROBE_LINES]), _decimal_quantum(time_texts[-_QUANTUM_PROBE_LINES:])
+    )
+    tolerance = UNIFORM_SAMPLING_RTOL * median_step + quantum
     off = np.abs(step - median_step) > tolerance
     if off.any():
         k = int(np.argmax(off))
@@ -241,7 +245,8 @@ def _read_csv(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
         if not np.isfinite(time).all():
             i = int(np.argmin(np.isfinite(time)))
             raise TraceError(f"{file}: line {first_line + i}: non-finite time_s value {float(time[i])!r}")
-        time_texts = [line.split(",", 1)[0] for line in data[:_QUANTUM_PROBE_LINES] + data[-_QUANTUM_PROBE_LINES:]]
+        probe = data[:_QUANTUM_PROBE_LINES] + data[-_QUANTUM_PROBE_LINES:]
+        time_texts = [line.split(",", 1)[0] for line in probe]
         rate = _time_column_rate(time, time_texts, first_line, file)
         if header_rate is not None and abs(rate - header_rate) > RATE_AGREEMENT_RTOL * header_rate:
             raise TraceError(
@@ -285,7 +290,8 @@ def _read_tdms(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
         tdms = TdmsFile.read(path)
         groups = tdms.groups()
     except Exception as exc:  # npTDMS raises many types for a damaged file
-        raise TraceError(f"{file}: not a readable TDMS file: {' '.join(str(exc).split()) or type(exc).__name__}") from None
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise TraceError(f"{file}: not a readable TDMS file: {detail}") from None
     if not groups:
         raise TraceError(f"{file}: empty trace: the TDMS file has no groups")
     channels = groups[0].channels()

@@ -12,6 +12,8 @@ from .traces import TraceError, read_trace
 
 __all__ = ["ValidationReport", "validate_session", "format_validation"]
 
+RATE_SIGNIFICANT_DIGITS = 9  # sample rates are grouped after rounding to this many digits
+
 
 @dataclass
 class ValidationReport:
@@ -20,7 +22,7 @@ class ValidationReport:
     session_id: str
     n_impacts: int
     impacts_per_ball: dict[str, int]  # ball key -> number of impacts (session.yaml order)
-    sample_rates_hz: dict[float, int]  # [Hz] sample rate -> number of traces read at that rate
+    sample_rates_hz: dict[float, int]  # [Hz] rate (9 significant digits) -> number of traces read at it
     trace_formats: dict[str, int]  # "csv" / "tdms" -> number of traces read
     problems: list[tuple[str, str]]  # (impact_id or "", message)
     sample_rate_sources: dict[str, int] = field(default_factory=dict)  # "header", "time_s", ...
@@ -84,7 +86,7 @@ def validate_session(path) -> ValidationReport:
             except TraceError as exc:
                 problems.append((row.impact_id, str(exc)))
                 continue
-            rates[trace.sample_rate_hz] += 1
+            rates[float(f"{trace.sample_rate_hz:.{RATE_SIGNIFICANT_DIGITS}g}")] += 1
             sources[trace.sample_rate_source] += 1
             formats[trace.format] += 1
             del trace  # one trace in memory at a time

@@ -1,0 +1,22 @@
+# ballimpact: force-platform tennis-ball impact tests (Goodwill & Haake 2004), raw sessions to
+# results/<session_id>/ (impacts.csv, parameters.csv, <session_id>.nc, report.pdf, figures/).
+#   snakemake --cores 2                                   every session of raw/
+#   snakemake --cores 2 --config sessions=[s1]            one session
+#   snakemake --profile profiles/slurm                    on a SLURM cluster
+#   snakemake --report report.html                        HTML report of the figures
+
+configfile: "config.yaml"
+
+
+report: "workflow/report/workflow.rst"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/process.smk"
+include: "workflow/rules/fit.smk"
+include: "workflow/rules/report.smk"
+
+
+rule all:
+    input:
+        [target for session in SESSIONS for target in session_targets(session)],

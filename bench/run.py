@@ -1,0 +1,144 @@
+"""Benchmarks of ballimpact: model throughput, fit time, workflow wall time and memory.
+
+    python bench/run.py            # full run, human-readable
+    python bench/run.py --json     # one JSON object with every figure
+    python bench/run.py --quick --json   # same keys from smaller runs (< 1 min)
+
+Keys:
+  model_impacts_per_s       batched simulate_impact, Table 2 ball 1, speeds 14-30 m/s, one process
+  fit_seconds               fit_ball_model for every ball type of raw/demo-2004, intervals included
+                            (processing the session is not timed)
+  workflow_seconds_<n>      `snakemake --cores 2` wall time on a synthetic session of n impacts
+  peak_memory_mb_<n>        largest resident set of any process of that run (getrusage of children)
+In --quick mode the workflow runs on smaller sessions and the <n> figures are linear
+fits (t = t0 + n * per_impact) of the measured small runs, flagged "quick": true.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+SIZES = (50, 200, 1000)
+QUICK_SIZES = (12, 24)
+
+
+def bench_model(n: int, repeats: int = 3) -> float:
+    from ballimpact.balls import BALLS
+    from ballimpact.model import simulate_impact
+
+    p = BALLS["pressurised"].params
+    vin = np.random.default_rng(0).uniform(14, 30, n)
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+        best = min(best, time.perf_counter() - t0)
+    return n / best
+
+
+def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
+    from ballimpact.pipeline import fit_inputs
+    from ballimpact.processing import iter_process
+    from ballimpact.session import read_session
+    from ballimpact.fitting import fit_ball_model
+
+    session = read_session(session_dir)
+    results = list(iter_process(session))
+    inputs = fit_inputs(results, session)
+    t0 = time.perf_counter()
+    for ball, kw in inputs.items():
+        fit_ball_model(**kw, n_bootstrap=n_bootstrap)
+    return {"fit_seconds": time.perf_counter() - t0, "fit_ball_types": len(inputs)}
+
+
+def _run_workflow(n_impacts: int, workdir: Path) -> tuple[float, float]:
+    from ballimpact.synth import SynthConfig, write_session
+
+    raw = workdir / f"raw{n_impacts}"
+    sid = f"bench{n_impacts}"
+    write_session(raw / sid, SynthConfig(session_id=sid, total_impacts=n_impacts, faults_per_kind=1))
+    results = workdir / f"results{n_impacts}"
+    cmd = [
+        str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
+        "--config", f"raw_dir={raw}", f"results_dir={results}",
+        "--directory", str(REPO),
+    ]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"workflow failed for n={n_impacts}:\n{proc.stderr[-3000:]}")
+    return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+
+
+def _run_isolated(n_impacts: int, workdir: Path) -> tuple[float, float]:
+    # a fresh Python process per size so that ru_maxrss of children is this run's own
+    code = (
+        "import sys, json; sys.path.insert(0, %r); import run; "
+        "print(json.dumps(run._run_workflow(%d, run.Path(%r))))" % (str(Path(__file__).parent), n_impacts, str(workdir))
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr[-3000:])
+    wall, mem = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, mem
+
+
+def bench_workflow(sizes, quick: bool) -> dict:
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-") as tmp:
+        measured = {n: _run_isolated(n, Path(tmp)) for n in (QUICK_SIZES if quick else sizes)}
+    if quick:
+        ns = np.array(list(measured))
+        ts = np.array([measured[n][0] for n in ns])
+        slope, intercept = np.polyfit(ns, ts, 1)
+        mem = max(m for _, m in measured.values())
+        for n in sizes:
+            out[f"workflow_seconds_{n}"] = float(intercept + slope * n)
+            out[f"peak_memory_mb_{n}"] = float(mem)
+        out["workflow_measured_sizes"] = [int(n) for n in ns]
+    else:
+        for n, (wall, mem) in measured.items():
+            out[f"workflow_seconds_{n}"] = wall
+            out[f"peak_memory_mb_{n}"] = mem
+        ns = np.array(list(measured))
+        ts = np.array([measured[n][0] for n in ns])
+        out["workflow_seconds_per_impact"] = float(np.polyfit(ns, ts, 1)[0])
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="ballimpact benchmarks")
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--quick", action="store_true", help="smaller runs, same keys (< 1 min)")
+    ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
+    args = ap.parse_args(argv)
+
+    figures: dict = {"quick": args.quick}
+    figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
+    figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
+    figures.update(bench_fit(REPO / "raw" / "demo-2004", n_bootstrap=200))
+    if not args.skip_workflow:
+        figures.update(bench_workflow(SIZES, args.quick))
+    if args.json:
+        print(json.dumps(figures, indent=2))
+    else:
+        for k, v in figures.items():
+            print(f"{k:32s} {v:.4g}" if isinstance(v, float) else f"{k:32s} {v}")
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    sys.exit(main())

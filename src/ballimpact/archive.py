@@ -1,0 +1,798 @@
+"""The session archive: per-impact results and ball fits as one CF/ACDD netCDF4 file (xarray at the edge).
+
+Layout (one root group, see the shared brief "Intermediate files and the archive"):
+
+* dims ``impact``, ``sample`` (contact series, NaN padded), ``raw_sample`` (whole
+  trace, NaN padded), ``ball``, ``speed``, ``model_time``, ``stiffness_x``;
+* per impact: ``impact_id`` (coordinate), ``impact_ball``, ``status``, ``reason``,
+  ``trace_file``, ``trace_sha256`` and the scalar results of :data:`IMPACT_COLUMNS`,
+  plus ``impact_mass_kg`` and ``sample_rate_hz``, ``model_agreement_fraction`` and
+  ``model_rms_N``;
+* per ball: the fitted parameters of :data:`PARAMETER_COLUMNS` (``mass_kg`` is the
+  ball type's mass, which is why the per-impact mass is called ``impact_mass_kg``),
+  ``ball_label``, ``fit_message``, ``ak_a_correlation`` and the paper's Table 2
+  values ``paper_*``;
+* model curves over ``speed``, force components over ``model_time`` (20 m/s) and
+  the stiffness law over ``stiffness_x``.
+
+Every variable carries ``units`` and ``long_name`` (:data:`VARIABLE_ATTRS`); text
+variables are stored as netCDF variable-length strings.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import os
+import tempfile
+import warnings
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+__all__ = [
+    "IMPACT_COLUMNS",
+    "PARAMETER_COLUMNS",
+    "VARIABLE_ATTRS",
+    "PAPER_REFERENCE",
+    "AGREEMENT_START_S",
+    "AGREEMENT_TOLERANCE",
+    "impacts_dataset",
+    "impacts_table",
+    "parameters_table",
+    "paper_parameters_dataset",
+    "add_model_forces",
+    "assemble_archive",
+    "set_variable_attrs",
+    "add_metadata",
+    "write_dataset",
+    "open_dataset",
+]
+
+#: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
+IMPACT_COLUMNS = [
+    "impact_id",
+    "ball",
+    "status",
+    "reason",
+    "vin_m_s",
+    "vout_m_s",
+    "cor",
+    "contact_time_ms",
+    "kcal_N_per_V",
+    "impulse_N_s",
+    "peak_force_N",
+    "time_to_peak_ms",
+    "max_displacement_mm",
+    "kv_stiffness_kN_m",
+    "kv_damping_N_s_m",
+]
+
+#: Columns of results/<session>/parameters.csv, in order: identification (ball,
+#: n_impacts, mass_kg), the parameters in Table 2 units (kb0_kN_m, kb0_source,
+#: ak_kN_m, a, ac_kN_s_m3), the 95 % intervals of the fitted ones (ak, a, ac, then
+#: kb0, NaN when kB(0) came from the config), then the relative fit residuals.
+PARAMETER_COLUMNS = [
+    "ball",
+    "n_impacts",
+    "mass_kg",
+    "kb0_kN_m",
+    "kb0_source",
+    "ak_kN_m",
+    "a",
+    "ac_kN_s_m3",
+    "ak_lo",
+    "ak_hi",
+    "a_lo",
+    "a_hi",
+    "ac_lo",
+    "ac_hi",
+    "kb0_lo",
+    "kb0_hi",
+    "contact_time_rmse_pct",
+    "cor_rmse_pct",
+]
+
+#: Citation of the paper the model comes from (ACDD ``references``).
+PAPER_REFERENCE = (
+    "Goodwill S R, Haake S J (2004) Modelling of tennis ball impacts on a rigid surface. "
+    "Proc. IMechE Part C 218:1139-1153, doi:10.1243/0954406042369125"
+)
+
+#: Start of the window in which model and measured force are compared [s]
+#: (after the shell buckles, section 4 of Goodwill & Haake 2004).
+AGREEMENT_START_S = 0.2e-3
+#: Model and measurement "agree" when within this fraction of the measured peak force [-].
+AGREEMENT_TOLERANCE = 0.10
+
+_AK_UNITS = "kN m-(1+a)"
+_PER_IMPACT_SCALARS = [
+    # (archive name, ImpactResult attribute)
+    ("vin_m_s", "vin_m_s"),
+    ("vout_m_s", "vout_m_s"),
+    ("cor", "cor"),
+    ("contact_time_ms", "contact_time_ms"),
+    ("kcal_N_per_V", "kcal_N_per_V"),
+    ("impulse_N_s", "impulse_N_s"),
+    ("peak_force_N", "peak_force_N"),
+    ("time_to_peak_ms", "time_to_peak_ms"),
+    ("max_displacement_mm", "max_displacement_mm"),
+    ("kv_stiffness_kN_m", "kv_stiffness_kN_m"),
+    ("kv_damping_N_s_m", "kv_damping_N_s_m"),
+    ("impact_mass_kg", "mass_kg"),
+    ("sample_rate_hz", "sample_rate_hz"),
+]
+_SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
+
+#: units and long_name of every archive variable (CF-style unit strings).
+VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
+    # coordinates
+    "impact_id": ("1", "impact identifier from the raw impacts.csv"),
+    "ball": ("1", "ball type key from session.yaml"),
+    "speed_m_s": ("m s-1", "inbound speed of the model curves"),
+    "model_time_s": ("s", "time since first contact of the modelled 20 m/s impact"),
+    "stiffness_x_m": ("m", "centre-of-mass displacement of the stiffness curve"),
+    # per impact
+    "impact_ball": ("1", "ball type key of the impact"),
+    "status": ("1", "processing status: ok or excluded"),
+    "reason": ("1", "why the impact was excluded (empty when ok)"),
+    "trace_file": ("1", "trace file path relative to the session folder"),
+    "trace_sha256": ("1", "SHA-256 digest of the trace file"),
+    "vin_m_s": ("m s-1", "inbound ball speed VB from the light gates"),
+    "vout_m_s": ("m s-1", "rebound ball speed VB' from the light gates"),
+    "cor": ("1", "coefficient of restitution VB'/VB"),
+    "contact_time_ms": ("ms", "contact time TC"),
+    "kcal_N_per_V": ("N V-1", "force-plate calibration factor kCAL of this impact"),
+    "impulse_N_s": ("N s", "impulse m (VB + VB')"),
+    "peak_force_N": ("N", "peak calibrated force"),
+    "time_to_peak_ms": ("ms", "time from contact start to peak force"),
+    "max_displacement_mm": ("mm", "largest centre-of-mass displacement during contact"),
+    "kv_stiffness_kN_m": ("kN m-1", "Kelvin-Voigt stiffness kB = m pi^2 / TC^2 (Eq. 2)"),
+    "kv_damping_N_s_m": ("N s m-1", "Kelvin-Voigt damping cB = -2 m ln(COR) / TC (Eq. 3)"),
+    "impact_mass_kg": ("kg", "ball mass used for this impact"),
+    "sample_rate_hz": ("Hz", "sample rate of the trace"),
+    "model_agreement_fraction": (
+        "1",
+        "share of the contact after 0.2 ms where the fitted model force is within 10 % of the measured peak",
+    ),
+    "model_rms_N": ("N", "RMS difference between fitted model and measured force over the contact"),
+    # series (impact, sample)
+    "time_s": ("s", "time since contact start"),
+    "voltage_V": ("V", "force-plate voltage over the contact (conditioned, polarity applied)"),
+    "force_N": ("N", "calibrated contact force on the ball"),
+    "velocity_m_s": ("m s-1", "ball centre-of-mass velocity towards the plate"),
+    "displacement_m": ("m", "ball centre-of-mass displacement towards the plate"),
+    "model_force_N": ("N", "fitted improved-model force at this impact's inbound speed (Eq. 14)"),
+    "kv_force_N": ("N", "Kelvin-Voigt model force of this impact (Eqs. 1-3)"),
+    # raw (impact, raw_sample)
+    "raw_time_s": ("s", "time of the raw sample, from contact start when found, else from the first sample"),
+    "raw_voltage_V": ("V", "raw trace voltage, polarity applied"),
+    # per ball
+    "ball_label": ("1", "ball label for figures"),
+    "mass_kg": ("kg", "ball type mass used in the fit"),
+    "n_impacts": ("1", "number of impacts used in the fit"),
+    "kb0_kN_m": ("kN m-1", "stiffness at zero displacement kB(0) (Eq. 4)"),
+    "kb0_source": ("1", "origin of kB(0): config or extrapolated"),
+    "kb0_lo": ("kN m-1", "lower end of the 95 % interval of kB(0)"),
+    "kb0_hi": ("kN m-1", "upper end of the 95 % interval of kB(0)"),
+    "ak_kN_m": (_AK_UNITS, "stiffness coefficient AK, x in metres (Eq. 4)"),
+    "ak_lo": (_AK_UNITS, "lower end of the 95 % interval of AK"),
+    "ak_hi": (_AK_UNITS, "upper end of the 95 % interval of AK"),
+    "a": ("1", "stiffness exponent a (Eq. 4)"),
+    "a_lo": ("1", "lower end of the 95 % interval of a"),
+    "a_hi": ("1", "upper end of the 95 % interval of a"),
+    "ac_kN_s_m3": ("kN s m-3", "damping area constant AC (Eq. 7)"),
+    "ac_lo": ("kN s m-3", "lower end of the 95 % interval of AC"),
+    "ac_hi": ("kN s m-3", "upper end of the 95 % interval of AC"),
+    "ak_a_correlation": ("1", "correlation between the AK and a estimates"),
+    "contact_time_rmse_pct": ("percent", "relative RMS contact-time residual over the impacts used"),
+    "cor_rmse_pct": ("percent", "relative RMS COR residual over the impacts used"),
+    "fit_message": ("1", "fit status message"),
+    "paper_kb0_kN_m": ("kN m-1", "kB(0) of Table 2 in Goodwill & Haake 2004"),
+    "paper_ak_kN_m": (_AK_UNITS, "AK of Table 2 in Goodwill & Haake 2004"),
+    "paper_a": ("1", "a of Table 2 in Goodwill & Haake 2004"),
+    "paper_ac_kN_s_m3": ("kN s m-3", "AC of Table 2 in Goodwill & Haake 2004"),
+    # model curves (ball, speed)
+    "model_contact_time_ms": ("ms", "fitted model contact time"),
+    "model_contact_time_ms_lo": ("ms", "lower end of the 95 % band of the model contact time"),
+    "model_contact_time_ms_hi": ("ms", "upper end of the 95 % band of the model contact time"),
+    "model_cor": ("1", "fitted model coefficient of restitution"),
+    "model_cor_lo": ("1", "lower end of the 95 % band of the model COR"),
+    "model_cor_hi": ("1", "upper end of the 95 % band of the model COR"),
+    "model_peak_force_N": ("N", "fitted model peak force"),
+    # components (ball, model_time)
+    "comp_total_force_N": ("N", "total model force at 20 m/s (Eq. 14)"),
+    "comp_stiffness_force_N": ("N", "structural stiffness force kB x at 20 m/s"),
+    "comp_damping_force_N": ("N", "material damping force cB x' at 20 m/s"),
+    "comp_momentum_flux_force_N": ("N", "momentum flux force cM x' at 20 m/s"),
+    "comp_displacement_m": ("m", "model centre-of-mass displacement at 20 m/s"),
+    # stiffness curve (ball, stiffness_x)
+    "model_stiffness_kN_m": ("kN m-1", "fitted structural stiffness kB(x) (Eq. 4)"),
+}
+
+_TEXT_PER_IMPACT = ["impact_ball", "status", "reason", "trace_file", "trace_sha256"]
+
+
+def _text_array(values) -> np.ndarray:
+    """Object array of Python str (netCDF variable-length strings)."""
+    return np.array(["" if v is None else str(v) for v in values], dtype=object)
+
+
+def _float(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _as_1d(value) -> np.ndarray:
+    if value is None:
+        return np.empty(0)
+    return np.asarray(value, dtype=float).ravel()
+
+
+def _pad(rows: list[np.ndarray], length: int, dtype) -> np.ndarray:
+    out = np.full((len(rows), length), np.nan, dtype=dtype)
+    for i, row in enumerate(rows):
+        out[i, : row.size] = row
+    return out
+
+
+def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset:
+    """Fill ``units`` and ``long_name`` of every known variable from :data:`VARIABLE_ATTRS`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive or part of one; modified in place and returned.
+    overwrite : bool, optional
+        Replace attributes that are already set.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds``. Variables unknown to :data:`VARIABLE_ATTRS` and lacking ``units`` or
+        ``long_name`` raise a warning (the archive contract wants both everywhere).
+    """
+    for name in list(ds.variables):
+        attrs = ds[name].attrs
+        if name in VARIABLE_ATTRS:
+            units, long_name = VARIABLE_ATTRS[name]
+            if overwrite or "units" not in attrs:
+                attrs["units"] = units
+            if overwrite or "long_name" not in attrs:
+                attrs["long_name"] = long_name
+        elif "units" not in attrs or "long_name" not in attrs:
+            warnings.warn(
+                f"archive variable {name!r} has no units/long_name and is not in VARIABLE_ATTRS",
+                stacklevel=2,
+            )
+    return ds
+
+
+def _kelvin_voigt_force(time_s: np.ndarray, vin, mass, kv_kN_m, kv_N_s_m) -> np.ndarray:
+    """Kelvin-Voigt force on the impact's own time samples (NaN where undefined)."""
+    from .model import simulate_kelvin_voigt
+
+    out = np.full(time_s.shape, np.nan)
+    kb = kv_kN_m * 1e3
+    ok = np.isfinite(time_s)
+    values = (vin, mass, kb, kv_N_s_m)
+    if not ok.any() or not all(np.isfinite(v) for v in values) or min(vin, mass, kb) <= 0 or kv_N_s_m < 0:
+        return out
+    try:
+        _, _, force = simulate_kelvin_voigt(time_s[ok], vin, mass, kb, kv_N_s_m)
+    except ValueError:  # overdamped or otherwise outside the analytic solution
+        return out
+    out[ok] = force
+    return out
+
+
+def impacts_dataset(
+    results: Iterable,
+    *,
+    max_raw_samples: int | None = None,
+    trace_info: Mapping[str, tuple[str, str]] | None = None,
+) -> xr.Dataset:
+    """Per-impact part of the archive from processed impacts.
+
+    Parameters
+    ----------
+    results : iterable of ImpactResult
+        Processed impacts in raw order (``ballimpact.processing.ImpactResult`` or any
+        object with the same attributes). Series may be empty (impact excluded
+        before the contact was found).
+    max_raw_samples : int, optional
+        Decimate each raw trace (every k-th sample) to at most this many samples;
+        None keeps the whole trace.
+    trace_info : mapping, optional
+        impact_id -> (trace file relative to the session, its SHA-256). Otherwise
+        taken from the results' ``trace_file`` / ``trace_sha256`` attributes (or
+        ``trace``) when they have them, else empty.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``impact``, ``sample``, ``raw_sample`` (each at least 1 long, NaN
+        padded). ``kv_force_N`` is the Kelvin-Voigt force of Eqs. (1)-(3) in Goodwill &
+        Haake 2004 on each impact's time samples; ``model_force_N``,
+        ``model_agreement_fraction`` and ``model_rms_N`` are NaN until
+        :func:`add_model_forces` runs with the fitted parameters.
+    """
+    if max_raw_samples is not None and (int(max_raw_samples) != max_raw_samples or max_raw_samples < 2):
+        raise ValueError(f"max_raw_samples must be an integer >= 2 or None, got {max_raw_samples!r}")
+    trace_info = {} if trace_info is None else dict(trace_info)
+
+    ids, text = [], {k: [] for k in _TEXT_PER_IMPACT}
+    scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
+    series = {k: [] for k in _SERIES}
+    raw_t, raw_v = [], []
+    for r in results:
+        impact_id = str(r.impact_id)
+        if impact_id in ids:
+            raise ValueError(f"duplicate impact_id {impact_id!r} in the results")
+        ids.append(impact_id)
+        status = str(r.status)
+        if status not in ("ok", "excluded"):
+            raise ValueError(f"impact {impact_id}: status must be 'ok' or 'excluded', got {status!r}")
+        trace_file, trace_sha = trace_info.get(
+            impact_id,
+            (getattr(r, "trace_file", None) or getattr(r, "trace", None) or "", getattr(r, "trace_sha256", "") or ""),
+        )
+        text["impact_ball"].append(r.ball)
+        text["status"].append(status)
+        text["reason"].append("" if status == "ok" else (r.reason or ""))
+        text["trace_file"].append(trace_file)
+        text["trace_sha256"].append(trace_sha)
+        for name, attr in _PER_IMPACT_SCALARS:
+            scalars[name].append(_float(getattr(r, attr, math.nan)))
+        lengths = {k: _as_1d(getattr(r, k, None)).size for k in _SERIES}
+        n = lengths["time_s"]
+        for k in _SERIES:
+            arr = _as_1d(getattr(r, k, None))
+            if arr.size != n:
+                raise ValueError(
+                    f"impact {impact_id}: series {k} has {arr.size} samples but time_s has {n}"
+                )
+            series[k].append(arr)
+        rt, rv = _as_1d(getattr(r, "raw_time_s", None)), _as_1d(getattr(r, "raw_voltage_V", None))
+        if rt.size != rv.size:
+            raise ValueError(
+                f"impact {impact_id}: raw_time_s has {rt.size} samples but raw_voltage_V has {rv.size}"
+            )
+        if max_raw_samples is not None and rv.size > max_raw_samples:
+            step = math.ceil(rv.size / max_raw_samples)
+            rt, rv = rt[::step], rv[::step]
+        raw_t.append(rt)
+        raw_v.append(rv)
+
+    n_sample = max([s.size for s in series["time_s"]] + [1])
+    n_raw = max([s.size for s in raw_v] + [1])
+    dims, raw_dims = ("impact", "sample"), ("impact", "raw_sample")
+    data_vars = {k: ("impact", _text_array(v)) for k, v in text.items()}
+    data_vars.update({k: ("impact", np.asarray(v, dtype=float)) for k, v in scalars.items()})
+    for k in _SERIES:
+        data_vars[k] = (dims, _pad(series[k], n_sample, np.float64))
+    kv = [
+        _kelvin_voigt_force(
+            t, scalars["vin_m_s"][i], scalars["impact_mass_kg"][i],
+            scalars["kv_stiffness_kN_m"][i], scalars["kv_damping_N_s_m"][i],
+        )
+        for i, t in enumerate(series["time_s"])
+    ]
+    data_vars["kv_force_N"] = (dims, _pad(kv, n_sample, np.float64))
+    data_vars["model_force_N"] = (dims, np.full((len(ids), n_sample), np.nan))
+    data_vars["model_agreement_fraction"] = ("impact", np.full(len(ids), np.nan))
+    data_vars["model_rms_N"] = ("impact", np.full(len(ids), np.nan))
+    data_vars["raw_time_s"] = (raw_dims, _pad(raw_t, n_raw, np.float32))
+    data_vars["raw_voltage_V"] = (raw_dims, _pad(raw_v, n_raw, np.float32))
+    ds = xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(ids))})
+    return set_variable_attrs(ds)
+
+
+def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:
+    """Table 2 of Goodwill & Haake 2004 on the ``ball`` dimension (NaN for other ball keys).
+
+    Parameters
+    ----------
+    balls : iterable of str
+        Ball type keys of the session.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``paper_kb0_kN_m`` [kN/m], ``paper_ak_kN_m`` [kN/m^(1+a)], ``paper_a`` [-],
+        ``paper_ac_kN_s_m3`` [kN s/m^3].
+    """
+    from .balls import BALLS
+
+    keys = [str(b) for b in balls]
+    cols = {"paper_kb0_kN_m": "kb0_kN_m", "paper_ak_kN_m": "ak_kN_m", "paper_a": "a", "paper_ac_kN_s_m3": "ac_kN_s_m3"}
+    data = {name: np.full(len(keys), np.nan) for name in cols}
+    for i, key in enumerate(keys):
+        if key in BALLS:
+            table = BALLS[key].params.table_units()
+            for name, col in cols.items():
+                data[name][i] = table[col]
+    ds = xr.Dataset({k: ("ball", v) for k, v in data.items()}, coords={"ball": _text_array(keys)})
+    return set_variable_attrs(ds)
+
+
+def _fitted_si(ds: xr.Dataset, ball: str) -> tuple[float, float, float, float, float] | None:
+    """(mass_kg, kb0_N_m, ak, a, ac) in SI for one ball, None when any is missing or NaN."""
+    names = ("mass_kg", "kb0_kN_m", "ak_kN_m", "a", "ac_kN_s_m3")
+    if "ball" not in ds.coords or any(n not in ds for n in names):
+        return None
+    idx = np.flatnonzero(ds["ball"].values.astype(str) == ball)
+    if idx.size == 0:
+        return None
+    m, kb0, ak, a, ac = (float(ds[n].values[idx[0]]) for n in names)
+    values = (m, kb0 * 1e3, ak * 1e3, a, ac * 1e3)
+    if not all(np.isfinite(values)) or m <= 0 or a <= 0 or min(values) < 0:
+        return None
+    return values
+
+
+def add_model_forces(ds: xr.Dataset) -> xr.Dataset:
+    """Fill ``model_force_N``, ``model_agreement_fraction`` and ``model_rms_N`` from the fitted parameters.
+
+    For every impact with a contact series, a finite inbound speed and a ball with
+    finite fitted parameters, the improved model (Eq. (14) in Goodwill & Haake
+    2004, :func:`ballimpact.model.simulate_impact`) is run at the impact's inbound
+    speed and mass and interpolated onto its ``time_s``; after the model's end of
+    contact its force is 0. The agreement fraction is the share of samples with
+    ``time_s`` >= :data:`AGREEMENT_START_S` where the model is within
+    :data:`AGREEMENT_TOLERANCE` of the measured peak force (section 4 of the paper);
+    the RMS difference is taken over the whole contact.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive holding the per-impact part and the per-ball fitted parameters.
+
+    Returns
+    -------
+    xarray.Dataset
+        A copy with the three variables filled (NaN where no model applies).
+    """
+    from .model import simulate_impact
+
+    ds = ds.copy()
+    n_impact, n_sample = ds.sizes.get("impact", 0), ds.sizes.get("sample", 0)
+    model_force = np.full((n_impact, n_sample), np.nan)
+    agreement = np.full(n_impact, np.nan)
+    rms = np.full(n_impact, np.nan)
+    balls = ds["impact_ball"].values.astype(str) if n_impact else np.array([], dtype=str)
+    for ball in np.unique(balls):
+        params = _fitted_si(ds, ball)
+        if params is None:
+            continue
+        _, kb0, ak, a, ac = params
+        for i in np.flatnonzero(balls == ball):
+            t = ds["time_s"].values[i]
+            f_meas = ds["force_N"].values[i]
+            vin = float(ds["vin_m_s"].values[i])
+            mass = float(ds["impact_mass_kg"].values[i]) if "impact_mass_kg" in ds else params[0]
+            if not np.isfinite(mass) or mass <= 0:
+                mass = params[0]
+            ok = np.isfinite(t) & np.isfinite(f_meas)
+            if ok.sum() < 2 or not np.isfinite(vin) or vin <= 0:
+                continue
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                sim = simulate_impact(vin, mass, kb0, ak, a, ac, record=True)
+            ts, fs = sim.time_s, np.asarray(sim.force_N)
+            good = np.isfinite(fs)
+            if good.sum() < 2:
+                continue
+            f_model = np.interp(t[ok], ts[good], fs[good], right=0.0)
+            model_force[i, ok] = f_model
+            diff = f_model - f_meas[ok]
+            rms[i] = float(np.sqrt(np.mean(diff**2)))
+            peak = np.nanmax(f_meas[ok])
+            late = t[ok] >= AGREEMENT_START_S
+            if late.any() and peak > 0:
+                agreement[i] = float(np.mean(np.abs(diff[late]) <= AGREEMENT_TOLERANCE * peak))
+    ds["model_force_N"] = (("impact", "sample"), model_force)
+    ds["model_agreement_fraction"] = ("impact", agreement)
+    ds["model_rms_N"] = ("impact", rms)
+    return set_variable_attrs(ds)
+
+
+def assemble_archive(impacts: xr.Dataset, fits: Iterable[xr.Dataset]) -> xr.Dataset:
+    """Merge the per-impact dataset and the per-ball fit datasets into one archive.
+
+    Adds the paper's Table 2 values (``paper_*``) when the fits do not carry them,
+    fills the model forces (:func:`add_model_forces`) and the variable attributes.
+
+    Parameters
+    ----------
+    impacts : xarray.Dataset
+        From :func:`impacts_dataset` (possibly concatenated chunks, raw order).
+    fits : iterable of xarray.Dataset
+        One dataset per ball type on the ``ball`` dimension (length 1 each).
+
+    Returns
+    -------
+    xarray.Dataset
+        The archive without the global attributes (see :func:`add_metadata`).
+    """
+    fits = list(fits)
+    ds = impacts
+    if fits:
+        try:
+            per_ball = xr.concat(
+                fits, dim="ball", data_vars="minimal", coords="minimal", compat="override",
+                join="exact", combine_attrs="drop_conflicts",
+            )
+        except ValueError as err:
+            raise ValueError(
+                f"the fit datasets do not share their speed / model_time / stiffness_x grids: {err}"
+            ) from err
+        balls = [str(b) for b in per_ball["ball"].values]
+        dupes = sorted({b for b in balls if balls.count(b) > 1})
+        if dupes:
+            raise ValueError(f"more than one fit dataset for ball type(s) {dupes}")
+        ds = xr.merge([impacts, per_ball], combine_attrs="drop_conflicts", join="exact", compat="no_conflicts")
+    if "ball" in ds.coords and "paper_a" not in ds:
+        ds = ds.merge(paper_parameters_dataset(ds["ball"].values))
+    if "ball" in ds.coords:
+        ds = ds.assign_coords(ball=_text_array(ds["ball"].values))
+    ds = add_model_forces(ds) if "ball" in ds.coords else ds
+    return set_variable_attrs(ds)
+
+
+def _column(ds: xr.Dataset, name: str, n: int, *, text: bool = False):
+    if name in ds.variables:
+        values = ds[name].values
+        return [("" if v is None else str(v)) for v in values] if text else values
+    return [""] * n if text else np.full(n, np.nan)
+
+
+def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
+    """The impacts.csv table: one row per impact in raw order, columns :data:`IMPACT_COLUMNS`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive (or its per-impact part).
+
+    Returns
+    -------
+    pandas.DataFrame
+        SI columns as named in shared/spec/outputs.md; ``reason`` is empty for ok impacts.
+    """
+    n = ds.sizes.get("impact", 0)
+    data = {}
+    for col in IMPACT_COLUMNS:
+        if col == "impact_id":
+            data[col] = _column(ds, "impact_id", n, text=True)
+        elif col == "ball":
+            data[col] = _column(ds, "impact_ball", n, text=True)
+        elif col in ("status", "reason"):
+            data[col] = _column(ds, col, n, text=True)
+        else:
+            data[col] = np.asarray(_column(ds, col, n), dtype=float)
+    table = pd.DataFrame(data, columns=IMPACT_COLUMNS)
+    table.loc[table["status"] == "ok", "reason"] = ""
+    return table
+
+
+def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
+    """The parameters.csv table: one row per ball type, columns :data:`PARAMETER_COLUMNS`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive with the per-ball variables (missing ones give NaN / empty cells).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
+        a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
+    """
+    n = ds.sizes.get("ball", 0)
+    data = {}
+    for col in PARAMETER_COLUMNS:
+        if col in ("ball", "kb0_source"):
+            data[col] = _column(ds, col, n, text=True)
+        elif col == "n_impacts":
+            values = np.asarray(_column(ds, col, n), dtype=float)
+            data[col] = pd.array(
+                [int(v) if np.isfinite(v) else pd.NA for v in values], dtype="Int64"
+            )
+        else:
+            data[col] = np.asarray(_column(ds, col, n), dtype=float)
+    return pd.DataFrame(data, columns=PARAMETER_COLUMNS)
+
+
+def _utc_now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+def add_metadata(
+    ds: xr.Dataset,
+    *,
+    session_id: str,
+    session_yaml_text: str,
+    raw_sha256: Mapping[str, str],
+    synthetic: bool,
+    history: str,
+) -> xr.Dataset:
+    """Set the CF-1.10 / ACDD-1.3 global attributes of the archive.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The archive; a shallow copy with new attributes is returned.
+    session_id : str
+        Session identifier (folder name).
+    session_yaml_text : str
+        The raw session.yaml text, stored verbatim in ``session_yaml``.
+    raw_sha256 : mapping of str to str
+        Relative path of every raw file -> SHA-256 hex digest; stored as JSON text.
+    synthetic : bool
+        True when the session came from the synthetic generator; stored as 1/0
+        (netCDF has no boolean attributes).
+    history : str
+        What made the file (e.g. the command); prefixed with the UTC time.
+
+    Returns
+    -------
+    xarray.Dataset
+        Copy of ``ds`` with title, summary, history, source, date_created,
+        references, Conventions, software_version, session_id, synthetic,
+        session_yaml, raw_sha256 and the session's date, operator and description.
+    """
+    from . import __version__
+
+    if not isinstance(session_id, str) or not session_id:
+        raise ValueError(f"session_id must be a non-empty string, got {session_id!r}")
+    if not isinstance(session_yaml_text, str):
+        raise ValueError(f"session_yaml_text must be str, got {type(session_yaml_text).__name__}")
+    bad = [k for k, v in dict(raw_sha256).items() if not isinstance(k, str) or not isinstance(v, str)]
+    if bad:
+        raise ValueError(f"raw_sha256 must map str paths to str digests; bad key(s): {bad[:3]}")
+    meta = {}
+    try:
+        import yaml
+
+        parsed = yaml.safe_load(session_yaml_text) or {}
+        meta = parsed if isinstance(parsed, dict) else {}
+    except Exception:  # the text is archived as is; a parse failure only loses the summary fields
+        meta = {}
+    created = _utc_now()
+    description = str(meta.get("description", "") or "")
+    kind = "synthetic session from the ballimpact generator" if synthetic else "laboratory session"
+    summary = (
+        f"Normal impacts of tennis balls on a rigid force platform ({kind} {session_id}): "
+        "per-impact light-gate speeds, COR, contact time, calibrated force, centre-of-mass "
+        "velocity and displacement, and the Goodwill & Haake (2004) viscoelastic ball model "
+        "fitted per ball type."
+    )
+    if description:
+        summary += f" Session description: {description}"
+    out = ds.copy()
+    out.attrs = dict(ds.attrs)
+    out.attrs.update(
+        {
+            "title": f"Tennis ball impacts on a rigid surface, session {session_id}",
+            "summary": summary,
+            "history": f"{created} {history} (ballimpact {__version__})",
+            "source": (
+                "synthetic force-platform traces and light-gate times (ballimpact.synth)"
+                if synthetic
+                else "piezoelectric force platform with charge amplifier and light gates"
+            ),
+            "date_created": created,
+            "references": PAPER_REFERENCE,
+            "Conventions": "CF-1.10, ACDD-1.3",
+            "software_version": __version__,
+            "session_id": session_id,
+            "session_date": str(meta.get("date", "") or ""),
+            "operator": str(meta.get("operator", "") or ""),
+            "session_description": description,
+            "synthetic": np.int8(1 if synthetic else 0),
+            "session_yaml": session_yaml_text,
+            "raw_sha256": json.dumps(dict(sorted(dict(raw_sha256).items())), indent=None),
+        }
+    )
+    return out
+
+
+def _encoding(ds: xr.Dataset) -> dict:
+    enc = {}
+    for name, var in ds.variables.items():
+        if var.dtype.kind in "fiub":
+            if var.ndim == 0 or var.size == 0:
+                continue
+            enc[name] = {"zlib": True, "complevel": 4}
+            if var.dtype.kind == "f":
+                enc[name]["_FillValue"] = np.nan
+        elif var.dtype.kind in "OUS":
+            enc[name] = {"dtype": str}
+    return enc
+
+
+def _text_to_object(ds: xr.Dataset) -> xr.Dataset:
+    """Make every text variable an object array of str (variable-length strings in netCDF)."""
+    ds = ds.copy()
+    for name in list(ds.variables):
+        var = ds[name]
+        if var.dtype.kind in "OUS":
+            values = np.asarray(var.values)
+            fixed = np.array(
+                ["" if (v is None or (isinstance(v, float) and math.isnan(v))) else str(v) for v in values.ravel()],
+                dtype=object,
+            ).reshape(values.shape)
+            if name in ds.coords:
+                ds = ds.assign_coords({name: (var.dims, fixed, var.attrs)})
+            else:
+                ds[name] = (var.dims, fixed, var.attrs)
+    return ds
+
+
+def write_dataset(ds: xr.Dataset, path) -> Path:
+    """Write the archive to netCDF4, atomically.
+
+    Every numeric variable is compressed (zlib, level 4), text is stored as
+    variable-length strings. The file is written beside ``path`` under a temporary
+    name and moved into place with :func:`os.replace`, so an interrupted run never
+    leaves a half-written file under the final name.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Dataset to write.
+    path : str or Path
+        Destination; its folder must exist.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"cannot write {path}: folder {path.parent} does not exist")
+    ds = _text_to_object(ds)
+    for var in ds.variables.values():
+        var.encoding = {}
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        ds.to_netcdf(tmp, mode="w", engine="netcdf4", format="NETCDF4", encoding=_encoding(ds))
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return path
+
+
+def open_dataset(path) -> xr.Dataset:
+    """Read an archive (or intermediate file) fully into memory and close the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        netCDF4 file written by :func:`write_dataset`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Text variables as object arrays of str.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"archive not found: {path}")
+    with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as f:
+        ds = f.load()
+    return _text_to_object(ds)

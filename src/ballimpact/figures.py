@@ -1,0 +1,837 @@
+"""Figures of the session archive: the paper's Figs 2b, 7, 8, 9, 10, the kCAL check and QC traces (matplotlib, Agg)."""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+import textwrap
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+__all__ = [
+    "DPI",
+    "FIGURE_FILES",
+    "KCAL_BAND_ROBUST_SD",
+    "COMPONENT_SPEED_M_S",
+    "fig_contact_time_cor",
+    "fig_stiffness",
+    "fig_force_curves",
+    "fig_components",
+    "fig_kelvin_voigt",
+    "fig_kcal",
+    "fig_qc_impact",
+    "excluded_impacts",
+    "save_figure",
+    "save_all",
+]
+
+#: Resolution of the PNG files [dots per inch].
+DPI = 150
+#: File name of each report figure, in report order, with the function that draws it.
+FIGURE_FILES = {
+    "fig7_contact_time_cor.png": "fig_contact_time_cor",
+    "fig8_stiffness.png": "fig_stiffness",
+    "fig9_force_curves.png": "fig_force_curves",
+    "fig10_components.png": "fig_components",
+    "fig2b_kelvin_voigt.png": "fig_kelvin_voigt",
+    "kcal.png": "fig_kcal",
+}
+#: Half width of the kCAL band around the session median, in robust standard
+#: deviations (1.4826 x median absolute deviation of the good impacts) [-].
+KCAL_BAND_ROBUST_SD = 3.0
+#: Inbound speed of the force-component figure (Fig. 10 of the paper) [m/s].
+COMPONENT_SPEED_M_S = 20.0
+#: A measured impact is overlaid on Fig. 10 when its speed is this close to 20 m/s [m/s].
+COMPONENT_SPEED_TOLERANCE_M_S = 2.5
+#: Width of the figures [in]; they are read on A4 paper.
+FIGURE_WIDTH_IN = 7.5
+
+_MAD_TO_SD = 1.4826  # robust standard deviation per median absolute deviation (normal data)
+_STYLE = {
+    "font.size": 9,
+    "axes.titlesize": 9.5,
+    "axes.labelsize": 9,
+    "legend.fontsize": 7.5,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "figure.titlesize": 11,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "lines.linewidth": 1.3,
+}
+_NO_FIT = "no fit"
+_NO_GOOD = "no good impacts"
+
+
+@contextmanager
+def _style():
+    with matplotlib.rc_context(_STYLE):
+        yield
+
+
+def _new_figure(width_in: float, height_in: float) -> Figure:
+    fig = Figure(figsize=(width_in, height_in), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+# ----------------------------------------------------------------------------- archive access
+
+
+def _text(values) -> np.ndarray:
+    return np.array(["" if v is None else str(v) for v in np.asarray(values).ravel()], dtype=object)
+
+
+def _balls(ds) -> list[str]:
+    """Ball keys: the ``ball`` coordinate, then any ball seen only in the impacts."""
+    balls = list(_text(ds["ball"].values)) if "ball" in ds.coords else []
+    if "impact_ball" in ds:
+        for b in _text(ds["impact_ball"].values):
+            if b not in balls:
+                balls.append(b)
+    return balls
+
+
+def _ball_index(ds, ball) -> int | None:
+    if "ball" not in ds.coords:
+        return None
+    idx = np.flatnonzero(_text(ds["ball"].values) == ball)
+    return int(idx[0]) if idx.size else None
+
+
+def _ball_value(ds, name, ball, default=np.nan):
+    i = _ball_index(ds, ball)
+    if i is None or name not in ds:
+        return default
+    return ds[name].values[i]
+
+
+def _ball_array(ds, name, ball) -> np.ndarray | None:
+    i = _ball_index(ds, ball)
+    if i is None or name not in ds:
+        return None
+    return np.asarray(ds[name].values[i], dtype=float)
+
+
+def _label(ds, ball) -> str:
+    label = _ball_value(ds, "ball_label", ball, default="")
+    label = "" if label is None else str(label)
+    return label if label and label != "nan" else str(ball)
+
+
+def _colors(ds) -> dict[str, str]:
+    return {b: f"C{i % 10}" for i, b in enumerate(_balls(ds))}
+
+
+def _impacts(ds, ball=None, status=None) -> np.ndarray:
+    """Indices of impacts (raw order) of a ball and/or status."""
+    n = ds.sizes.get("impact", 0)
+    keep = np.ones(n, dtype=bool)
+    if ball is not None:
+        keep &= _text(ds["impact_ball"].values) == ball
+    if status is not None:
+        keep &= _text(ds["status"].values) == status
+    return np.flatnonzero(keep)
+
+
+def _impact_value(ds, name, i, default=np.nan):
+    return float(ds[name].values[i]) if name in ds else default
+
+
+def _series(ds, i, *names):
+    """Finite part of the contact series of impact i (rows where time_s is finite)."""
+    t = np.asarray(ds["time_s"].values[i], dtype=float) if "time_s" in ds else np.empty(0)
+    keep = np.isfinite(t)
+    out = [t[keep]]
+    for name in names:
+        out.append(np.asarray(ds[name].values[i], dtype=float)[keep] if name in ds else np.full(keep.sum(), np.nan))
+    return out
+
+
+def _fitted(ds, ball):
+    """(mass_kg, kb0_N_m, ak, a, ac) in SI, None when the fit is missing or failed."""
+    from .archive import _fitted_si
+
+    return _fitted_si(ds, ball)
+
+
+def _simulate(ds, ball, vin, mass=None):
+    """Improved model at one speed with the fitted parameters, or None."""
+    from .model import simulate_impact
+
+    params = _fitted(ds, ball)
+    if params is None or not np.isfinite(vin) or vin <= 0:
+        return None
+    m, kb0, ak, a, ac = params
+    if mass is not None and np.isfinite(mass) and mass > 0:
+        m = mass
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        sim = simulate_impact(vin, m, kb0, ak, a, ac, record=True)
+    good = np.isfinite(sim.force_N)
+    if good.sum() < 2:
+        return None
+    return sim.time_s[good], np.asarray(sim.force_N)[good], np.asarray(sim.displacement_m)[good]
+
+
+def _note(ax, text, *, color="0.35"):
+    ax.text(
+        0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", fontsize=10, color=color,
+        bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9}, zorder=10,
+    )
+
+
+def excluded_impacts(ds) -> list[tuple[str, str, str]]:
+    """(impact_id, ball, reason) of every excluded impact, in raw order."""
+    if ds.sizes.get("impact", 0) == 0:
+        return []
+    ids, balls, reasons = (_text(ds[n].values) for n in ("impact_id", "impact_ball", "reason"))
+    return [(ids[i], balls[i], reasons[i]) for i in _impacts(ds, status="excluded")]
+
+
+def _grid(fig, n, ncols):
+    nrows = max(1, -(-n // ncols))
+    axes = np.atleast_2d(fig.subplots(nrows, ncols, squeeze=False))
+    flat = list(axes.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return flat[:n]
+
+
+def _rows_height(n_rows, per_row, extra=0.7, cap=10.0):
+    return min(per_row * max(n_rows, 1) + extra, cap)
+
+
+# ----------------------------------------------------------------------------- Fig. 7
+
+
+def _draw_contact_time_cor(fig, ds):
+    balls = _balls(ds)
+    colors = _colors(ds)
+    if not balls:
+        _note(fig.subplots(), "no impacts in this session")
+        return
+    axes = fig.subplots(len(balls), 2, squeeze=False, sharex=True)
+    speed = np.asarray(ds["speed_m_s"].values, dtype=float) if "speed_m_s" in ds else None
+    for row, ball in enumerate(balls):
+        ax_tc, ax_cor = axes[row]
+        good = _impacts(ds, ball, "ok")
+        c = colors[ball]
+        for ax, meas, model, unit_label in (
+            (ax_tc, "contact_time_ms", "model_contact_time_ms", "Contact time TC [ms]"),
+            (ax_cor, "cor", "model_cor", "COR [-]"),
+        ):
+            vin = ds["vin_m_s"].values[good] if good.size else np.empty(0)
+            y = ds[meas].values[good] if good.size else np.empty(0)
+            if good.size:
+                ax.plot(vin, y, "o", color=c, ms=4.5, mfc="none", mew=1.2, label="measured")
+            curve = _ball_array(ds, model, ball)
+            lo, hi = _ball_array(ds, model + "_lo", ball), _ball_array(ds, model + "_hi", ball)
+            if speed is not None and curve is not None and np.isfinite(curve).any():
+                ax.plot(speed, curve, "-", color="k", lw=1.2, label="fitted model")
+                if lo is not None and hi is not None and np.isfinite(lo).any():
+                    ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
+            else:
+                _note(ax, _NO_FIT if good.size else f"{_NO_GOOD}\n{_NO_FIT}")
+            ax.set_ylabel(unit_label)
+            if good.size or (curve is not None and np.isfinite(curve).any()):
+                ax.legend(loc="best", frameon=True)
+        n_used = _ball_value(ds, "n_impacts", ball)
+        n_used = f", {int(n_used)} used in fit" if np.isfinite(float(n_used)) else ""
+        ax_tc.set_title(f"{_label(ds, ball)}: contact time ({good.size} good{n_used})", loc="left")
+        ax_cor.set_title(f"{_label(ds, ball)}: coefficient of restitution", loc="left")
+    for ax in axes[-1]:
+        ax.set_xlabel("Inbound speed VB [m/s]")
+    fig.suptitle("Contact time and COR against inbound speed (cf. Fig. 7 of Goodwill & Haake 2004)")
+
+
+def fig_contact_time_cor(ds) -> Figure:
+    """Measured contact time and COR against inbound speed with the fitted model (paper Fig. 7).
+
+    One row per ball type: TC [ms] and COR [-] of the good impacts against VB
+    [m/s], the fitted model curve (Eq. (14) in Goodwill & Haake 2004) and its 95 %
+    band. Panels of a ball without good impacts or fit say so.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.3))
+        _draw_contact_time_cor(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- Fig. 8
+
+
+def _draw_stiffness(fig, ds):
+    from .model import structural_stiffness
+
+    ax = fig.subplots()
+    colors = _colors(ds)
+    x_m = np.asarray(ds["stiffness_x_m"].values, dtype=float) if "stiffness_x_m" in ds else np.linspace(0, 0.03, 61)
+    no_fit = []
+    any_line = False
+    for ball in _balls(ds):
+        c = colors[ball]
+        label = _label(ds, ball)
+        curve = _ball_array(ds, "model_stiffness_kN_m", ball)
+        params = _fitted(ds, ball)
+        if (curve is None or not np.isfinite(curve).any()) and params is not None:
+            curve = structural_stiffness(x_m, params[1], params[2], params[3]) / 1e3
+        if curve is not None and np.isfinite(curve).any():
+            ax.plot(x_m * 1e3, curve, "-", color=c, lw=1.8, label=f"{label}: fitted")
+            any_line = True
+        else:
+            no_fit.append(label)
+        paper = [float(_ball_value(ds, n, ball)) for n in ("paper_kb0_kN_m", "paper_ak_kN_m", "paper_a")]
+        if all(np.isfinite(paper)):
+            kb0, ak, a = paper
+            ax.plot(x_m * 1e3, structural_stiffness(x_m, kb0, ak, a), "--", color=c, lw=1.2,
+                    label=f"{label}: paper Table 2")
+            any_line = True
+    ax.set_xlabel("Centre-of-mass displacement x [mm]")
+    ax.set_ylabel("Structural stiffness kB [kN/m]")
+    ax.set_xlim(x_m[0] * 1e3, x_m[-1] * 1e3)
+    ax.set_ylim(bottom=0)
+    if any_line:
+        ax.legend(loc="upper left", ncols=1)
+    if no_fit:
+        ax.text(0.98, 0.03, "no fit: " + ", ".join(no_fit), transform=ax.transAxes, ha="right", va="bottom",
+                color="0.3", bbox={"fc": "white", "ec": "0.7"})
+    ax.set_title("kB = kB(0) + AK x^a (Eq. 4); solid: fitted, dashed: paper Table 2", loc="left")
+    fig.suptitle("Structural stiffness against displacement (cf. Fig. 8 of Goodwill & Haake 2004)")
+
+
+def fig_stiffness(ds) -> Figure:
+    """Structural stiffness kB against centre-of-mass displacement for every ball (paper Fig. 8).
+
+    kB = kB(0) + AK x^a (Eq. (4) in Goodwill & Haake 2004) with the fitted
+    parameters (solid) and Table 2 (dashed, Table 2 balls only); kB [kN/m] against
+    x [mm].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, 5.2)
+        _draw_stiffness(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- Fig. 9
+
+
+def _extreme_good(ds, ball):
+    """Good impacts of a ball at the lowest and the highest inbound speed (one if they coincide)."""
+    good = [i for i in _impacts(ds, ball, "ok") if np.isfinite(_impact_value(ds, "vin_m_s", i))]
+    good = [i for i in good if _series(ds, i)[0].size >= 2]
+    if not good:
+        return []
+    vin = np.array([_impact_value(ds, "vin_m_s", i) for i in good])
+    lo, hi = good[int(np.argmin(vin))], good[int(np.argmax(vin))]
+    return [lo] if lo == hi else [lo, hi]
+
+
+def _draw_force_curves(fig, ds):
+    balls = _balls(ds)
+    if not balls:
+        _note(fig.subplots(), "no impacts in this session")
+        return
+    axes = fig.subplots(len(balls), 2, squeeze=False)
+    speed_colors = ("C0", "C3")
+    for row, ball in enumerate(balls):
+        ax_t, ax_x = axes[row]
+        picks = _extreme_good(ds, ball)
+        label = _label(ds, ball)
+        ax_t.set_title(f"{label}: force-time", loc="left")
+        ax_x.set_title(f"{label}: force-displacement", loc="left")
+        if not picks:
+            for ax in (ax_t, ax_x):
+                _note(ax, _NO_GOOD)
+        fit_ok = _fitted(ds, ball) is not None
+        for k, i in enumerate(picks):
+            c = speed_colors[k]
+            vin = _impact_value(ds, "vin_m_s", i)
+            t, f, x = _series(ds, i, "force_N", "displacement_m")
+            ax_t.plot(t * 1e3, f, "-", color=c, lw=1.1, label=f"measured {vin:.1f} m/s")
+            ax_x.plot(x * 1e3, f, "-", color=c, lw=1.1, label=f"measured {vin:.1f} m/s")
+            sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
+            if sim is not None:
+                ts, fs, xs = sim
+                ax_t.plot(ts * 1e3, fs, "--", color="k" if k == 0 else "0.45", lw=1.2, label=f"model {vin:.1f} m/s")
+                ax_x.plot(xs * 1e3, fs, "--", color="k" if k == 0 else "0.45", lw=1.2, label=f"model {vin:.1f} m/s")
+        if picks and not fit_ok:
+            for ax in (ax_t, ax_x):
+                ax.text(0.98, 0.95, _NO_FIT, transform=ax.transAxes, ha="right", va="top", color="0.3",
+                        fontsize=10, bbox={"fc": "white", "ec": "0.7"})
+        for ax in (ax_t, ax_x):
+            ax.set_ylabel("Force on the ball [N]")
+            if picks:
+                ax.legend(loc="upper right" if fit_ok else "upper left")
+                ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+        ax_t.set_xlabel("Time since first contact [ms]")
+        ax_x.set_xlabel("Centre-of-mass displacement [mm]")
+    fig.suptitle("Measured and modelled force at the lowest and highest good speed (cf. Fig. 9)")
+
+
+def fig_force_curves(ds) -> Figure:
+    """Measured against modelled force-time and force-displacement curves (paper Fig. 9).
+
+    For each ball type, the good impacts at the lowest and the highest inbound
+    speed: measured force [N] against time [ms] and against centre-of-mass
+    displacement [mm], with the fitted model (Eq. (14) in Goodwill & Haake 2004,
+    simulated at the same speed) dashed.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.4))
+        _draw_force_curves(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- Fig. 10
+
+
+def _nearest_good(ds, ball, speed, tol):
+    good = [i for i in _impacts(ds, ball, "ok") if _series(ds, i)[0].size >= 2]
+    if not good:
+        return None
+    d = np.array([abs(_impact_value(ds, "vin_m_s", i) - speed) for i in good])
+    if not np.isfinite(d).any():
+        return None
+    j = int(np.nanargmin(d))
+    return good[j] if d[j] <= tol else None
+
+
+def _draw_components(fig, ds):
+    balls = _balls(ds)
+    if not balls:
+        _note(fig.subplots(), "no impacts in this session")
+        return
+    ncols = 1 if len(balls) == 1 else 2
+    axes = _grid(fig, len(balls), ncols)
+    t_ms = np.asarray(ds["model_time_s"].values, dtype=float) * 1e3 if "model_time_s" in ds else None
+    parts = (
+        ("comp_total_force_N", "total model force", "k", "-", 1.8),
+        ("comp_stiffness_force_N", "structural stiffness kB x", "C0", "-", 1.2),
+        ("comp_damping_force_N", "material damping cB x'", "C2", "-", 1.2),
+        ("comp_momentum_flux_force_N", "momentum flux cM x'", "C3", "-", 1.2),
+    )
+    for ax, ball in zip(axes, balls):
+        ax.set_title(_label(ds, ball), loc="left")
+        drawn = False
+        if t_ms is not None:
+            for name, lab, c, ls, lw in parts:
+                y = _ball_array(ds, name, ball)
+                if y is not None and np.isfinite(y).any():
+                    ax.plot(t_ms, y, ls, color=c, lw=lw, label=lab)
+                    drawn = True
+        i = _nearest_good(ds, ball, COMPONENT_SPEED_M_S, COMPONENT_SPEED_TOLERANCE_M_S)
+        if i is not None:
+            t, f = _series(ds, i, "force_N")
+            ax.plot(t * 1e3, f, "-", color="0.6", lw=1.0, zorder=1,
+                    label=f"measured {_impact_value(ds, 'vin_m_s', i):.1f} m/s")
+        if not drawn:
+            _note(ax, _NO_FIT if _impacts(ds, ball, "ok").size else f"{_NO_GOOD}\n{_NO_FIT}")
+        if drawn or i is not None:
+            ax.legend(loc="upper right")
+            ax.axhline(0.0, color="0.5", lw=0.6)
+        ax.axvspan(0, 0.6, color="C3", alpha=0.06, lw=0)
+        ax.set_xlabel("Time since first contact [ms]")
+        ax.set_ylabel("Force [N]")
+    fig.suptitle(
+        f"Force components of the fitted model at {COMPONENT_SPEED_M_S:.0f} m/s (cf. Fig. 10); "
+        "shaded: first 0.6 ms"
+    )
+
+
+def fig_components(ds) -> Figure:
+    """Structural, damping and momentum-flux force components at 20 m/s (paper Fig. 10).
+
+    One panel per ball type: the total model force and its three components
+    kB x, cB x' and cM x' [N] (Eq. (14) in Goodwill & Haake 2004) against time
+    [ms] with the fitted parameters, and the measured force of the good impact
+    nearest 20 m/s (within 2.5 m/s) in grey.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    n = len(_balls(ds))
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
+        _draw_components(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- Fig. 2b
+
+
+def _kelvin_voigt_curve(ds, i):
+    """Kelvin-Voigt force of impact i on a fine grid up to its own end (x back to 0)."""
+    from .model import simulate_kelvin_voigt
+
+    vin = _impact_value(ds, "vin_m_s", i)
+    mass = _impact_value(ds, "impact_mass_kg", i)
+    kb = _impact_value(ds, "kv_stiffness_kN_m", i) * 1e3
+    cb = _impact_value(ds, "kv_damping_N_s_m", i)
+    if all(np.isfinite((vin, mass, kb, cb))) and min(vin, mass, kb) > 0 and cb >= 0:
+        wn = np.sqrt(kb / mass)
+        zeta = cb / (2.0 * np.sqrt(kb * mass))
+        if zeta < 1:
+            t_end = np.pi / (wn * np.sqrt(1 - zeta**2))
+            t = np.linspace(0.0, t_end, 400)
+            _, _, f = simulate_kelvin_voigt(t, vin, mass, kb, cb)
+            return t, f
+    t, f = _series(ds, i, "kv_force_N")
+    keep = np.isfinite(f)
+    return (t[keep], f[keep]) if keep.sum() >= 2 else None
+
+
+def _draw_kelvin_voigt(fig, ds):
+    balls = _balls(ds)
+    if not balls:
+        _note(fig.subplots(), "no impacts in this session")
+        return
+    ncols = 1 if len(balls) == 1 else 2
+    axes = _grid(fig, len(balls), ncols)
+    colors = _colors(ds)
+    for ax, ball in zip(axes, balls):
+        good = [i for i in _impacts(ds, ball, "ok") if _series(ds, i)[0].size >= 2]
+        vins = [_impact_value(ds, "vin_m_s", i) for i in good]
+        if not good or not np.isfinite(vins).any():
+            ax.set_title(_label(ds, ball), loc="left")
+            _note(ax, _NO_GOOD)
+            ax.set_xlabel("Time since first contact [ms]")
+            ax.set_ylabel("Force [N]")
+            continue
+        i = good[int(np.nanargmax(vins))]
+        vin = _impact_value(ds, "vin_m_s", i)
+        t, f = _series(ds, i, "force_N")
+        ax.plot(t * 1e3, f, "-", color=colors[ball], lw=1.4, label="measured")
+        kv = _kelvin_voigt_curve(ds, i)
+        if kv is not None:
+            tk, fk = kv
+            ax.plot(tk * 1e3, fk, "--", color="C3", lw=1.4, label="Kelvin-Voigt (Eqs 1-3)")
+            neg = fk < 0
+            if neg.any():
+                ax.fill_between(tk * 1e3, fk, 0, where=neg, color="C3", alpha=0.25, lw=0,
+                                label=f"tensile force (min {np.nanmin(fk):.0f} N)")
+        sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
+        if sim is not None:
+            ax.plot(sim[0] * 1e3, sim[1], ":", color="k", lw=1.4, label="improved model (Eq. 14)")
+        else:
+            ax.text(0.98, 0.5, f"improved model: {_NO_FIT}", transform=ax.transAxes, ha="right",
+                    color="0.3", bbox={"fc": "white", "ec": "0.7"})
+        ax.axhline(0.0, color="0.4", lw=0.7)
+        ax.set_title(f"{_label(ds, ball)}, VB = {vin:.1f} m/s ({_text(ds['impact_id'].values)[i]})", loc="left")
+        ax.set_xlabel("Time since first contact [ms]")
+        ax.set_ylabel("Force [N]")
+        ax.legend(loc="upper right")
+    fig.suptitle("Kelvin-Voigt model against measured force, fastest good impact (cf. Fig. 2b)")
+
+
+def fig_kelvin_voigt(ds) -> Figure:
+    """Kelvin-Voigt force against the measured force of each ball's fastest good impact (paper Fig. 2b).
+
+    The Kelvin-Voigt force F = kB x + cB x' with kB and cB of Eqs. (2)-(3) in
+    Goodwill & Haake 2004 (from the impact's TC and COR), up to the return of x to
+    zero; its tensile (negative) tail is shaded. The improved model (Eq. (14)) is
+    dotted. Force [N] against time [ms].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    n = len(_balls(ds))
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
+        _draw_kelvin_voigt(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- kCAL
+
+
+def kcal_band(ds) -> tuple[float, float]:
+    """Session median of kCAL over the good impacts and the band half width [N/V].
+
+    The half width is :data:`KCAL_BAND_ROBUST_SD` robust standard deviations
+    (1.4826 x median absolute deviation). NaN when there is no good impact.
+    """
+    good = _impacts(ds, status="ok")
+    k = np.asarray(ds["kcal_N_per_V"].values[good], dtype=float) if good.size else np.empty(0)
+    k = k[np.isfinite(k)]
+    if not k.size:
+        return np.nan, np.nan
+    med = float(np.median(k))
+    return med, KCAL_BAND_ROBUST_SD * _MAD_TO_SD * float(np.median(np.abs(k - med)))
+
+
+def _draw_kcal(fig, ds):
+    ax = fig.subplots()
+    n = ds.sizes.get("impact", 0)
+    if n == 0:
+        _note(ax, "no impacts in this session")
+        return
+    colors = _colors(ds)
+    ids = _text(ds["impact_id"].values)
+    kcal = np.asarray(ds["kcal_N_per_V"].values, dtype=float)
+    x = np.arange(n)
+    med, half = kcal_band(ds)
+    if np.isfinite(med):
+        ax.axhline(med, color="k", lw=1.0, label=f"session median {med:.1f} N/V")
+        if np.isfinite(half) and half > 0:
+            ax.axhspan(med - half, med + half, color="0.5", alpha=0.15, lw=0,
+                       label=f"median \u00b1 {KCAL_BAND_ROBUST_SD:g} robust SD (\u00b1{half:.1f} N/V)")
+    for ball in _balls(ds):
+        ok = _impacts(ds, ball, "ok")
+        if ok.size:
+            ax.plot(x[ok], kcal[ok], "o", color=colors[ball], ms=5, label=_label(ds, ball))
+        ex = _impacts(ds, ball, "excluded")
+        ex_f = ex[np.isfinite(kcal[ex])]
+        if ex_f.size:
+            ax.plot(x[ex_f], kcal[ex_f], "o", color=colors[ball], ms=7, mfc="none", mew=1.2)
+    ex = _impacts(ds, status="excluded")
+    ex_f = ex[np.isfinite(kcal[ex])]
+    if ex_f.size:
+        ax.plot(x[ex_f], kcal[ex_f], "x", color="k", ms=6, mew=1.3, label="excluded (kCAL known)")
+    ex_n = ex[~np.isfinite(kcal[ex])]
+    if ex_n.size:
+        ax.plot(x[ex_n], np.full(ex_n.size, 0.02), "v", color="0.35", ms=6,
+                transform=ax.get_xaxis_transform(), clip_on=False, label="excluded (no kCAL)")
+    for i in ex:
+        ax.axvline(x[i], color="0.6", lw=0.6, ls=":", zorder=0)
+    finite = kcal[np.isfinite(kcal)]
+    if finite.size:
+        lo, hi = finite.min(), finite.max()
+        if np.isfinite(med) and np.isfinite(half):
+            lo, hi = min(lo, med - half), max(hi, med + half)
+        pad = 0.15 * (hi - lo) if hi > lo else 0.05 * abs(hi) + 1.0
+        ax.set_ylim(lo - pad, hi + 2.2 * pad)
+    else:
+        _note(ax, "no impact has a kCAL")
+    if n <= 40:
+        ax.set_xticks(x, ids, rotation=90, fontsize=7 if n > 20 else 8)
+    ax.set_xlim(-0.7, n - 0.3)
+    ax.set_xlabel("Impact (raw order)")
+    ax.set_ylabel("Calibration factor kCAL [N/V]")
+    ax.legend(loc="upper left", ncols=2)
+    fig.suptitle("Per-impact force-plate calibration kCAL = m (VB + VB') / \u222bV dt")
+
+
+def fig_kcal(ds) -> Figure:
+    """kCAL of every impact in raw order, coloured by ball, with the session median and band.
+
+    kCAL = m (VB + VB') / integral of V dt (section 2 of Goodwill & Haake 2004)
+    [N/V]; band = median +- :data:`KCAL_BAND_ROBUST_SD` robust SD over the good
+    impacts; excluded impacts are crossed (or marked on the axis when they have no
+    kCAL).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, 4.6)
+        _draw_kcal(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- QC
+
+
+def _impact_position(ds, impact_id) -> int:
+    ids = _text(ds["impact_id"].values) if ds.sizes.get("impact", 0) else np.array([], dtype=object)
+    idx = np.flatnonzero(ids == str(impact_id))
+    if not idx.size:
+        raise KeyError(f"impact_id {impact_id!r} is not in the archive")
+    return int(idx[0])
+
+
+def _draw_qc(fig, ds, impact_id, *, wrap=90):
+    i = _impact_position(ds, impact_id)
+    ball = _text(ds["impact_ball"].values)[i]
+    status = _text(ds["status"].values)[i]
+    reason = _text(ds["reason"].values)[i] or "(no reason given)"
+    rt = np.asarray(ds["raw_time_s"].values[i], dtype=float) if "raw_time_s" in ds else np.empty(0)
+    rv = np.asarray(ds["raw_voltage_V"].values[i], dtype=float) if "raw_voltage_V" in ds else np.empty(0)
+    keep = np.isfinite(rt) & np.isfinite(rv)
+    rt, rv = rt[keep], rv[keep]
+    t_contact = _series(ds, i)[0]
+    contact_known = t_contact.size >= 2
+    tc_ms = _impact_value(ds, "contact_time_ms", i)
+    if contact_known and not np.isfinite(tc_ms):
+        tc_ms = float(t_contact[-1]) * 1e3
+    title = f"{impact_id} ({_label(ds, ball)}), {status}: {reason}"
+    fig.suptitle("\n".join(textwrap.wrap(title, wrap)), fontsize=10)
+    if not rt.size:
+        ax = fig.subplots()
+        _note(ax, "no raw trace stored for this impact")
+        ax.set_xlabel("Time [ms]")
+        ax.set_ylabel("Voltage [V]")
+        return
+    zoom = contact_known and np.isfinite(tc_ms)
+    axes = fig.subplots(2 if zoom else 1, 1, squeeze=False)[:, 0]
+    xlabel = "Time since contact start [ms]" if contact_known else "Time since first sample [ms]"
+    for k, ax in enumerate(axes):
+        ax.plot(rt * 1e3, rv, "-", color="C0", lw=0.8, label="raw voltage (polarity applied)")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("Voltage [V]")
+        if zoom:
+            ax.axvline(0.0, color="C2", lw=1.0, ls="--", label="contact start")
+            ax.axvline(tc_ms, color="C3", lw=1.0, ls="--", label=f"contact end (TC {tc_ms:.2f} ms)")
+        if k == 1:
+            margin = max(0.3 * tc_ms, 0.3)
+            ax.set_xlim(-margin, tc_ms + margin)
+            sel = (rt * 1e3 >= -margin) & (rt * 1e3 <= tc_ms + margin)
+            if sel.any():
+                lo, hi = rv[sel].min(), rv[sel].max()
+                pad = 0.08 * (hi - lo) if hi > lo else 0.1
+                ax.set_ylim(lo - pad, hi + pad)
+            ax.set_title("zoom on the contact", loc="left")
+        else:
+            ax.set_title("whole trace" + ("" if contact_known else " (contact not found)"), loc="left")
+        ax.legend(loc="upper right")
+
+
+def fig_qc_impact(ds, impact_id) -> Figure:
+    """Raw trace of one (excluded) impact with the exclusion reason in the title.
+
+    Raw voltage [V] (polarity applied) against time [ms]; when the contact was
+    found, its start and end (contact time) are marked and a second panel zooms
+    on it.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+    impact_id : str
+        The impact to show.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    KeyError
+        If the impact is not in the archive.
+    """
+    _impact_position(ds, impact_id)
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, 5.0)
+        _draw_qc(fig, ds, impact_id)
+    return fig
+
+
+# ----------------------------------------------------------------------------- files
+
+
+def save_figure(fig: Figure, path, dpi: int = DPI) -> Path:
+    """Save a figure as PNG atomically (temporary file in the same folder, then os.replace).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or Path
+        Destination PNG.
+    dpi : int
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, format="png", dpi=dpi)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return path
+
+
+def _safe_name(impact_id: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", str(impact_id)) or "impact"
+
+
+def save_all(ds, out_dir) -> list[Path]:
+    """Write every figure as PNG (dpi 150) into ``out_dir``, QC traces into ``out_dir/qc``.
+
+    Files: fig7_contact_time_cor.png, fig8_stiffness.png, fig9_force_curves.png,
+    fig10_components.png, fig2b_kelvin_voigt.png, kcal.png and qc/<impact_id>.png
+    for each excluded impact (the qc folder is always created). Each file is
+    written atomically.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+    out_dir : str or Path
+        Output folder (created if needed).
+
+    Returns
+    -------
+    list of Path
+        The files written, report figures first, then the QC pages in raw order.
+    """
+    out_dir = Path(out_dir)
+    qc_dir = out_dir / "qc"
+    qc_dir.mkdir(parents=True, exist_ok=True)
+    funcs = globals()
+    written = []
+    for name, func in FIGURE_FILES.items():
+        written.append(save_figure(funcs[func](ds), out_dir / name))
+    for impact_id, _, _ in excluded_impacts(ds):
+        written.append(save_figure(fig_qc_impact(ds, impact_id), qc_dir / f"{_safe_name(impact_id)}.png"))
+    return written

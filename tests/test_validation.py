@@ -1,0 +1,201 @@
+"""Tests of session validation (file-level checks of a raw session folder)."""
+
+import hashlib
+
+import numpy as np
+import pytest
+import yaml
+from nptdms import ChannelObject, GroupObject, TdmsWriter
+
+from ballimpact.session import SessionError
+from ballimpact.validation import ValidationReport, format_validation, validate_session
+
+RATE_HZ = 66964.3  # [Hz] session default
+TDMS_RATE_HZ = 100000.0  # [Hz]
+HEADER = "impact_id,ball,trace,gate_in_1_s,gate_in_2_s,gate_out_2_s,gate_out_1_s,mass_g,note"
+GATES = "0.0,0.004,0.010,0.0145"
+
+META = {
+    "session_id": "s1",
+    "date": "2026-11-21",
+    "plate": {"polarity": -1},
+    "daq": {"sample_rate_hz": RATE_HZ, "adc_range_v": [-10.0, 10.0]},
+    "gates": {"spacing_m": 0.1, "resolution_s": 1.0e-6},
+    "balls": {"pressurised": {"mass_g": 57.7}, "pressureless": {"mass_g": 57.0}},
+}
+
+
+def voltage(n=300):
+    return np.where((np.arange(n) > 100) & (np.arange(n) < 150), 1.0, 0.0) + 0.01
+
+
+def write_csv_trace(path, *, header="", time=False, body=None):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    v = voltage()
+    if body is None:
+        if time:
+            body = "time_s,voltage_V\n" + "\n".join(f"{i / RATE_HZ!r},{x!r}" for i, x in enumerate(v.tolist()))
+        else:
+            body = "voltage_V\n" + "\n".join(repr(x) for x in v.tolist())
+    path.write_text(header + body + "\n")
+
+
+def write_tdms_trace(path, rate_hz=TDMS_RATE_HZ):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with TdmsWriter(str(path)) as writer:
+        writer.write_segment(
+            [GroupObject("Impact"), ChannelObject("Impact", "voltage", voltage(), properties={"wf_increment": 1 / rate_hz})]
+        )
+
+
+def make_session(root, rows, meta=None):
+    """Session folder s1 with the given impacts.csv rows (traces written by the caller)."""
+    folder = root / "s1"
+    (folder / "traces").mkdir(parents=True, exist_ok=True)
+    (folder / "session.yaml").write_text(yaml.safe_dump(meta or META, sort_keys=False))
+    (folder / "impacts.csv").write_text(HEADER + "\n" + "\n".join(rows) + "\n")
+    return folder
+
+
+def clean_session(root):
+    folder = make_session(
+        root,
+        [
+            f"p1,pressurised,traces/p1.csv,{GATES},,",
+            f"p2,pressurised,traces/p2.csv,{GATES},,",
+            f"p3,pressurised,traces/p3.tdms,{GATES},,",
+            f"n1,pressureless,traces/n1.csv,{GATES},,",
+        ],
+    )
+    write_csv_trace(folder / "traces" / "p1.csv")  # session default rate
+    write_csv_trace(folder / "traces" / "p2.csv", header=f"# sample_rate_hz: {RATE_HZ}\n# units: V\n")
+    write_tdms_trace(folder / "traces" / "p3.tdms")
+    write_csv_trace(folder / "traces" / "n1.csv", time=True)
+    return folder
+
+
+def test_clean_session(tmp_path):
+    report = validate_session(clean_session(tmp_path))
+    assert isinstance(report, ValidationReport)
+    assert report.session_id == "s1"
+    assert report.n_impacts == 4
+    assert report.impacts_per_ball == {"pressurised": 3, "pressureless": 1}
+    assert set(report.sample_rates_hz) >= {RATE_HZ, TDMS_RATE_HZ}
+    assert sum(report.sample_rates_hz.values()) == 4
+    assert report.trace_formats == {"csv": 3, "tdms": 1}
+    assert report.sample_rate_sources == {"header": 1, "session": 1, "time_s": 1, "wf_increment": 1}
+    assert report.problems == []
+    assert report.ok
+    text = format_validation(report)
+    assert text.splitlines()[0] == "Session s1: 4 impacts"
+    assert "pressurised: 3, pressureless: 1" in text
+    assert "66964.3 Hz" in text and "100000 Hz: 1" in text
+    assert "csv: 3, tdms: 1" in text
+    assert "Problems: none" in text
+    assert text.splitlines()[-1] == "Verdict: OK, all 4 impacts passed the file-level checks"
+
+
+def faulty_session(root):
+    folder = make_session(
+        root,
+        [
+            f"ok1,pressurised,traces/ok1.csv,{GATES},,",
+            "gap,pressurised,traces/gap.csv,0.0,,0.010,0.0145,,",
+            f"lost,pressureless,traces/lost.csv,{GATES},,",
+            f"bad,pressureless,traces/bad.csv,{GATES},,",
+            f"mv,pressureless,traces/mv.csv,{GATES},,",
+            f"esc,pressureless,../s1.csv,{GATES},,",
+            f"short,pressurised,traces/short.csv,{GATES},,",
+            f"ext,pressurised,traces/ext.txt,{GATES},,",
+        ],
+    )
+    traces = folder / "traces"
+    write_csv_trace(traces / "ok1.csv")
+    write_csv_trace(traces / "gap.csv")
+    write_csv_trace(traces / "bad.csv", body="voltage_V\n0.1\n0.2\nspike!\n" + "0.1\n" * 200)
+    write_csv_trace(traces / "mv.csv", header="# units: mV\n")
+    write_csv_trace(traces / "short.csv", body="voltage_V\n" + "0.1\n" * 20)
+    (traces / "ext.txt").write_text("voltage_V\n0.1\n")
+    (root / "s1.csv").write_text("voltage_V\n0.1\n")
+    return folder
+
+
+def test_problems_by_impact(tmp_path):
+    folder = faulty_session(tmp_path)
+    report = validate_session(folder)
+    assert report.n_impacts == 8
+    problems = dict(report.problems)
+    assert len(problems) == len(report.problems) == 7  # one problem each
+    assert "ok1" not in problems
+    assert problems["gap"] == "missing gate time gate_in_2_s"
+    assert problems["lost"] == "trace file not found: traces/lost.csv"
+    assert problems["bad"] == f"{folder}/traces/bad.csv: line 4: non-numeric value 'spike!'"
+    assert problems["mv"] == f"{folder}/traces/mv.csv: line 1: units must be 'V', got 'mV'"
+    assert problems["esc"] == "trace path escapes the session folder: ../s1.csv"
+    assert problems["short"].endswith("short.csv: truncated trace: only 20 samples (at least 100 required)")
+    assert problems["ext"].endswith("ext.txt: unknown trace file extension '.txt' (expected .csv or .tdms)")
+    assert report.trace_formats == {"csv": 2}  # ok1 and gap were read
+    assert report.impacts_with_problems == ["gap", "lost", "bad", "mv", "esc", "short", "ext"]
+    assert not report.ok
+
+    text = format_validation(report)
+    lines = text.splitlines()
+    assert "Problems (7):" in lines
+    for impact_id, message in report.problems:
+        assert f"  {impact_id}: {message}" in lines
+    assert lines[-1] == "Verdict: PROBLEMS, 7 of 8 impacts will be excluded; 1 can be processed"
+
+
+def test_several_problems_one_impact_counted_once(tmp_path):
+    folder = make_session(tmp_path, ["x1,pressurised,traces/none.csv,0.0,,,0.0145,abc,"])
+    report = validate_session(folder)
+    assert [p[0] for p in report.problems] == ["x1"] * 4
+    assert [p[1] for p in report.problems] == [
+        "missing gate time gate_in_2_s",
+        "missing gate time gate_out_2_s",
+        "non-numeric mass_g: 'abc'",
+        "trace file not found: traces/none.csv",
+    ]
+    assert format_validation(report).splitlines()[-1] == (
+        "Verdict: PROBLEMS, 1 of 1 impacts will be excluded; 0 can be processed"
+    )
+
+
+def test_shared_trace_and_suspect_mass_are_warnings(tmp_path):
+    meta = {**META, "balls": {"pressurised": {"mass_g": 80.0}, "pressureless": {"mass_g": 57.0}}}
+    folder = make_session(
+        tmp_path,
+        [f"a,pressurised,traces/a.csv,{GATES},,", f"b,pressurised,traces/a.csv,{GATES},,"],
+        meta=meta,
+    )
+    write_csv_trace(folder / "traces" / "a.csv")
+    report = validate_session(folder)
+    assert report.problems == []
+    assert any("80 g" in w for w in report.warnings)
+    assert any("trace traces/a.csv is also the trace of impact a" in w for w in report.warnings)
+    text = format_validation(report)
+    assert "Warnings (2):" in text
+    assert text.splitlines()[-1].endswith("; 2 warning(s)")
+
+
+def test_session_error_propagates(tmp_path):
+    folder = make_session(tmp_path, [f"a,tennis,traces/a.csv,{GATES},,"])
+    with pytest.raises(SessionError, match=r"s1/impacts\.csv: line 2: ball 'tennis' is not defined"):
+        validate_session(folder)
+
+
+def test_validation_does_not_modify_folder(tmp_path):
+    folder = faulty_session(tmp_path)
+    clean_session(tmp_path / "clean")
+
+    def snapshot(root):
+        return {
+            str(p.relative_to(root)): (p.stat().st_mtime_ns, hashlib.sha256(p.read_bytes()).hexdigest())
+            for p in sorted(root.rglob("*"))
+        if p.is_file()
+        }
+
+    before = snapshot(tmp_path)
+    validate_session(folder)
+    validate_session(tmp_path / "clean" / "s1")
+    assert snapshot(tmp_path) == before

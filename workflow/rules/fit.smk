@@ -1,0 +1,40 @@
+# Stage 2: fit the ball model per ball type and write the session archive.
+
+
+rule fit_ball:
+    """Fit kB(0), AK, a, AC of one ball type with bootstrap intervals."""
+    input:
+        impacts_nc=result_path("work/impacts.nc"),
+        session_yaml=raw_path("session.yaml"),
+    output:
+        fit=result_path("work/fit_{ball}.nc"),
+    params:
+        session_dir=session_dir,
+        n_bootstrap=config["bootstrap"],
+        seed=config["seed"],
+    log:
+        log_path("fit_ball_{ball}"),
+    benchmark:
+        benchmark_path("fit_ball_{ball}")
+    threads: 1
+    script:
+        "../scripts/fit_ball.py"
+
+
+rule archive:
+    """netCDF archive <session>.nc (impacts + fits + provenance) and parameters.csv."""
+    input:
+        snapshot=result_path("work/session.json"),
+        session_yaml=raw_path("session.yaml"),
+        impacts_nc=result_path("work/impacts.nc"),
+        fits=fit_files,
+    output:
+        archive=result_path("{session}.nc"),
+        parameters_csv=result_path("parameters.csv"),
+    params:
+        session_dir=session_dir,
+    log:
+        log_path("archive"),
+    threads: 1
+    script:
+        "../scripts/archive.py"
