@@ -188,6 +188,18 @@ def _note(ax, text, *, color="0.35"):
     )
 
 
+def _corner_note(ax, text):
+    ax.text(0.98, 0.96, text, transform=ax.transAxes, ha="right", va="top", color="0.3", fontsize=9,
+            bbox={"fc": "white", "ec": "0.7"}, zorder=10)
+
+
+def _legend_with_headroom(ax, *, ncols=2, headroom=0.45, loc="upper left"):
+    """Legend in a band added above the data so that it never hides a curve."""
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, hi + headroom * (hi - lo))
+    ax.legend(loc=loc, ncols=ncols, fontsize=7, handlelength=1.8, columnspacing=1.0, borderaxespad=0.3)
+
+
 def excluded_impacts(ds) -> list[tuple[str, str, str]]:
     """(impact_id, ball, reason) of every excluded impact, in raw order."""
     if ds.sizes.get("impact", 0) == 0:
@@ -238,11 +250,13 @@ def _draw_contact_time_cor(fig, ds):
                 ax.plot(speed, curve, "-", color="k", lw=1.2, label="fitted model")
                 if lo is not None and hi is not None and np.isfinite(lo).any():
                     ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
+            elif good.size:
+                _corner_note(ax, _NO_FIT)
             else:
-                _note(ax, _NO_FIT if good.size else f"{_NO_GOOD}\n{_NO_FIT}")
+                _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
             ax.set_ylabel(unit_label)
             if good.size or (curve is not None and np.isfinite(curve).any()):
-                ax.legend(loc="best", frameon=True)
+                ax.legend(loc="upper right" if meas == "contact_time_ms" else "upper right", frameon=True)
         n_used = _ball_value(ds, "n_impacts", ball)
         n_used = f", {int(n_used)} used in fit" if np.isfinite(float(n_used)) else ""
         ax_tc.set_title(f"{_label(ds, ball)}: contact time ({good.size} good{n_used})", loc="left")
@@ -293,15 +307,15 @@ def _draw_stiffness(fig, ds):
         if (curve is None or not np.isfinite(curve).any()) and params is not None:
             curve = structural_stiffness(x_m, params[1], params[2], params[3]) / 1e3
         if curve is not None and np.isfinite(curve).any():
-            ax.plot(x_m * 1e3, curve, "-", color=c, lw=1.8, label=f"{label}: fitted")
+            ax.plot(x_m * 1e3, curve, "-", color=c, lw=2.4, alpha=0.55, label=f"{label}: fitted")
             any_line = True
         else:
             no_fit.append(label)
         paper = [float(_ball_value(ds, n, ball)) for n in ("paper_kb0_kN_m", "paper_ak_kN_m", "paper_a")]
         if all(np.isfinite(paper)):
             kb0, ak, a = paper
-            ax.plot(x_m * 1e3, structural_stiffness(x_m, kb0, ak, a), "--", color=c, lw=1.2,
-                    label=f"{label}: paper Table 2")
+            ax.plot(x_m * 1e3, structural_stiffness(x_m, kb0, ak, a), "--", color=c, lw=1.2, zorder=3,
+                    dashes=(4, 2.5), label=f"{label}: paper Table 2")
             any_line = True
     ax.set_xlabel("Centre-of-mass displacement x [mm]")
     ax.set_ylabel("Structural stiffness kB [kN/m]")
@@ -312,7 +326,7 @@ def _draw_stiffness(fig, ds):
     if no_fit:
         ax.text(0.98, 0.03, "no fit: " + ", ".join(no_fit), transform=ax.transAxes, ha="right", va="bottom",
                 color="0.3", bbox={"fc": "white", "ec": "0.7"})
-    ax.set_title("kB = kB(0) + AK x^a (Eq. 4); solid: fitted, dashed: paper Table 2", loc="left")
+    ax.set_title(r"$k_B = k_B(0) + A_K\,x^a$ (Eq. 4); solid: fitted, dashed: paper Table 2", loc="left")
     fig.suptitle("Structural stiffness against displacement (cf. Fig. 8 of Goodwill & Haake 2004)")
 
 
@@ -380,15 +394,13 @@ def _draw_force_curves(fig, ds):
                 ts, fs, xs = sim
                 ax_t.plot(ts * 1e3, fs, "--", color="k" if k == 0 else "0.45", lw=1.2, label=f"model {vin:.1f} m/s")
                 ax_x.plot(xs * 1e3, fs, "--", color="k" if k == 0 else "0.45", lw=1.2, label=f"model {vin:.1f} m/s")
-        if picks and not fit_ok:
-            for ax in (ax_t, ax_x):
-                ax.text(0.98, 0.95, _NO_FIT, transform=ax.transAxes, ha="right", va="top", color="0.3",
-                        fontsize=10, bbox={"fc": "white", "ec": "0.7"})
         for ax in (ax_t, ax_x):
             ax.set_ylabel("Force on the ball [N]")
             if picks:
-                ax.legend(loc="upper right" if fit_ok else "upper left")
                 ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+                _legend_with_headroom(ax)
+                if not fit_ok:
+                    _corner_note(ax, _NO_FIT)
         ax_t.set_xlabel("Time since first contact [ms]")
         ax_x.set_xlabel("Centre-of-mass displacement [mm]")
     fig.suptitle("Measured and modelled force at the lowest and highest good speed (cf. Fig. 9)")
@@ -459,12 +471,15 @@ def _draw_components(fig, ds):
             t, f = _series(ds, i, "force_N")
             ax.plot(t * 1e3, f, "-", color="0.6", lw=1.0, zorder=1,
                     label=f"measured {_impact_value(ds, 'vin_m_s', i):.1f} m/s")
-        if not drawn:
-            _note(ax, _NO_FIT if _impacts(ds, ball, "ok").size else f"{_NO_GOOD}\n{_NO_FIT}")
         if drawn or i is not None:
-            ax.legend(loc="upper right")
             ax.axhline(0.0, color="0.5", lw=0.6)
-        ax.axvspan(0, 0.6, color="C3", alpha=0.06, lw=0)
+            _legend_with_headroom(ax, headroom=0.5)
+        if drawn:
+            ax.axvspan(0, 0.6, color="C3", alpha=0.07, lw=0)
+        elif i is not None:
+            _corner_note(ax, _NO_FIT)
+        else:
+            _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
         ax.set_xlabel("Time since first contact [ms]")
         ax.set_ylabel("Force [N]")
     fig.suptitle(
@@ -553,14 +568,14 @@ def _draw_kelvin_voigt(fig, ds):
         sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
         if sim is not None:
             ax.plot(sim[0] * 1e3, sim[1], ":", color="k", lw=1.4, label="improved model (Eq. 14)")
-        else:
-            ax.text(0.98, 0.5, f"improved model: {_NO_FIT}", transform=ax.transAxes, ha="right",
-                    color="0.3", bbox={"fc": "white", "ec": "0.7"})
         ax.axhline(0.0, color="0.4", lw=0.7)
         ax.set_title(f"{_label(ds, ball)}, VB = {vin:.1f} m/s ({_text(ds['impact_id'].values)[i]})", loc="left")
         ax.set_xlabel("Time since first contact [ms]")
         ax.set_ylabel("Force [N]")
-        ax.legend(loc="upper right")
+        _legend_with_headroom(ax, headroom=0.5)
+        if sim is None:
+            ax.text(0.98, 0.04, f"improved model: {_NO_FIT}", transform=ax.transAxes, ha="right", va="bottom",
+                    color="0.3", fontsize=9, bbox={"fc": "white", "ec": "0.7"}, zorder=10)
     fig.suptitle("Kelvin-Voigt model against measured force, fastest good impact (cf. Fig. 2b)")
 
 

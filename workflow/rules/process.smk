@@ -20,9 +20,9 @@ rule validate_session:
 rule process_chunk:
     """Process impacts chunk, chunk + n_chunks, ... of the session (one trace in memory at a time)."""
     input:
-        # ancient: a new snapshot (another chunk's trace changed) does not re-run this chunk;
-        # its own raw files below do
-        snapshot=ancient(result_path("work/session.json")),
+        # a new snapshot (any raw file of the session changed) re-runs every chunk. Do not
+        # wrap it in ancient(): Snakemake then skips this job even when its own traces change.
+        snapshot=result_path("work/session.json"),
         session_yaml=raw_path("session.yaml"),
         impacts_csv=raw_path("impacts.csv"),
         traces=chunk_trace_files,
