@@ -8,7 +8,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from ballimpact.archive import add_metadata, assemble_archive, impacts_dataset, set_variable_attrs
+from ballimpact.archive import (
+    COMPONENT_SPEED_M_S,
+    MODEL_TIME_STEPS,
+    SPEED_GRID_M_S,
+    STIFFNESS_X_M,
+    add_metadata,
+    assemble_archive,
+    impacts_dataset,
+    set_variable_attrs,
+)
 from ballimpact.balls import BALLS
 from ballimpact.model import kelvin_voigt_parameters, simulate_impact, structural_stiffness
 
@@ -16,10 +25,6 @@ SAMPLE_RATE_HZ = 1.0e5  # [Hz] the model's own step (0.01 ms), so no resampling 
 PRE_TRIGGER_SAMPLES = 150  # quiet samples before the contact in the raw trace
 POST_SAMPLES = 250  # quiet samples after the contact
 KCAL_N_PER_V = 250.0  # [N/V] nominal calibration factor
-SPEED_GRID_M_S = np.arange(10.0, 32.0 + 1e-9, 1.0)  # [m/s] model curves
-MODEL_TIME_STEPS = 800  # 8 ms at 0.01 ms
-STIFFNESS_X_M = np.linspace(0.0, 0.03, 61)  # [m]
-COMPONENT_SPEED_M_S = 20.0  # [m/s] Fig. 10
 INTERVAL_FRACTION = 0.03  # half width of the made-up 95 % intervals, relative
 
 SESSION_YAML = """\

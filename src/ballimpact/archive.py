@@ -45,6 +45,11 @@ __all__ = [
     "impacts_table",
     "parameters_table",
     "paper_parameters_dataset",
+    "fit_dataset",
+    "SPEED_GRID_M_S",
+    "MODEL_TIME_STEPS",
+    "COMPONENT_SPEED_M_S",
+    "STIFFNESS_X_M",
     "add_model_forces",
     "assemble_archive",
     "set_variable_attrs",
@@ -108,6 +113,15 @@ PAPER_REFERENCE = (
 AGREEMENT_START_S = 0.2e-3
 #: Model and measurement "agree" when within this fraction of the measured peak force [-].
 AGREEMENT_TOLERANCE = 0.10
+
+#: Inbound speeds of the model curves (Fig. 7) [m/s].
+SPEED_GRID_M_S = np.round(np.arange(10.0, 32.0 + 1e-9, 0.5), 10)
+#: Number of 0.01 ms steps of the force components (10 ms, longer than any contact at 20 m/s).
+MODEL_TIME_STEPS = 1000
+#: Inbound speed of the force components (Fig. 10) [m/s].
+COMPONENT_SPEED_M_S = 20.0
+#: Displacements of the stiffness curve (Fig. 8) [m].
+STIFFNESS_X_M = np.linspace(0.0, 0.03, 61)
 
 _AK_UNITS = "kN m-(1+a)"
 _PER_IMPACT_SCALARS = [
@@ -192,6 +206,7 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "contact_time_rmse_pct": ("percent", "relative RMS contact-time residual over the impacts used"),
     "cor_rmse_pct": ("percent", "relative RMS COR residual over the impacts used"),
     "fit_message": ("1", "fit status message"),
+    "interval_method": ("1", "how the 95 % intervals were obtained"),
     "paper_kb0_kN_m": ("kN m-1", "kB(0) of Table 2 in Goodwill & Haake 2004"),
     "paper_ak_kN_m": (_AK_UNITS, "AK of Table 2 in Goodwill & Haake 2004"),
     "paper_a": ("1", "a of Table 2 in Goodwill & Haake 2004"),
@@ -350,8 +365,7 @@ def impacts_dataset(
         text["trace_sha256"].append(trace_sha)
         for name, attr in _PER_IMPACT_SCALARS:
             scalars[name].append(_float(getattr(r, attr, math.nan)))
-        lengths = {k: _as_1d(getattr(r, k, None)).size for k in _SERIES}
-        n = lengths["time_s"]
+        n = _as_1d(getattr(r, "time_s", None)).size
         for k in _SERIES:
             arr = _as_1d(getattr(r, k, None))
             if arr.size != n:
@@ -419,6 +433,129 @@ def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:
             for name, col in cols.items():
                 data[name][i] = table[col]
     ds = xr.Dataset({k: ("ball", v) for k, v in data.items()}, coords={"ball": _text_array(keys)})
+    return set_variable_attrs(ds)
+
+
+def fit_dataset(
+    ball: str,
+    fit=None,
+    *,
+    label: str | None = None,
+    mass_kg: float = math.nan,
+    n_impacts: int = 0,
+    kb0_source: str = "",
+    message: str = "",
+) -> xr.Dataset:
+    """Per-ball part of the archive (``ball`` dimension of length 1) from a fit.
+
+    Parameters in the units of Table 2 of Goodwill & Haake 2004 with their 95 %
+    intervals, the model curves TC [ms], COR [-] and peak force [N] on
+    :data:`SPEED_GRID_M_S` with 95 % bands (:func:`ballimpact.fitting.model_curves`),
+    the force components of Eq. (14) at :data:`COMPONENT_SPEED_M_S` on 0.01 ms
+    steps, the stiffness law kB(x) of Eq. (4) on :data:`STIFFNESS_X_M`, and the
+    paper's Table 2 values.
+
+    Parameters
+    ----------
+    ball : str
+        Ball type key.
+    fit : ballimpact.fitting.BallFit, optional
+        The fit (SI units); None when it failed or there were too few impacts: the
+        parameters and curves are NaN and ``message`` says why.
+    label : str, optional
+        Ball label for figures (default: the key).
+    mass_kg : float
+        Ball type mass [kg], used when ``fit`` is None (otherwise ``fit.mass_kg``).
+    n_impacts : int
+        Good impacts of the ball, used when ``fit`` is None.
+    kb0_source : str
+        "config" or "extrapolated", used when ``fit`` is None.
+    message : str
+        Why there is no fit (``fit`` None), or extra text for ``fit_message``.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    from .model import TIME_STEP_S, simulate_impact, structural_stiffness
+
+    if not isinstance(ball, str) or not ball:
+        raise ValueError(f"ball must be a non-empty ball type key, got {ball!r}")
+    nan = math.nan
+    n_speed, n_x = SPEED_GRID_M_S.size, STIFFNESS_X_M.size
+    curves = {k: np.full(n_speed, nan) for k in (
+        "model_contact_time_ms", "model_contact_time_ms_lo", "model_contact_time_ms_hi",
+        "model_cor", "model_cor_lo", "model_cor_hi", "model_peak_force_N")}
+    comps = {k: np.full(MODEL_TIME_STEPS, nan) for k in (
+        "comp_total_force_N", "comp_stiffness_force_N", "comp_damping_force_N",
+        "comp_momentum_flux_force_N", "comp_displacement_m")}
+    stiffness = np.full(n_x, nan)
+    params = {k: nan for k in (
+        "kb0_kN_m", "kb0_lo", "kb0_hi", "ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi",
+        "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct")}
+    if fit is None:
+        text = {"kb0_source": kb0_source, "fit_message": message or "no fit", "interval_method": "none"}
+        mass, n_used = float(mass_kg), int(n_impacts)
+    else:
+        from .fitting import model_curves
+
+        kn = 1e3
+        params.update(
+            kb0_kN_m=fit.kb0_N_m / kn, kb0_lo=fit.kb0_lo / kn, kb0_hi=fit.kb0_hi / kn,
+            ak_kN_m=fit.ak / kn, ak_lo=fit.ak_lo / kn, ak_hi=fit.ak_hi / kn,
+            a=fit.a, a_lo=fit.a_lo, a_hi=fit.a_hi,
+            ac_kN_s_m3=fit.ac / kn, ac_lo=fit.ac_lo / kn, ac_hi=fit.ac_hi / kn,
+            ak_a_correlation=fit.ak_a_correlation,
+            contact_time_rmse_pct=fit.contact_time_rmse_pct, cor_rmse_pct=fit.cor_rmse_pct,
+        )
+        notes = list(getattr(fit, "messages", None) or [])
+        if message:
+            notes.append(message)
+        text = {
+            "kb0_source": fit.kb0_source,
+            "fit_message": "; ".join(["ok"] + notes),
+            "interval_method": str(getattr(fit, "interval_method", "") or "none"),
+        }
+        mass, n_used = float(fit.mass_kg), int(fit.n_impacts)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mc = model_curves(fit, SPEED_GRID_M_S)
+            comp = simulate_impact(COMPONENT_SPEED_M_S, fit.mass_kg, fit.kb0_N_m, fit.ak, fit.a, fit.ac,
+                                   record=True)
+        for key, src, scale in (
+            ("model_contact_time_ms", "contact_time_s", 1e3), ("model_contact_time_ms_lo", "contact_time_s_lo", 1e3),
+            ("model_contact_time_ms_hi", "contact_time_s_hi", 1e3), ("model_cor", "cor", 1.0),
+            ("model_cor_lo", "cor_lo", 1.0), ("model_cor_hi", "cor_hi", 1.0),
+            ("model_peak_force_N", "peak_force_N", 1.0),
+        ):
+            curves[key] = np.asarray(mc[src], dtype=float) * scale
+        m = min(comp.time_s.size, MODEL_TIME_STEPS)
+        for key, arr in (
+            ("comp_total_force_N", comp.force_N), ("comp_stiffness_force_N", comp.stiffness_force_N),
+            ("comp_damping_force_N", comp.damping_force_N),
+            ("comp_momentum_flux_force_N", comp.momentum_flux_force_N),
+            ("comp_displacement_m", comp.displacement_m),
+        ):
+            comps[key][:m] = np.asarray(arr, dtype=float)[:m]
+        stiffness = structural_stiffness(STIFFNESS_X_M, fit.kb0_N_m, fit.ak, fit.a) / 1e3
+    data = {k: ("ball", np.array([v], dtype=float)) for k, v in params.items()}
+    data.update({k: ("ball", _text_array([v])) for k, v in text.items()})
+    data["ball_label"] = ("ball", _text_array([label or ball]))
+    data["mass_kg"] = ("ball", np.array([mass], dtype=float))
+    data["n_impacts"] = ("ball", np.array([n_used], dtype=np.int64))
+    data.update({k: (("ball", "speed"), v[None, :]) for k, v in curves.items()})
+    data.update({k: (("ball", "model_time"), v[None, :]) for k, v in comps.items()})
+    data["model_stiffness_kN_m"] = (("ball", "stiffness_x"), np.asarray(stiffness, dtype=float)[None, :])
+    ds = xr.Dataset(
+        data,
+        coords={
+            "ball": _text_array([ball]),
+            "speed_m_s": ("speed", SPEED_GRID_M_S.copy()),
+            "model_time_s": ("model_time", np.arange(MODEL_TIME_STEPS) * TIME_STEP_S),
+            "stiffness_x_m": ("stiffness_x", STIFFNESS_X_M.copy()),
+        },
+    )
+    ds = ds.merge(paper_parameters_dataset([ball]))
     return set_variable_attrs(ds)
 
 
@@ -730,6 +867,8 @@ def _text_to_object(ds: xr.Dataset) -> xr.Dataset:
                 ["" if (v is None or (isinstance(v, float) and math.isnan(v))) else str(v) for v in values.ravel()],
                 dtype=object,
             ).reshape(values.shape)
+            if fixed.size == 0:  # xarray infers float for empty object arrays; keep them text
+                fixed = fixed.astype("U1")
             if name in ds.coords:
                 ds = ds.assign_coords({name: (var.dims, fixed, var.attrs)})
             else:

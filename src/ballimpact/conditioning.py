@@ -309,7 +309,13 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
 
 
 def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
-    """Time constant for the decay correction, its source and the warnings to give."""
+    """Time constant for the decay correction, its source and the warnings to give.
+
+    A positive undershoot always gives tau = integral / undershoot (applying a
+    noisy tau is unbiased; skipping it is not). A warning is given when the
+    undershoot is not measurable (below UNDERSHOOT_SIGNIFICANCE standard
+    errors) and the impulse could then be off by more than BIAS_WARN_FRACTION.
+    """
     if tau_s is not None:
         return float(tau_s), "given", []
     if not fit.has_step:
@@ -319,29 +325,33 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
         ]
     undershoot = -fit.step
     se = fit.step_se
-    if integral > 0 and undershoot > UNDERSHOOT_SIGNIFICANCE * se:
-        tau = integral / undershoot
-        if TAU_BOUNDS_S[0] <= tau <= TAU_BOUNDS_S[1]:
-            return tau, "estimated", []
-        return math.inf, "none", [
-            f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is outside "
-            f"the plausible range {TAU_BOUNDS_S[0]:g}-{TAU_BOUNDS_S[1]:g} s"
-        ]
+    messages = []
+    if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(undershoot):
+        # how much could an undershoot hidden in the noise change the impulse?
+        bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / (2.0 * integral)
+        if bias > BIAS_WARN_FRACTION:
+            messages.append(
+                f"charge-amplifier undershoot not measurable ({undershoot * 1e3:.3g} +/- {se * 1e3:.2g} mV): "
+                f"the impulse may be off by up to {bias * 100:.2g} %"
+            )
+    if not integral > 0:
+        return math.inf, "none", messages
     if undershoot < -UNDERSHOOT_SIGNIFICANCE * se:
         return math.inf, "none", [
             f"charge-amplifier decay not corrected: the baseline after the contact is "
             f"{-undershoot * 1e3:.3g} mV above the one before it (expected an undershoot)"
         ]
-    # not measurable: how large could an undetected decay be?
-    if integral > 0:
-        tau_min = integral / max(UNDERSHOOT_SIGNIFICANCE * se, 1e-300)
-        bias = duration_s / (2.0 * tau_min)
-        if bias > BIAS_WARN_FRACTION:
-            return math.inf, "none", [
-                f"charge-amplifier undershoot not measurable ({undershoot * 1e3:.3g} +/- {se * 1e3:.2g} mV); "
-                f"decay not corrected, impulse may be low by up to {bias * 100:.2g} %"
-            ]
-    return math.inf, "none", []
+    if undershoot <= 0:
+        return math.inf, "none", messages
+    tau = integral / undershoot
+    if tau > TAU_BOUNDS_S[1]:
+        return math.inf, "none", messages  # DC-coupled in effect: the correction is negligible
+    if tau < TAU_BOUNDS_S[0]:
+        return math.inf, "none", messages + [
+            f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
+            f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)"
+        ]
+    return tau, "estimated", messages
 
 
 def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, messages, t0_s, anchor_s):

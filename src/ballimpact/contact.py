@@ -50,9 +50,11 @@ THRESHOLD_SIGMA = 8.0  # contact threshold in noise standard deviations [-]
 THRESHOLD_FRACTION = 0.03  # contact threshold as a fraction of the peak [-]
 EDGE_BAND = (0.03, 0.20)  # fractions of the peak between which edges are fitted by a line [-]
 FOOT_SIGMA = 4.0  # cloth-foot samples are above this many noise standard deviations [-]
-FOOT_MAX_SAMPLES = 8  # foot samples used by the hinge fit [samples]
-FOOT_MIN_SAMPLES = 2  # a shorter foot is taken as part of the steep edge [samples]
-FOOT_PRE_SAMPLES = 4  # samples before the foot used by the hinge fit [samples]
+FOOT_MIN_SAMPLES = 2  # fewest rising samples in the hinge fit [samples]
+FOOT_MAX_S = 0.2e-3  # longest stretch of rising samples in the hinge fit [s]
+FOOT_PRE_S = 0.15e-3  # stretch before the first sample above the noise in the hinge fit [s]
+FOOT_PRE_SAMPLES = 4  # ... but at least this many samples [samples]
+FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample further than this from the hinge ends the foot [-]
 HINGE_GRID_PER_SAMPLE = 50  # hinge corner search steps per sample [-]
 SECOND_IMPACT_FRACTION = 0.05  # another impact reaches this fraction of the main peak [-]
 SECOND_IMPACT_MIN_S = 0.3e-3  # ... and lasts longer than this [s]
@@ -260,19 +262,51 @@ def _line_zero(u: np.ndarray, y: np.ndarray) -> float:
     return float(um - ym / b)
 
 
-def _hinge_corner(u: np.ndarray, y: np.ndarray, lower: float, upper: float) -> float:
-    """Corner ts of the least-squares hinge y = b * max(u - ts, 0), b >= 0, ts in [lower, upper]."""
-    if upper <= lower:
-        return float(upper)
-    n_grid = int(math.ceil((upper - lower) * HINGE_GRID_PER_SAMPLE)) + 1
+def _hinge_fit(u: np.ndarray, y: np.ndarray, lower: float, upper: float):
+    """Least-squares hinge y = b * max(u - ts, 0), b >= 0, ts in [lower, upper] on a grid: (ts, b)."""
+    n_grid = max(int(math.ceil((upper - lower) * HINGE_GRID_PER_SAMPLE)), 0) + 1
     corners = np.linspace(lower, upper, n_grid)
     g = np.maximum(u[None, :] - corners[:, None], 0.0)
     gg = np.sum(g * g, axis=1)
-    gy = g @ y
-    b = np.where(gg > 0, gy / np.where(gg > 0, gg, 1.0), 0.0)
+    b = np.where(gg > 0, (g @ y) / np.where(gg > 0, gg, 1.0), 0.0)
     b = np.maximum(b, 0.0)
     sse = np.sum((y[None, :] - b[:, None] * g) ** 2, axis=1)
-    return float(corners[int(np.argmin(sse))])
+    k = int(np.argmin(sse))
+    return float(corners[k]), float(b[k])
+
+
+def _foot_start(u, xs, i0: int, peak_index: int, sigma: float, fs: float) -> float:
+    """Start of the force: corner of a hinge fitted to the quiet samples and the foot of the rise.
+
+    The window holds FOOT_PRE_S of samples before the first sample above the
+    noise threshold (i0), so foot samples hidden in the noise are still fitted,
+    and the rising samples from i0 on for as long as the hinge refitted with
+    each next sample passes within FOOT_RESIDUAL_SIGMA noise deviations of it
+    (the steep rise after a cloth ramp departs from the ramp).
+    """
+    n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
+    k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
+    wl = max(i0 - n_pre, 0)
+    last = min(i0 + k_max - 1, peak_index)
+    wr = min(i0 + FOOT_MIN_SAMPLES - 1, last)
+    ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
+    if wr > i0:
+        # Is the second rising sample already on the steep rise after a faint
+        # foot? Then the hinge through it misses the sub-threshold foot samples
+        # that the hinge through the first rising sample alone explains.
+        ts1, b1 = _hinge_fit(u[wl:i0 + 1], xs[wl:i0 + 1], float(wl), float(i0))
+        uw, xw = u[wl:i0 + 1], xs[wl:i0 + 1]
+        sse1 = np.sum((xw - b1 * np.maximum(uw - ts1, 0.0)) ** 2)
+        sse2 = np.sum((xw - b * np.maximum(uw - ts, 0.0)) ** 2)
+        if sse2 - sse1 > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
+            return ts1
+    while wr < last:
+        nxt = wr + 1
+        ts_n, b_n = _hinge_fit(u[wl:nxt + 1], xs[wl:nxt + 1], float(wl), float(i0))
+        if abs(xs[nxt] - b_n * max(u[nxt] - ts_n, 0.0)) > FOOT_RESIDUAL_SIGMA * sigma:
+            break
+        wr, ts, b = nxt, ts_n, b_n
+    return ts
 
 
 def _not_found(noise, threshold, peak_index, peak, clipped, flags) -> ContactResult:
@@ -420,21 +454,18 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         u_edge = float(j_lo + 1)
     u_edge = min(max(u_edge, j_lo - max(n_band, 2), 0.0), float(j_lo + 1))
 
-    # --- walk back over the foot: the samples below the edge band but above the noise
-    u_start = u_edge
+    # --- start: walk back from the peak to the first sample above the noise, then a local hinge fit
     foot_thr = FOOT_SIGMA * sigma
-    if j_lo >= 0 and xs[j_lo] > foot_thr:
-        quiet = np.flatnonzero(xs[:j_lo + 1] <= foot_thr)
-        i0 = int(quiet[-1]) + 1 if quiet.size else 0
-        if i0 == 0:
-            if "contact_at_trace_start" not in flags:
-                flags.append("contact_at_trace_start")
-            u_start = 0.0
-        elif j_lo - i0 + 1 >= FOOT_MIN_SAMPLES:
+    quiet = np.flatnonzero(xs[:peak_index + 1] <= foot_thr)
+    i0 = int(quiet[-1]) + 1 if quiet.size else 0
+    if i0 == 0:
+        if "contact_at_trace_start" not in flags:
+            flags.append("contact_at_trace_start")
+        u_start = 0.0
+    else:
+        u_start = _foot_start(u, xs, i0, peak_index, sigma, fs)
+        if u_start < u_edge - 1.0:
             flags.append("cloth_foot")
-            wl = max(i0 - FOOT_PRE_SAMPLES, 0)
-            wr = min(j_lo, i0 + FOOT_MAX_SAMPLES - 1)
-            u_start = _hinge_corner(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
 
     # --- falling edge: lowest contiguous part of the edge between lo and hi
     after = np.flatnonzero(xs[peak_index + 1:] < lo)

@@ -188,6 +188,12 @@ def _note(ax, text, *, color="0.35"):
     )
 
 
+def _empty(fig):
+    ax = fig.subplots()
+    ax.set_axis_off()
+    _note(ax, "no impacts in this session")
+
+
 def _corner_note(ax, text):
     ax.text(0.98, 0.96, text, transform=ax.transAxes, ha="right", va="top", color="0.3", fontsize=9,
             bbox={"fc": "white", "ec": "0.7"}, zorder=10)
@@ -228,7 +234,7 @@ def _draw_contact_time_cor(fig, ds):
     balls = _balls(ds)
     colors = _colors(ds)
     if not balls:
-        _note(fig.subplots(), "no impacts in this session")
+        _empty(fig)
         return
     axes = fig.subplots(len(balls), 2, squeeze=False, sharex=True)
     speed = np.asarray(ds["speed_m_s"].values, dtype=float) if "speed_m_s" in ds else None
@@ -251,16 +257,16 @@ def _draw_contact_time_cor(fig, ds):
                 if lo is not None and hi is not None and np.isfinite(lo).any():
                     ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
             elif good.size:
-                _corner_note(ax, _NO_FIT)
+                ax.plot([], [], ls="none", label=f"model: {_NO_FIT}")
             else:
                 _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
             ax.set_ylabel(unit_label)
             if good.size or (curve is not None and np.isfinite(curve).any()):
                 ax.legend(loc="upper right" if meas == "contact_time_ms" else "upper right", frameon=True)
         n_used = _ball_value(ds, "n_impacts", ball)
-        n_used = f", {int(n_used)} used in fit" if np.isfinite(float(n_used)) else ""
-        ax_tc.set_title(f"{_label(ds, ball)}: contact time ({good.size} good{n_used})", loc="left")
-        ax_cor.set_title(f"{_label(ds, ball)}: coefficient of restitution", loc="left")
+        n_used = f", {int(n_used)} in fit" if np.isfinite(float(n_used)) else ""
+        ax_tc.set_title(f"{_label(ds, ball)}: TC ({good.size} good{n_used})", loc="left")
+        ax_cor.set_title(f"{_label(ds, ball)}: COR", loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("Inbound speed VB [m/s]")
     fig.suptitle("Contact time and COR against inbound speed (cf. Fig. 7 of Goodwill & Haake 2004)")
@@ -294,6 +300,9 @@ def fig_contact_time_cor(ds) -> Figure:
 def _draw_stiffness(fig, ds):
     from .model import structural_stiffness
 
+    if not _balls(ds):
+        _empty(fig)
+        return
     ax = fig.subplots()
     colors = _colors(ds)
     x_m = np.asarray(ds["stiffness_x_m"].values, dtype=float) if "stiffness_x_m" in ds else np.linspace(0, 0.03, 61)
@@ -369,7 +378,7 @@ def _extreme_good(ds, ball):
 def _draw_force_curves(fig, ds):
     balls = _balls(ds)
     if not balls:
-        _note(fig.subplots(), "no impacts in this session")
+        _empty(fig)
         return
     axes = fig.subplots(len(balls), 2, squeeze=False)
     speed_colors = ("C0", "C3")
@@ -398,9 +407,9 @@ def _draw_force_curves(fig, ds):
             ax.set_ylabel("Force on the ball [N]")
             if picks:
                 ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
-                _legend_with_headroom(ax)
                 if not fit_ok:
-                    _corner_note(ax, _NO_FIT)
+                    ax.plot([], [], ls="none", label=f"model: {_NO_FIT}")
+                _legend_with_headroom(ax)
         ax_t.set_xlabel("Time since first contact [ms]")
         ax_x.set_xlabel("Centre-of-mass displacement [mm]")
     fig.suptitle("Measured and modelled force at the lowest and highest good speed (cf. Fig. 9)")
@@ -444,36 +453,40 @@ def _nearest_good(ds, ball, speed, tol):
 
 
 def _draw_components(fig, ds):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     balls = _balls(ds)
     if not balls:
-        _note(fig.subplots(), "no impacts in this session")
+        _empty(fig)
         return
     ncols = 1 if len(balls) == 1 else 2
     axes = _grid(fig, len(balls), ncols)
     t_ms = np.asarray(ds["model_time_s"].values, dtype=float) * 1e3 if "model_time_s" in ds else None
     parts = (
-        ("comp_total_force_N", "total model force", "k", "-", 1.8),
-        ("comp_stiffness_force_N", "structural stiffness kB x", "C0", "-", 1.2),
-        ("comp_damping_force_N", "material damping cB x'", "C2", "-", 1.2),
-        ("comp_momentum_flux_force_N", "momentum flux cM x'", "C3", "-", 1.2),
+        ("comp_total_force_N", "total model force", "k", 1.8),
+        ("comp_stiffness_force_N", "structural stiffness kB x", "C0", 1.2),
+        ("comp_damping_force_N", "material damping cB x'", "C2", 1.2),
+        ("comp_momentum_flux_force_N", "momentum flux cM x'", "C3", 1.2),
     )
     for ax, ball in zip(axes, balls):
-        ax.set_title(_label(ds, ball), loc="left")
         drawn = False
         if t_ms is not None:
-            for name, lab, c, ls, lw in parts:
+            for name, _, c, lw in parts:
                 y = _ball_array(ds, name, ball)
                 if y is not None and np.isfinite(y).any():
-                    ax.plot(t_ms, y, ls, color=c, lw=lw, label=lab)
+                    ax.plot(t_ms, y, "-", color=c, lw=lw)
                     drawn = True
         i = _nearest_good(ds, ball, COMPONENT_SPEED_M_S, COMPONENT_SPEED_TOLERANCE_M_S)
+        title = _label(ds, ball)
         if i is not None:
             t, f = _series(ds, i, "force_N")
-            ax.plot(t * 1e3, f, "-", color="0.6", lw=1.0, zorder=1,
-                    label=f"measured {_impact_value(ds, 'vin_m_s', i):.1f} m/s")
+            ax.plot(t * 1e3, f, "-", color="0.6", lw=1.0, zorder=1)
+            vin = _impact_value(ds, "vin_m_s", i)
+            title += f" (measured: {_text(ds['impact_id'].values)[i]}, {vin:.1f} m/s)"
+        ax.set_title(title, loc="left")
         if drawn or i is not None:
             ax.axhline(0.0, color="0.5", lw=0.6)
-            _legend_with_headroom(ax, headroom=0.5)
         if drawn:
             ax.axvspan(0, 0.6, color="C3", alpha=0.07, lw=0)
         elif i is not None:
@@ -482,10 +495,11 @@ def _draw_components(fig, ds):
             _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
         ax.set_xlabel("Time since first contact [ms]")
         ax.set_ylabel("Force [N]")
-    fig.suptitle(
-        f"Force components of the fitted model at {COMPONENT_SPEED_M_S:.0f} m/s (cf. Fig. 10); "
-        "shaded: first 0.6 ms"
-    )
+    handles = [Line2D([], [], color=c, lw=lw, label=lab) for _, lab, c, lw in parts]
+    handles.append(Line2D([], [], color="0.6", lw=1.0, label="measured, good impact nearest 20 m/s"))
+    handles.append(Patch(color="C3", alpha=0.15, label="first 0.6 ms"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=8)
+    fig.suptitle(f"Force components of the fitted model at {COMPONENT_SPEED_M_S:.0f} m/s (cf. Fig. 10)")
 
 
 def fig_components(ds) -> Figure:
@@ -537,46 +551,53 @@ def _kelvin_voigt_curve(ds, i):
 
 
 def _draw_kelvin_voigt(fig, ds):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     balls = _balls(ds)
     if not balls:
-        _note(fig.subplots(), "no impacts in this session")
+        _empty(fig)
         return
     ncols = 1 if len(balls) == 1 else 2
     axes = _grid(fig, len(balls), ncols)
     colors = _colors(ds)
     for ax, ball in zip(axes, balls):
+        ax.set_xlabel("Time since first contact [ms]")
+        ax.set_ylabel("Force [N]")
         good = [i for i in _impacts(ds, ball, "ok") if _series(ds, i)[0].size >= 2]
         vins = [_impact_value(ds, "vin_m_s", i) for i in good]
         if not good or not np.isfinite(vins).any():
             ax.set_title(_label(ds, ball), loc="left")
             _note(ax, _NO_GOOD)
-            ax.set_xlabel("Time since first contact [ms]")
-            ax.set_ylabel("Force [N]")
             continue
         i = good[int(np.nanargmax(vins))]
         vin = _impact_value(ds, "vin_m_s", i)
         t, f = _series(ds, i, "force_N")
-        ax.plot(t * 1e3, f, "-", color=colors[ball], lw=1.4, label="measured")
+        ax.plot(t * 1e3, f, "-", color=colors[ball], lw=1.4)
         kv = _kelvin_voigt_curve(ds, i)
         if kv is not None:
             tk, fk = kv
-            ax.plot(tk * 1e3, fk, "--", color="C3", lw=1.4, label="Kelvin-Voigt (Eqs 1-3)")
+            ax.plot(tk * 1e3, fk, "--", color="C3", lw=1.4)
             neg = fk < 0
             if neg.any():
-                ax.fill_between(tk * 1e3, fk, 0, where=neg, color="C3", alpha=0.25, lw=0,
-                                label=f"tensile force (min {np.nanmin(fk):.0f} N)")
+                ax.fill_between(tk * 1e3, fk, 0, where=neg, color="C3", alpha=0.25, lw=0)
+                ax.text(0.03, 0.04, f"tensile tail: min {np.nanmin(fk):.0f} N", transform=ax.transAxes,
+                        ha="left", va="bottom", color="C3", fontsize=8)
         sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
         if sim is not None:
-            ax.plot(sim[0] * 1e3, sim[1], ":", color="k", lw=1.4, label="improved model (Eq. 14)")
+            ax.plot(sim[0] * 1e3, sim[1], ":", color="k", lw=1.4)
+        else:
+            _corner_note(ax, f"improved model: {_NO_FIT}")
         ax.axhline(0.0, color="0.4", lw=0.7)
         ax.set_title(f"{_label(ds, ball)}, VB = {vin:.1f} m/s ({_text(ds['impact_id'].values)[i]})", loc="left")
-        ax.set_xlabel("Time since first contact [ms]")
-        ax.set_ylabel("Force [N]")
-        _legend_with_headroom(ax, headroom=0.5)
-        if sim is None:
-            ax.text(0.98, 0.04, f"improved model: {_NO_FIT}", transform=ax.transAxes, ha="right", va="bottom",
-                    color="0.3", fontsize=9, bbox={"fc": "white", "ec": "0.7"}, zorder=10)
-    fig.suptitle("Kelvin-Voigt model against measured force, fastest good impact (cf. Fig. 2b)")
+    handles = [
+        Line2D([], [], color="0.25", lw=1.4, label="measured (ball colour)"),
+        Line2D([], [], color="C3", ls="--", lw=1.4, label="Kelvin-Voigt, Eqs (1)-(3)"),
+        Patch(color="C3", alpha=0.25, label="tensile (negative) force"),
+        Line2D([], [], color="k", ls=":", lw=1.4, label="improved model, Eq. (14)"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8)
+    fig.suptitle("Kelvin-Voigt model against measured force, fastest good impact of each ball (cf. Fig. 2b)")
 
 
 def fig_kelvin_voigt(ds) -> Figure:
@@ -622,11 +643,11 @@ def kcal_band(ds) -> tuple[float, float]:
 
 
 def _draw_kcal(fig, ds):
-    ax = fig.subplots()
     n = ds.sizes.get("impact", 0)
     if n == 0:
-        _note(ax, "no impacts in this session")
+        _empty(fig)
         return
+    ax = fig.subplots()
     colors = _colors(ds)
     ids = _text(ds["impact_id"].values)
     kcal = np.asarray(ds["kcal_N_per_V"].values, dtype=float)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import importlib.util
 import json
 import logging
 import math
@@ -42,6 +44,7 @@ FIGURE_STEMS = (
 QC_DIR_NAME = "qc"  # sub-folder of the figures folder with one QC page per impact
 
 SNAPSHOT_FORMAT_VERSION = 1  # version of the work/session.json layout
+CSV_FLOAT_FORMAT = "%.12g"  # numbers in impacts.csv / parameters.csv: 12 significant digits
 
 logger = logging.getLogger(__name__)
 
@@ -150,6 +153,7 @@ def atomic_dir(path):
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
+    tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private (0700); a results folder is not
     try:
         yield tmp
         if path.exists():
@@ -158,6 +162,12 @@ def atomic_dir(path):
     finally:
         if tmp.exists():
             shutil.rmtree(tmp)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _write_text_atomic(path, text: str) -> None:
@@ -259,12 +269,31 @@ def chunk_impact_ids(impact_ids, chunk: int, n_chunks: int) -> list:
     return list(impact_ids)[chunk::n_chunks]
 
 
+def _requires(module: str) -> None:
+    """NotImplementedError while the library module ``ballimpact.<module>`` is not written yet."""
+    if importlib.util.find_spec(f"ballimpact.{module}") is None:
+        raise NotImplementedError(f"this step waits for the library module ballimpact.{module}")
+
+
+def _trace_info(session, row) -> tuple[str, str]:
+    """(trace path relative to the session folder, sha256) of a row; sha256 empty when unreadable."""
+    if any(p.startswith(("missing trace path", "trace ")) for p in row.problems):
+        return row.trace, ""
+    from .session import file_sha256
+
+    path = session.trace_path(row)
+    try:
+        return path.resolve().relative_to(session.path.resolve()).as_posix(), file_sha256(path)
+    except (OSError, ValueError):
+        return row.trace, ""
+
+
 def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: float | None = None) -> None:
     """
     Process impacts ``chunk, chunk + n_chunks, ...`` of a session into ``work/chunk_{chunk}.nc``.
 
     Rule ``process_chunk``. Impact-level faults exclude the impact only (it stays in
-    the file with status ``excluded`` and the reason).
+    the file with status ``excluded`` and the reason); one trace is in memory at a time.
 
     Parameters
     ----------
@@ -279,23 +308,48 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
     mains_hz : float or None, optional
         Mains frequency [Hz] to remove; None keeps session.yaml ``daq.mains_hz``.
     """
+    if mains_hz is not None and (isinstance(mains_hz, bool) or not (math.isfinite(mains_hz) and mains_hz > 0)):
+        raise ValueError(f"mains_hz must be a positive number of Hz or None, got {mains_hz!r}")
     _check_int("n_chunks", n_chunks, 1)
     _check_int("chunk", chunk, 0)
-    if chunk >= n_chunks:
-        raise ValueError(f"chunk must be smaller than n_chunks ({n_chunks}), got {chunk}")
-    if mains_hz is not None and not (math.isfinite(mains_hz) and mains_hz > 0):
-        raise ValueError(f"mains_hz must be a positive number of Hz or None, got {mains_hz!r}")
-    # TODO(lead): needs ballimpact.processing (iter_process) and a per-impact results ->
-    # xarray.Dataset writer (ballimpact.archive); the session's mains_hz is replaced by
-    # dataclasses.replace(session.meta, mains_hz=mains_hz) when mains_hz is given.
-    raise NotImplementedError("process_chunk waits for ballimpact.processing and ballimpact.archive")
+    _requires("processing")
+    from . import archive, processing
+    from .session import read_session
+
+    session = read_session(session_dir)
+    if mains_hz is not None:
+        session.meta = dataclasses.replace(session.meta, mains_hz=float(mains_hz))
+    ids = chunk_impact_ids([row.impact_id for row in session.impacts], chunk, n_chunks)
+    rows = {row.impact_id: row for row in session.impacts}
+    trace_info = {impact_id: _trace_info(session, rows[impact_id]) for impact_id in ids}
+
+    def logged(results):
+        for result in results:
+            if result.status == "ok":
+                logger.info("%s (%s): ok", result.impact_id, result.ball)
+            else:
+                logger.info("%s (%s): excluded: %s", result.impact_id, result.ball, result.reason)
+            yield result
+
+    ds = archive.impacts_dataset(logged(processing.iter_process(session, impact_ids=ids)), trace_info=trace_info)
+    got = [str(i) for i in ds["impact_id"].values]
+    if sorted(got) != sorted(ids):
+        missing, extra = sorted(set(ids) - set(got)), sorted(set(got) - set(ids))
+        raise RuntimeError(
+            f"processing of chunk {chunk} of {n_chunks} returned the wrong impacts: "
+            f"missing {missing[:10]}, unexpected {extra[:10]}"
+        )
+    Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
+    archive.write_dataset(ds, out_nc)
+    logger.info("chunk %d of %d: %d impacts written to %s", chunk, n_chunks, len(ids), out_nc)
 
 
 def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     """
     Join the chunk files into all impacts in raw order: ``impacts.csv`` and ``work/impacts.nc``.
 
-    Rule ``collect_impacts``; adds the session's kCAL QC.
+    Rule ``collect_impacts``. Every impact of the raw impacts.csv must be in exactly
+    one chunk (none dropped, none twice).
 
     Parameters
     ----------
@@ -307,12 +361,51 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
         ``impacts.csv`` to write (atomically), columns of outputs.md.
     out_nc : str or Path
         ``work/impacts.nc`` to write (atomically).
+
+    Raises
+    ------
+    ValueError
+        An impact missing from the chunks, given twice, or not in the raw impacts.csv.
     """
-    if not list(chunk_ncs):
+    import xarray as xr
+
+    from . import archive
+    from .session import read_session
+
+    chunk_ncs = [Path(p) for p in chunk_ncs]
+    if not chunk_ncs:
         raise ValueError("chunk_ncs must name at least one chunk file, got none")
-    # TODO(lead): needs ballimpact.processing (IMPACT_COLUMNS) and ballimpact.archive
-    # (concatenate chunk datasets, reorder to raw order, kCAL QC).
-    raise NotImplementedError("collect_impacts waits for ballimpact.processing and ballimpact.archive")
+    order = [row.impact_id for row in read_session(session_dir).impacts]
+    parts = [archive.open_dataset(p) for p in chunk_ncs]
+    sizes = {dim: max(part.sizes.get(dim, 1) for part in parts) for dim in ("sample", "raw_sample")}
+    padded = []
+    for part in parts:
+        widths = {dim: (0, n - part.sizes[dim]) for dim, n in sizes.items() if dim in part.dims and part.sizes[dim] < n}
+        padded.append(part.pad(widths) if widths else part)  # NaN padding of the series
+    ds = xr.concat(padded, dim="impact", data_vars="all", coords="minimal", join="exact", combine_attrs="drop_conflicts")
+    found = [str(i) for i in ds["impact_id"].values]
+    position = {}
+    for k, impact_id in enumerate(found):
+        if impact_id in position:
+            raise ValueError(f"impact {impact_id!r} is in more than one chunk file ({', '.join(map(str, chunk_ncs))})")
+        position[impact_id] = k
+    missing = [i for i in order if i not in position]
+    extra = [i for i in found if i not in set(order)]
+    if missing or extra:
+        raise ValueError(
+            f"chunk files do not match {Path(session_dir) / 'impacts.csv'}: "
+            f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
+        )
+    ds = archive.set_variable_attrs(ds.isel(impact=[position[i] for i in order]))
+    # TODO(lead): session-level kCAL QC (compare each impact's kCAL with the session's
+    # robust spread, e.g. figures.kcal_band) once processing defines how it excludes.
+    archive.write_dataset(ds, out_nc)
+    table = archive.impacts_table(ds)
+    with atomic_path(out_csv) as tmp:
+        table.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+    n_excluded = int((table["status"] == "excluded").sum())
+    logger.info("collected %d impacts from %d chunks: %d ok, %d excluded",
+                len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
 
 
 def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, seed: int) -> None:
@@ -340,15 +433,22 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     _check_int("seed", seed, 0)
     if not ball:
         raise ValueError("ball must be a ball type key, got an empty string")
-    # TODO(lead): needs ballimpact.fitting (fit_ball_model) and ballimpact.archive (fit dataset).
-    raise NotImplementedError("fit_ball waits for ballimpact.fitting and ballimpact.archive")
+    # TODO(lead): ballimpact.fitting.fit_ball_model and model_curves exist; missing is the
+    # BallFit -> per-ball xarray.Dataset builder (ball dim of length 1: parameters in Table 2
+    # units with intervals, ball_label, fit_message, n_impacts, model curves on speed_m_s
+    # 10..32 m/s, components at 20 m/s on model_time_s, model_stiffness_kN_m on
+    # stiffness_x_m; layout as tests/archive_fixture.py _ball_fit), ideally in
+    # ballimpact.archive. A ball with fewer than 3 ok impacts (FitError) must still give a
+    # dataset with NaN parameters and the reason in fit_message, so the session goes on.
+    raise NotImplementedError("fit_ball waits for a fit-dataset builder in ballimpact.archive (or fitting)")
 
 
 def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) -> None:
     """
     Write the session archive ``<session_id>.nc`` and ``parameters.csv``.
 
-    Rule ``archive``: impacts + every fit + global attributes (provenance, raw sha256).
+    Rule ``archive``: impacts + every fit + the model forces + global attributes
+    (session.yaml text, sha256 of every raw file).
 
     Parameters
     ----------
@@ -363,8 +463,31 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
     out_parameters_csv : str or Path
         ``parameters.csv`` to write (atomically), one row per ball type.
     """
-    # TODO(lead): needs ballimpact.archive.
-    raise NotImplementedError("write_archive waits for ballimpact.archive")
+    from . import archive
+    from .session import IMPACTS_FILE, SESSION_FILE, file_sha256, read_session
+
+    session = read_session(session_dir)
+    impacts = archive.open_dataset(impacts_nc)
+    fits = [archive.open_dataset(p) for p in fit_ncs]
+    ds = archive.assemble_archive(impacts, fits)
+    raw_sha256 = {name: file_sha256(session.path / name) for name in (SESSION_FILE, IMPACTS_FILE)}
+    # trace hashes were taken when the traces were read (rule process_chunk)
+    for trace_file, sha in zip(ds["trace_file"].values, ds["trace_sha256"].values):
+        if trace_file and sha:
+            raw_sha256[str(trace_file)] = str(sha)
+    ds = archive.add_metadata(
+        ds,
+        session_id=session.meta.session_id,
+        session_yaml_text=(session.path / SESSION_FILE).read_text(encoding="utf-8-sig"),
+        raw_sha256=raw_sha256,
+        synthetic=session.meta.synthetic,
+        history=f"ballimpact workflow, rule archive (ballimpact.pipeline.write_archive) from {session.path}",
+    )
+    Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
+    archive.write_dataset(ds, out_nc)
+    with atomic_path(out_parameters_csv) as tmp:
+        archive.parameters_table(ds).to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+    logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
 
 
 def make_figures(archive_nc, out_dir) -> None:
@@ -372,7 +495,9 @@ def make_figures(archive_nc, out_dir) -> None:
     Draw every report figure from the archive as PNG into ``out_dir``.
 
     Rule ``figures``: writes ``<stem>.png`` for each of :data:`FIGURE_STEMS` and the
-    folder ``qc/`` with one QC page per impact.
+    folder ``qc/`` with one QC page per excluded impact. Everything is drawn into a
+    temporary folder inside ``out_dir`` first and then moved into place, so an
+    interrupted run leaves no half-written figure or QC folder.
 
     Parameters
     ----------
@@ -381,9 +506,30 @@ def make_figures(archive_nc, out_dir) -> None:
     out_dir : str or Path
         The figures folder ``results/<session_id>/figures``.
     """
-    # TODO(lead): needs ballimpact.figures; write each PNG through atomic_path and the
-    # QC pages through atomic_dir(Path(out_dir) / QC_DIR_NAME).
-    raise NotImplementedError("make_figures waits for ballimpact.figures")
+    from . import archive, figures
+
+    names = tuple(Path(name).stem for name in figures.FIGURE_FILES)
+    if set(names) != set(FIGURE_STEMS):
+        raise RuntimeError(
+            f"ballimpact.figures.FIGURE_FILES {names} and pipeline.FIGURE_STEMS {FIGURE_STEMS} disagree; "
+            "update FIGURE_STEMS and workflow/rules/common.smk FIGURES together"
+        )
+    ds = archive.open_dataset(archive_nc)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".figures.", suffix=".tmp", dir=out_dir))
+    try:
+        figures.save_all(ds, staging)
+        for stem in FIGURE_STEMS:
+            os.replace(staging / f"{stem}.png", out_dir / f"{stem}.png")
+        qc = out_dir / QC_DIR_NAME
+        if qc.exists():
+            shutil.rmtree(qc)
+        os.replace(staging / QC_DIR_NAME, qc)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    logger.info("figures: %d PNG files and %d QC pages in %s", len(FIGURE_STEMS),
+                len(list((out_dir / QC_DIR_NAME).glob("*.png"))), out_dir)
 
 
 def make_report(archive_nc, figures_dir, out_pdf) -> None:
@@ -397,9 +543,14 @@ def make_report(archive_nc, figures_dir, out_pdf) -> None:
     archive_nc : str or Path
         The session archive.
     figures_dir : str or Path
-        The figures folder written by :func:`make_figures`.
+        The figures folder written by :func:`make_figures` (its PNG files are placed
+        on the pages).
     out_pdf : str or Path
         ``report.pdf`` to write (atomically).
     """
-    # TODO(lead): needs ballimpact.report.
-    raise NotImplementedError("make_report waits for ballimpact.report")
+    from . import archive, report
+
+    ds = archive.open_dataset(archive_nc)
+    Path(out_pdf).parent.mkdir(parents=True, exist_ok=True)
+    report.write_report(ds, out_pdf, figures_dir=figures_dir)
+    logger.info("report %s: %d pages", out_pdf, report.report_page_count(ds))

@@ -19,23 +19,31 @@ IMPACTS_REQUIRED_COLUMNS = ("impact_id", "ball", "trace")
 
 
 def _schema_error_message(exc):
-    """One line 'key 'a.b': what is wrong' from a WorkflowError wrapping a jsonschema error."""
+    """One line "key 'a.b': what is wrong" from snakemake.utils.validate's WorkflowError.
+
+    The jsonschema ValidationError is the exception being handled when validate raised
+    its WorkflowError, so it is found in ``__context__``.
+    """
     import jsonschema
 
-    inner = next((a for a in exc.args if isinstance(a, jsonschema.exceptions.ValidationError)), None)
+    inner = exc
+    while inner is not None and not isinstance(inner, jsonschema.exceptions.ValidationError):
+        inner = inner.__cause__ or inner.__context__
     if inner is None:
         return " ".join(str(exc).split())
-    # oneOf failures: report the most specific sub-error
-    best = jsonschema.exceptions.best_match([inner]) if inner.context else inner
+    best = inner
+    while best.context:  # oneOf/anyOf: the branch of the right type says what is wrong
+        candidates = [e for e in best.context if e.validator != "type"] or list(best.context)
+        best = jsonschema.exceptions.best_match(candidates)
     path = ".".join(str(p) for p in best.absolute_path)
     message = " ".join(best.message.split())
-    if best.validator == "additionalProperties" and not path:
-        return f"unknown key: {message}"
-    if best.validator == "required":
-        where = f" under '{path}'" if path else ""
-        return f"missing required key{where}: {message}"
-    if inner.validator == "oneOf" and not inner.context:
-        message = inner.message
+    if best.validator == "additionalProperties" and isinstance(best.instance, dict):
+        known = list(best.schema.get("properties", {}))
+        unknown = [repr(f"{path}.{k}" if path else k) for k in best.instance if k not in known]
+        return f"unknown key {', '.join(unknown)} (known keys: {', '.join(known)})"
+    if best.validator == "required" and isinstance(best.instance, dict):
+        missing = [repr(f"{path}.{k}" if path else k) for k in best.validator_value if k not in best.instance]
+        return f"missing required key {', '.join(missing)}"
     return f"key '{path}': {message}" if path else message
 
 
@@ -137,7 +145,7 @@ def _read_session_yaml(path):
         validate(data, SESSION_SCHEMA, set_default=False)
     except WorkflowError as exc:
         raise WorkflowError(
-            f"{path}: {_schema_error_message(exc)} (see shared/spec/raw-format.md)"
+            f"{path}: {_schema_error_message(exc)} (see workflow/schemas/session.schema.yaml)"
         ) from None
     if str(data["session_id"]) != path.parent.name:
         raise WorkflowError(
@@ -177,7 +185,7 @@ def _read_impact_rows(path):
     missing = [c for c in IMPACTS_REQUIRED_COLUMNS if c not in header]
     if missing:
         raise WorkflowError(
-            f"{path}: missing required column(s) in the header: {', '.join(missing)} (see shared/spec/raw-format.md)"
+            f"{path}: missing required column(s) in the header: {', '.join(missing)}"
         )
     rows = [dict(zip(header, record)) for record in records[1:]]
     if not rows:

@@ -2,7 +2,7 @@
 
 
 rule figures:
-    """Every report figure as its own PNG, plus one QC page per impact in figures/qc/."""
+    """Every report figure as its own PNG, plus one QC page per excluded impact in figures/qc/."""
     input:
         archive=result_path("{session}.nc"),
     output:
@@ -54,7 +54,7 @@ rule figures:
             caption="../report/qc.rst",
             category="Quality control",
             subcategory="{session}",
-            labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace and detected contact"},
+            labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace of an excluded impact"},
         ),
     log:
         log_path("figures"),
@@ -79,8 +79,6 @@ rule report:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "report.pdf", "shows": "the whole session report"},
         ),
-    params:
-        figures_dir=result_path("figures"),
     log:
         log_path("report"),
     benchmark:

@@ -1,5 +1,7 @@
 """Rule report: the session's PDF report."""
 
+from pathlib import Path
+
 from ballimpact.pipeline import log_to_file, make_report
 
 snakemake = globals()["snakemake"]  # injected by Snakemake's `script:` directive
@@ -7,6 +9,6 @@ snakemake = globals()["snakemake"]  # injected by Snakemake's `script:` directiv
 with log_to_file(snakemake.log[0]):
     make_report(
         archive_nc=snakemake.input.archive,
-        figures_dir=snakemake.params.figures_dir,
+        figures_dir=Path(snakemake.input.qc).parent,  # figures/, holding the PNGs and qc/
         out_pdf=snakemake.output.pdf,
     )

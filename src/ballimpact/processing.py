@@ -1,0 +1,296 @@
+"""One impact from raw gate times and voltage trace to calibrated force, TC and COR (section 2 of Goodwill & Haake 2004).
+
+:func:`process_impact` composes the pure pieces: gate speeds
+(:mod:`ballimpact.gates`), conditioning (:mod:`ballimpact.conditioning`),
+contact detection (:mod:`ballimpact.contact`) and calibration
+(:mod:`ballimpact.calibration`). It never raises for a fault of one impact:
+the impact comes back ``excluded`` with its reason. :func:`iter_process`
+streams a session, holding one trace in memory at a time, and
+:func:`flag_calibration_outliers` applies the session-level kCAL check.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field, replace
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
+from .conditioning import condition_voltage
+from .contact import contact_samples, detect_clipping
+from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
+from .model import kelvin_voigt_parameters
+from .session import ImpactRow, Session
+from .traces import TraceError, read_trace
+
+__all__ = [
+    "IMPACT_COLUMNS",
+    "PHYSICAL_BOUNDS",
+    "ImpactResult",
+    "process_impact",
+    "iter_process",
+    "flag_calibration_outliers",
+]
+
+#: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
+IMPACT_COLUMNS = [
+    "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
+    "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
+    "kv_stiffness_kN_m", "kv_damping_N_s_m",
+]
+
+#: Plausible ranges for a tennis ball fired at a force plate; outside = excluded.
+PHYSICAL_BOUNDS = {
+    "vin_m_s": (2.0, 80.0),  # inbound speed [m/s]
+    "cor": (0.05, 1.0),  # coefficient of restitution [-]
+    "contact_time_ms": (1.0, 12.0),  # contact time [ms]
+}
+#: Session-level kCAL check: excluded when both the robust z-score and the relative
+#: deviation from the session median exceed these.
+KCAL_MAX_ROBUST_Z = 5.0
+KCAL_MAX_RELATIVE = 0.10
+
+
+@dataclass
+class ImpactResult:
+    """Everything measured of one impact; see IMPACT_COLUMNS for the scalar columns.
+
+    Time series cover the contact, from its start (t = 0) to its end, at the
+    trace's samples with the sub-sample ends interpolated: time [s], conditioned
+    voltage [V], force [N], velocity [m/s] (towards the plate) and displacement
+    [m]. ``raw_time_s`` / ``raw_voltage_V`` hold the whole trace (polarity
+    applied), time from the contact start when it was found.
+    """
+
+    impact_id: str
+    ball: str
+    status: str = "ok"
+    reason: str = ""
+    vin_m_s: float = math.nan
+    vout_m_s: float = math.nan
+    cor: float = math.nan
+    contact_time_ms: float = math.nan
+    kcal_N_per_V: float = math.nan
+    impulse_N_s: float = math.nan
+    peak_force_N: float = math.nan
+    time_to_peak_ms: float = math.nan
+    max_displacement_mm: float = math.nan
+    kv_stiffness_kN_m: float = math.nan
+    kv_damping_N_s_m: float = math.nan
+    mass_kg: float = math.nan
+    sample_rate_hz: float = math.nan
+    trace_file: str = ""
+    noise_rms_V: float = math.nan
+    hum_amplitude_V: float = math.nan
+    tau_s: float = math.nan
+    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
+    force_N: np.ndarray = field(default_factory=lambda: np.empty(0))
+    velocity_m_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    displacement_m: np.ndarray = field(default_factory=lambda: np.empty(0))
+    raw_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    raw_voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+    def exclude(self, reason: str) -> "ImpactResult":
+        """Mark excluded, adding ``reason`` to any reason already given."""
+        self.status = "excluded"
+        self.reason = f"{self.reason}; {reason}" if self.reason else reason
+        return self
+
+    def row(self) -> dict:
+        """The impacts.csv row of this impact."""
+        return {c: getattr(self, c) for c in IMPACT_COLUMNS}
+
+
+def _out_of_bounds(name, value):
+    lo, hi = PHYSICAL_BOUNDS[name]
+    return not (lo <= value <= hi)
+
+
+def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
+    """Process one impact: speeds, COR, kCAL, force, motion, TC and Kelvin-Voigt kB, cB.
+
+    Implements section 2 of Goodwill & Haake 2004: COR = VB'/VB from the gates;
+    kCAL = m (VB + VB') / integral of V dt over the contact; F = kCAL V; velocity
+    and displacement by integrating -F/m from VB and 0; TC the time during which
+    a force acts; Kelvin-Voigt kB and cB from Eqs. (2) and (3).
+
+    Parameters
+    ----------
+    row : ImpactRow
+        The impact's row of impacts.csv.
+    session : Session
+        Its session (metadata and folder).
+
+    Returns
+    -------
+    ImpactResult
+        Status ``ok``, or ``excluded`` with every reason found; never raises for
+        a fault of this impact.
+    """
+    meta = session.meta
+    res = ImpactResult(impact_id=row.impact_id, ball=row.ball, mass_kg=row.mass_kg, trace_file=row.trace)
+    for problem in row.problems:
+        res.exclude(problem)
+
+    # Speeds from the gates (section 2): vin = spacing / (in_2 - in_1), vout = spacing / (out_1 - out_2).
+    gate_problems = check_gate_times(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
+    for p in gate_problems:
+        if p not in res.reason:
+            res.exclude(p)
+    if not gate_problems:
+        vin, vout = gate_speeds(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s,
+                                meta.gate_spacing_m)
+        res.vin_m_s, res.vout_m_s = float(vin), float(vout)
+        res.cor = float(coefficient_of_restitution(vin, vout))
+        if _out_of_bounds("vin_m_s", res.vin_m_s):
+            res.exclude(f"inbound speed {res.vin_m_s:.2f} m/s outside physical bounds {PHYSICAL_BOUNDS['vin_m_s']}")
+        if _out_of_bounds("cor", res.cor):
+            res.exclude(f"COR {res.cor:.3f} outside physical bounds {PHYSICAL_BOUNDS['cor']}")
+
+    # The trace.
+    path = session.trace_path(row)
+    if not path.is_file():
+        if "trace" not in res.reason:
+            res.exclude(f"trace file not found: {row.trace}")
+        return res
+    try:
+        trace = read_trace(path, meta.sample_rate_hz)
+    except TraceError as exc:
+        return res.exclude(f"unreadable trace: {exc}")
+    fs = trace.sample_rate_hz
+    res.sample_rate_hz = fs
+    raw = trace.voltage_V
+    t = trace.t0_s + np.arange(raw.size) / fs
+    res.raw_time_s = t - t[0]
+    res.raw_voltage_V = meta.polarity * raw
+
+    if detect_clipping(raw, meta.adc_range_v):
+        res.exclude("clipping at the ADC rails")
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        try:
+            cond = condition_voltage(raw, fs, polarity=meta.polarity, mains_hz=meta.mains_hz, t0_s=trace.t0_s)
+        except ValueError as exc:
+            return res.exclude(f"unusable trace: {exc}")
+    res.noise_rms_V = cond.noise_rms_V
+    res.hum_amplitude_V = cond.hum_amplitude_V
+    res.tau_s = cond.tau_s
+    contact = cond.contact
+    if not contact.found:
+        return res.exclude("no contact found")
+    res.raw_time_s = t - contact.start_s
+    if contact.n_impacts > 1:
+        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found)")
+    if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
+        res.exclude("contact not entirely inside the trace (truncated trace?)")
+    tc_ms = contact.contact_time_s * 1e3
+    res.contact_time_ms = tc_ms
+    if _out_of_bounds("contact_time_ms", tc_ms):
+        res.exclude(f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}")
+
+    t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s)
+    res.time_s = t_rel
+    res.voltage_V = v_contact
+    if not (math.isfinite(res.vin_m_s) and math.isfinite(res.vout_m_s) and math.isfinite(row.mass_kg)):
+        return res  # excluded above: no calibration without speeds and mass
+    try:
+        kcal = calibration_factor(t, cond.voltage_V, contact.start_s, contact.end_s, row.mass_kg,
+                                  res.vin_m_s, res.vout_m_s)
+    except ValueError as exc:
+        return res.exclude(f"no calibration: {exc}")
+    res.kcal_N_per_V = kcal
+    force = force_from_voltage(v_contact, kcal)
+    velocity, displacement = integrate_motion(t_rel, force, row.mass_kg, res.vin_m_s)
+    summary = contact_summary(t_rel, force, row.mass_kg, res.vin_m_s)
+    res.force_N, res.velocity_m_s, res.displacement_m = force, velocity, displacement
+    res.impulse_N_s = row.mass_kg * (res.vin_m_s + res.vout_m_s)
+    res.peak_force_N = summary.peak_force_N
+    res.time_to_peak_ms = summary.time_to_peak_s * 1e3
+    res.max_displacement_mm = summary.max_displacement_m * 1e3
+    kb, cb = kelvin_voigt_parameters(row.mass_kg, contact.contact_time_s, res.cor)
+    res.kv_stiffness_kN_m = float(kb) / 1e3
+    res.kv_damping_N_s_m = float(cb)
+    return res
+
+
+def iter_process(session: Session, impact_ids: Iterable[str] | None = None) -> Iterator[ImpactResult]:
+    """Process the impacts of a session one at a time, in raw order.
+
+    Parameters
+    ----------
+    session : Session
+        The session.
+    impact_ids : iterable of str, optional
+        Only these impacts (default all).
+
+    Yields
+    ------
+    ImpactResult
+        One per impact; only one trace is held in memory at a time.
+    """
+    wanted = None if impact_ids is None else set(impact_ids)
+    for row in session.impacts:
+        if wanted is None or row.impact_id in wanted:
+            yield process_impact(row, session)
+
+
+def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_Z, max_relative=KCAL_MAX_RELATIVE):
+    """Impacts whose kCAL is far from the session's typical value for the plate.
+
+    kCAL varies a little between impacts (section 2 of Goodwill & Haake 2004),
+    so a value far from the rest points at a bad gate time or trace. Typical =
+    median over the ``ok`` impacts; spread = 1.4826 x median absolute deviation.
+    An impact is flagged when its robust z-score exceeds ``max_robust_z`` AND it
+    lies more than ``max_relative`` from the median.
+
+    Parameters
+    ----------
+    kcal_N_per_V : array_like
+        kCAL of every impact [N/V] (NaN where none).
+    ok : array_like of bool
+        Impacts to take the typical value from.
+    max_robust_z : float
+        Largest robust z-score accepted [-].
+    max_relative : float
+        Largest relative deviation accepted [-].
+
+    Returns
+    -------
+    reasons : list of str
+        Per impact, "" or the exclusion reason.
+    median : float
+        Session median kCAL [N/V] (NaN with fewer than 3 ok impacts).
+    spread : float
+        Robust standard deviation [N/V].
+    """
+    k = np.asarray(kcal_N_per_V, dtype=float)
+    ok = np.asarray(ok, dtype=bool) & np.isfinite(k)
+    reasons = [""] * k.size
+    if ok.sum() < 3:
+        return reasons, math.nan, math.nan
+    med = float(np.median(k[ok]))
+    spread = float(1.4826 * np.median(np.abs(k[ok] - med)))
+    for i in np.flatnonzero(ok):
+        rel = abs(k[i] - med) / med
+        z = abs(k[i] - med) / spread if spread > 0 else math.inf
+        if z > max_robust_z and rel > max_relative:
+            reasons[i] = (
+                f"calibration factor {k[i]:.1f} N/V is {100 * rel:.0f} % from the session median "
+                f"{med:.1f} N/V (robust z = {z:.1f})"
+            )
+    return reasons, med, spread
+
+
+def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
+    """Exclude, in place, impacts whose kCAL is an outlier of the session; returns (median, spread) [N/V]."""
+    reasons, med, spread = flag_calibration_outliers(
+        [r.kcal_N_per_V for r in results], [r.status == "ok" for r in results]
+    )
+    for r, reason in zip(results, reasons):
+        if reason:
+            r.exclude(reason)
+    return med, spread

@@ -1,0 +1,597 @@
+"""The PDF session report: summary page, one page per figure, the exclusion list and the QC appendix (matplotlib PdfPages)."""
+
+from __future__ import annotations
+
+import datetime
+import os
+import tempfile
+import textwrap
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.backends.backend_pdf import PdfPages
+from matplotlib.figure import Figure
+
+from . import figures as _fig
+
+__all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "write_report", "report_page_count"]
+
+#: A4 portrait page size [in].
+A4_PORTRAIT_IN = (8.27, 11.69)
+_MARGIN_IN = 0.6  # page margin [in]
+_SOURCE_SHORT = {"extrapolated": "extrap."}
+
+#: Title and caption of each report figure (keys are the PNG names of figures.FIGURE_FILES).
+FIGURE_CAPTIONS = {
+    "fig7_contact_time_cor.png": (
+        "Contact time and coefficient of restitution against inbound speed",
+        "Each row is one ball type. Circles are the good impacts of this session (contact time TC from "
+        "the force trace, COR = VB'/VB from the light gates); the black line is the improved model "
+        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts and the shaded "
+        "area its 95 % band from the parameter uncertainty. TC is set by the stiffness law (AK, a), COR "
+        "mainly by the damping constant AC. The paper reports agreement within about 5 %; points well "
+        "outside the band point to a poor fit or to impacts that deserve a look.",
+    ),
+    "fig8_stiffness.png": (
+        "Structural stiffness against centre-of-mass displacement",
+        "kB = kB(0) + AK x^a (Eq. 4) for every ball type: solid lines use the parameters fitted here, "
+        "dashed lines the values of the paper's Table 2 (Table 2 ball types only). A stiffer ball has a "
+        "higher curve; the pressurised ball is the stiffest in the paper, the punctured ball is soft at "
+        "small displacements and stiffens quickly. Ball types without a fit are listed in the panel.",
+    ),
+    "fig9_force_curves.png": (
+        "Measured and modelled force at the lowest and highest good speed",
+        "For each ball type, the good impacts at the lowest and highest inbound speed: force against time "
+        "(left) and against centre-of-mass displacement (right, from integrating the force twice). "
+        "Solid: measured; dashed: the fitted model simulated at the same speed. The model force is zero "
+        "below 2 mm (cloth) and uses the pre-buckling stiffness for the first 0.2 ms; after that the "
+        "paper finds model and measurement within about 10 %.",
+    ),
+    "fig10_components.png": (
+        "Force components of the fitted model at 20 m/s",
+        "The total model force split into structural stiffness kB x, material damping cB x' and "
+        "momentum flux cM x' (Eq. 14), simulated at 20 m/s with each ball's fitted parameters; grey is "
+        "the measured good impact nearest 20 m/s (within 2.5 m/s). The paper finds the momentum flux "
+        "dominant during the first 0.6 ms (shaded) and the stiffness term dominant at the force peak; "
+        "the damping term turns negative in restitution.",
+    ),
+    "fig2b_kelvin_voigt.png": (
+        "Kelvin-Voigt model against the measured force",
+        "The fastest good impact of each ball type (solid) against the linear Kelvin-Voigt model with "
+        "kB = m pi^2 / TC^2 and cB = -2 m ln(COR) / TC (Eqs 1-3, dashed) and the improved model (dotted). "
+        "The Kelvin-Voigt force starts at cB VB instead of zero and turns tensile (shaded) before the "
+        "ball leaves the plate, the failure shown in Fig. 2b of the paper that motivates the improved model.",
+    ),
+    "kcal.png": (
+        "Per-impact force-plate calibration factor",
+        "kCAL = m (VB + VB') / integral of V dt for every impact in the order of the raw impacts.csv, "
+        "coloured by ball type. The line is the session median over the good impacts and the grey band "
+        "median +- 3 robust standard deviations. A drift or a step suggests a change in the charge "
+        "amplifier or plate; a single outlier points to a bad gate time or trace. Excluded impacts are "
+        "crossed when they have a kCAL and marked on the axis when they do not.",
+    ),
+}
+
+
+def _text(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    return str(value)
+
+
+def _session_info(ds) -> dict:
+    """Session metadata from the archive attributes (falling back on the session YAML)."""
+    attrs = ds.attrs
+    info = {
+        "session_id": _text(attrs.get("session_id", "")),
+        "date": _text(attrs.get("session_date", "")),
+        "operator": _text(attrs.get("operator", "")),
+        "description": _text(attrs.get("session_description", "")),
+        "software_version": _text(attrs.get("software_version", "")),
+        "date_created": _text(attrs.get("date_created", "")),
+        "synthetic": False,
+    }
+    yaml_text = attrs.get("session_yaml")
+    if yaml_text and not (info["date"] and info["operator"] and info["description"]):
+        try:
+            import yaml
+
+            meta = yaml.safe_load(_text(yaml_text)) or {}
+        except Exception:  # the report still renders without the YAML fields
+            meta = {}
+        if isinstance(meta, dict):
+            for key in ("date", "operator", "description", "session_id"):
+                if not info[key] and meta.get(key) is not None:
+                    info[key] = _text(meta[key])
+            if "synthetic" not in attrs and meta.get("synthetic") is True:
+                info["synthetic"] = True
+    syn = attrs.get("synthetic", None)
+    if syn is not None:
+        if isinstance(syn, str):
+            info["synthetic"] = syn.strip().lower() in ("1", "true", "yes")
+        else:
+            try:
+                info["synthetic"] = bool(np.asarray(syn).ravel()[0])
+            except (IndexError, TypeError, ValueError):
+                info["synthetic"] = False
+    return info
+
+
+def _page() -> Figure:
+    fig = Figure(figsize=A4_PORTRAIT_IN)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _footer(fig, info, page_label):
+    w, h = A4_PORTRAIT_IN
+    fig.text(_MARGIN_IN / w, 0.35 / h, f"ballimpact {info['software_version']} - session {info['session_id']}",
+             fontsize=7, color="0.4", ha="left")
+    fig.text(1 - _MARGIN_IN / w, 0.35 / h, page_label, fontsize=7, color="0.4", ha="right")
+
+
+class _Cursor:
+    """Top-down text placement on a page, in inches from the top."""
+
+    def __init__(self, fig, top_in=_MARGIN_IN):
+        self.fig = fig
+        self.y = top_in
+        self.w, self.h = A4_PORTRAIT_IN
+
+    def text(self, x_in, s, *, size=9.5, dy=None, **kw):
+        self.fig.text(x_in / self.w, 1 - self.y / self.h, s, fontsize=size, va="top", ha="left", **kw)
+        n_lines = s.count("\n") + 1
+        self.y += dy if dy is not None else n_lines * size * 1.45 / 72.0
+
+    def skip(self, dy_in):
+        self.y += dy_in
+
+
+def _fmt(value, fmt) -> str:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return "-"
+    if not np.isfinite(v):
+        return "-"
+    return format(v, fmt).replace(",", "\u2009")
+
+
+def _ball_values(ds, ball):
+    get = lambda name: _fig._ball_value(ds, name, ball)  # noqa: E731
+    return get
+
+
+def _counts(ds):
+    balls = _fig._balls(ds)
+    rows = []
+    for ball in balls:
+        total = _fig._impacts(ds, ball).size
+        ok = _fig._impacts(ds, ball, "ok").size
+        used = _fig._ball_value(ds, "n_impacts", ball)
+        rows.append((ball, total, ok, total - ok, used))
+    return rows
+
+
+def _table(ax, cells, col_widths, *, header_rows=1, font_size=8, row_height=None, bold_first_col=False,
+           shade_rows=()):
+    """A plain table filling ``ax`` (cells: list of rows of str)."""
+    ax.set_axis_off()
+    n_rows = len(cells)
+    table = ax.table(cellText=cells, colWidths=col_widths, loc="upper center", cellLoc="center",
+                     bbox=[0, 0, 1, 1])
+    table.auto_set_font_size(False)
+    table.set_fontsize(font_size)
+    for (r, c), cell in table.get_celld().items():
+        cell.set_edgecolor("0.75")
+        cell.set_linewidth(0.5)
+        if r < header_rows:
+            cell.set_facecolor("0.88")
+            cell.get_text().set_fontweight("bold")
+        elif r in shade_rows:
+            cell.set_facecolor("0.96")
+        if c == 0 and r >= header_rows:
+            cell.get_text().set_ha("left")
+            cell.PAD = 0.03
+            if bold_first_col:
+                cell.get_text().set_fontweight("bold")
+    return table
+
+
+def _interval(value, lo, hi, fmt) -> str:
+    main = _fmt(value, fmt)
+    if main == "-":
+        return "-"
+    lo_s, hi_s = _fmt(lo, fmt), _fmt(hi, fmt)
+    if lo_s == "-" or hi_s == "-":
+        return main
+    return f"{main}\n[{lo_s}, {hi_s}]"
+
+
+def _summary_page(ds, info) -> Figure:
+    fig = _page()
+    w, h = A4_PORTRAIT_IN
+    cur = _Cursor(fig)
+    x0 = _MARGIN_IN
+    cur.text(x0, "Tennis ball impacts on a rigid surface", size=17, weight="bold", dy=0.36)
+    cur.text(x0, f"Session report: {info['session_id']}", size=13, dy=0.38)
+    if info["synthetic"]:
+        cur.text(
+            x0 + 0.05, "SYNTHETIC DATA: generated by ballimpact.synth, not measured on the rig.",
+            size=10.5, weight="bold", color="#c00000",
+            bbox={"fc": "#fde8e8", "ec": "#c00000", "boxstyle": "round,pad=0.4"}, dy=0.45,
+        )
+    cur.skip(0.05)
+    rows = [
+        ("Session", info["session_id"] or "-"),
+        ("Date", info["date"] or "-"),
+        ("Operator", info["operator"] or "-"),
+        ("Software", f"ballimpact {info['software_version'] or '?'}"),
+        ("Archive created", info["date_created"] or "-"),
+    ]
+    for key, value in rows:
+        fig.text(x0 / w, 1 - cur.y / h, key, fontsize=9.5, va="top", weight="bold")
+        cur.text(x0 + 1.35, value, size=9.5)
+    desc = info["description"] or "-"
+    desc_lines = textwrap.wrap(" ".join(desc.split()), 84)[:8] or ["-"]
+    fig.text(x0 / w, 1 - cur.y / h, "Description", fontsize=9.5, va="top", weight="bold")
+    cur.text(x0 + 1.35, "\n".join(desc_lines), size=9.5)
+
+    # impact counts
+    cur.skip(0.15)
+    n_total = ds.sizes.get("impact", 0)
+    n_ok = _fig._impacts(ds, status="ok").size if n_total else 0
+    cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
+    cur.text(x0, f"{n_total} impacts in the raw impacts.csv: {n_ok} good, {n_total - n_ok} excluded "
+             "(listed with their reasons after the figures).", size=9.5)
+    cur.skip(0.08)
+    count_rows = _counts(ds)
+    cells = [["Ball type", "Impacts", "Good", "Excluded", "Used in fit"]]
+    for ball, total, ok, excl, used in count_rows:
+        cells.append([_fig._label(ds, ball), str(total), str(ok), str(excl), _fmt(used, ".0f")])
+    cells.append(["All", str(n_total), str(n_ok), str(n_total - n_ok), ""])
+    row_h = 0.22
+    tab_h = row_h * len(cells)
+    ax = fig.add_axes([x0 / w, 1 - (cur.y + tab_h) / h, 5.4 / w, tab_h / h])
+    _table(ax, cells, [0.4, 0.15, 0.15, 0.15, 0.15], font_size=8.5, shade_rows=(len(cells) - 1,))
+    cur.skip(tab_h + 0.3)
+
+    # parameters
+    cur.text(x0, "Fitted model parameters (95 % intervals) beside the paper's Table 2", size=12, weight="bold",
+             dy=0.28)
+    cur.text(
+        x0,
+        "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
+        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is either fixed in session.yaml "
+        "(config) or extrapolated from the Kelvin-Voigt\nstiffness to zero speed. RMSE: relative RMS residual of "
+        "TC and COR over the impacts used in the fit.",
+        size=8, color="0.25",
+    )
+    cur.skip(0.08)
+    head = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
+            "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
+    cells = [head]
+    shade = []
+    no_fit_notes = []
+    for ball in _fig._balls(ds):
+        get = _ball_values(ds, ball)
+        src = _text(get("kb0_source")) if "kb0_source" in ds else ""
+        src = "" if src == "nan" else src
+        kb0_cell = _interval(get("kb0_kN_m"), get("kb0_lo"), get("kb0_hi"), ".1f")
+        fitted = [
+            "\n".join(textwrap.wrap(_fig._label(ds, ball), 22)[:2]),
+            "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
+            _fmt(get("n_impacts"), ".0f"),
+            kb0_cell,
+            _interval(get("ak_kN_m"), get("ak_lo"), get("ak_hi"), ",.0f"),
+            _interval(get("a"), get("a_lo"), get("a_hi"), ".3f"),
+            _interval(get("ac_kN_s_m3"), get("ac_lo"), get("ac_hi"), ".2f"),
+            _fmt(get("contact_time_rmse_pct"), ".2f"),
+            _fmt(get("cor_rmse_pct"), ".2f"),
+        ]
+        if all(c == "-" for c in fitted[3:7]):
+            message = _text(get("fit_message")) if "fit_message" in ds else ""
+            fitted[1] = "this session\nno fit"
+            fitted[3:7] = ["no fit"] * 4
+            no_fit_notes.append(
+                f"{_fig._label(ds, ball)}: " + (message if message and message != "nan" else "no fit")
+            )
+        cells.append(fitted)
+        paper = [get("paper_kb0_kN_m"), get("paper_ak_kN_m"), get("paper_a"), get("paper_ac_kN_s_m3")]
+        if np.isfinite(np.asarray(paper, dtype=float)).any():
+            shade.append(len(cells))
+            cells.append(["", "paper Table 2", "", _fmt(paper[0], ".1f"), _fmt(paper[1], ",.0f"),
+                          _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), "", ""])
+    available = h - _MARGIN_IN - 0.9 - cur.y
+    line_h = 0.17
+    heights = [max(c.count("\n") + 1 for c in row) for row in cells]
+    total_h = sum(heights) * line_h + 0.06 * len(cells)
+    font = 8.0
+    if total_h > available:  # many ball types: shrink the table to fit the page
+        scale = available / total_h
+        total_h, font = available, max(5.0, 8.0 * scale)
+    ax = fig.add_axes([x0 / w, 1 - (cur.y + total_h) / h, (w - 2 * x0) / w, total_h / h])
+    table = _table(ax, cells, [0.17, 0.115, 0.04, 0.105, 0.165, 0.125, 0.12, 0.08, 0.08], font_size=font,
+                   shade_rows=tuple(shade))
+    # row heights proportional to the number of text lines
+    units = [hh * line_h + 0.06 for hh in heights]
+    total_units = sum(units)
+    for (r, c), cell in table.get_celld().items():
+        cell.set_height(units[r] / total_units)
+    y_acc = 1.0
+    tops = []
+    for u in units:
+        tops.append(y_acc - u / total_units)
+        y_acc -= u / total_units
+    for (r, c), cell in table.get_celld().items():
+        cell.set_y(tops[r])
+    cur.skip(total_h + 0.15)
+    for note in no_fit_notes:
+        if cur.y < h - _MARGIN_IN - 0.9:
+            cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
+    cur.skip(0.1)
+    if cur.y < h - _MARGIN_IN - 0.7:
+        ref = _text(ds.attrs.get("references", "")) or (
+            "Goodwill S R, Haake S J (2004) Modelling of tennis ball impacts on a rigid surface. "
+            "Proc. IMechE Part C 218:1139-1153"
+        )
+        cur.text(x0, "\n".join(textwrap.wrap("Reference: " + ref, 110)), size=7.5, color="0.3")
+    _footer(fig, info, "page 1: summary")
+    return fig
+
+
+def _caption_block(fig, top_in, title, caption, *, width_chars=105):
+    w, h = A4_PORTRAIT_IN
+    fig.text(_MARGIN_IN / w, 1 - top_in / h, title, fontsize=11, weight="bold", va="top")
+    fig.text(_MARGIN_IN / w, 1 - (top_in + 0.28) / h, "\n".join(textwrap.wrap(caption, width_chars)),
+             fontsize=8.8, va="top", linespacing=1.35)
+
+
+def _place_png(fig, png: Path, top_in: float, max_h_in: float):
+    """Put a PNG on the page below top_in, as wide as the text, within max_h_in."""
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(str(png))
+    w, h = A4_PORTRAIT_IN
+    avail_w = w - 2 * _MARGIN_IN
+    aspect = img.shape[0] / img.shape[1]
+    width = avail_w
+    height = width * aspect
+    if height > max_h_in:
+        height, width = max_h_in, max_h_in / aspect
+    left = (w - width) / 2
+    ax = fig.add_axes([left / w, 1 - (top_in + height) / h, width / w, height / h])
+    ax.imshow(img, interpolation="antialiased")
+    ax.set_axis_off()
+    return height
+
+
+def _draw_into_page(fig, draw, top_in: float, height_in: float):
+    """Draw a figure function's content into a region of the page (vector)."""
+    w, h = A4_PORTRAIT_IN
+    bottom = h - top_in - height_in
+    side = _MARGIN_IN - 0.15  # constrained layout adds a little padding of its own
+    # a constrained-layout subfigure spanning the region; the rest of the page is free text
+    gs = fig.add_gridspec(
+        3, 3, height_ratios=[top_in, height_in, max(bottom, 0.01)], width_ratios=[side, w - 2 * side, side],
+        hspace=0, wspace=0,
+    )
+    sub = fig.add_subfigure(gs[1, 1])
+    with _fig._style():
+        draw(sub)
+    return sub
+
+
+def _figure_height(name, ds) -> float:
+    n = len(_fig._balls(ds))
+    rows2 = -(-n // 2) if n > 1 else 1
+    return {
+        "fig7_contact_time_cor.png": _fig._rows_height(n, 2.3),
+        "fig8_stiffness.png": 5.2,
+        "fig9_force_curves.png": _fig._rows_height(n, 2.4),
+        "fig10_components.png": _fig._rows_height(rows2, 3.2),
+        "fig2b_kelvin_voigt.png": _fig._rows_height(rows2, 3.2),
+        "kcal.png": 4.6,
+    }[name]
+
+
+_DRAW = {
+    "fig7_contact_time_cor.png": lambda ds: (lambda f: _fig._draw_contact_time_cor(f, ds)),
+    "fig8_stiffness.png": lambda ds: (lambda f: _fig._draw_stiffness(f, ds)),
+    "fig9_force_curves.png": lambda ds: (lambda f: _fig._draw_force_curves(f, ds)),
+    "fig10_components.png": lambda ds: (lambda f: _fig._draw_components(f, ds)),
+    "fig2b_kelvin_voigt.png": lambda ds: (lambda f: _fig._draw_kelvin_voigt(f, ds)),
+    "kcal.png": lambda ds: (lambda f: _fig._draw_kcal(f, ds)),
+}
+
+
+def _figure_page(ds, info, name, number, figures_dir) -> Figure:
+    title, caption = FIGURE_CAPTIONS[name]
+    w, h = A4_PORTRAIT_IN
+    top = _MARGIN_IN
+    caption_lines = len(textwrap.wrap(caption, 105))
+    caption_h = 0.28 + caption_lines * 8.8 * 1.35 / 72 + 0.25
+    max_fig_h = h - top - caption_h - _MARGIN_IN - 0.2
+    png = Path(figures_dir) / name if figures_dir is not None else None
+    if png is not None and png.is_file():
+        fig = _page()
+        used = _place_png(fig, png, top, max_fig_h)
+        fig_h = used
+    else:
+        fig_h = min(_figure_height(name, ds), max_fig_h)
+        fig = Figure(figsize=A4_PORTRAIT_IN, layout="constrained")
+        FigureCanvasAgg(fig)
+        fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04)
+        _draw_into_page(fig, _DRAW[name](ds), top, fig_h)
+    _caption_block(fig, top + fig_h + 0.2, f"Figure {number}: {title}", caption)
+    _footer(fig, info, f"figure {number}")
+    return fig
+
+
+def _excluded_pages(ds, info) -> list[Figure]:
+    rows = _fig.excluded_impacts(ds)
+    w, h = A4_PORTRAIT_IN
+    x_id, x_ball, x_reason = _MARGIN_IN, _MARGIN_IN + 1.15, _MARGIN_IN + 2.75
+    reason_chars = 78
+    line_in = 8.5 * 1.45 / 72
+    pages, fig, cur = [], None, None
+
+    def new_page(continued):
+        nonlocal fig, cur
+        fig = _page()
+        pages.append(fig)
+        cur = _Cursor(fig)
+        title = "Excluded impacts" + (" (continued)" if continued else "")
+        cur.text(_MARGIN_IN, title, size=14, weight="bold", dy=0.35)
+        if not continued:
+            n_total = ds.sizes.get("impact", 0)
+            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were excluded from the fits. Each has a "
+                     "QC page with its raw trace in the appendix.", size=9.5, dy=0.3)
+        for x, label in ((x_id, "Impact"), (x_ball, "Ball type"), (x_reason, "Reason")):
+            fig.text(x / w, 1 - cur.y / h, label, fontsize=9, weight="bold", va="top")
+        cur.skip(0.2)
+        fig.add_artist(_hline(fig, cur.y - 0.04))
+
+    new_page(False)
+    if not rows:
+        cur.text(_MARGIN_IN, "No impact was excluded.", size=10, style="italic")
+    for impact_id, ball, reason in rows:
+        lines = textwrap.wrap(reason or "(no reason given)", reason_chars) or [""]
+        ball_lines = textwrap.wrap(_fig._label(ds, ball), 26) or [""]
+        n = max(len(lines), len(ball_lines))
+        if cur.y + n * line_in > h - _MARGIN_IN - 0.4:
+            new_page(True)
+        fig.text(x_id / w, 1 - cur.y / h, impact_id, fontsize=8.5, va="top", family="monospace")
+        fig.text(x_ball / w, 1 - cur.y / h, "\n".join(ball_lines), fontsize=8.5, va="top")
+        fig.text(x_reason / w, 1 - cur.y / h, "\n".join(lines), fontsize=8.5, va="top")
+        cur.skip(n * line_in + 0.06)
+    for k, page in enumerate(pages, 1):
+        _footer(page, info, f"excluded impacts {k}/{len(pages)}")
+    return pages
+
+
+def _hline(fig, y_in):
+    from matplotlib.lines import Line2D
+
+    w, h = A4_PORTRAIT_IN
+    return Line2D([_MARGIN_IN / w, 1 - _MARGIN_IN / w], [1 - y_in / h] * 2, transform=fig.transFigure,
+                  color="0.6", lw=0.6)
+
+
+def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
+    w, h = A4_PORTRAIT_IN
+    i = _fig._impact_position(ds, impact_id)
+    ball = _text(_fig._text(ds["impact_ball"].values)[i])
+    reason = _text(_fig._text(ds["reason"].values)[i]) or "(no reason given)"
+    png = Path(figures_dir) / "qc" / f"{_fig._safe_name(impact_id)}.png" if figures_dir is not None else None
+    use_png = png is not None and png.is_file()
+    if use_png:
+        fig = _page()
+    else:
+        fig = Figure(figsize=A4_PORTRAIT_IN, layout="constrained")
+        FigureCanvasAgg(fig)
+    cur = _Cursor(fig)
+    cur.text(_MARGIN_IN, f"QC appendix {number}/{n_total}: impact {impact_id}", size=14, weight="bold", dy=0.36)
+    def value(name, fmt, unit=""):
+        text = _fmt(ds[name].values[i], fmt) if name in ds else "-"
+        return "n/a" if text == "-" else f"{text}{unit}"
+
+    trace = _text(_fig._text(ds["trace_file"].values)[i]) if "trace_file" in ds else ""
+    facts = [
+        ("Ball type", _fig._label(ds, ball)),
+        ("Reason", "\n".join(textwrap.wrap(reason, 85))),
+        ("Trace file", trace or "-"),
+        ("Gate speeds", f"VB = {value('vin_m_s', '.2f', ' m/s')}, VB' = {value('vout_m_s', '.2f', ' m/s')}, "
+                        f"COR = {value('cor', '.3f')}"),
+        ("Contact", f"TC = {value('contact_time_ms', '.3f', ' ms')}, "
+                    f"peak force = {value('peak_force_N', '.0f', ' N')}, "
+                    f"kCAL = {value('kcal_N_per_V', '.1f', ' N/V')}"),
+    ]
+    for key, text in facts:
+        fig.text(_MARGIN_IN / w, 1 - cur.y / h, key, fontsize=9, weight="bold", va="top")
+        cur.text(_MARGIN_IN + 1.2, text, size=9)
+    cur.skip(0.15)
+    fig_h = min(6.0, h - cur.y - _MARGIN_IN - 0.5)
+    if use_png:
+        _place_png(fig, png, cur.y, fig_h)
+    else:
+        _draw_into_page(fig, lambda f: _fig._draw_qc(f, ds, impact_id), cur.y, fig_h)
+    _footer(fig, info, f"QC {number}/{n_total}")
+    return fig
+
+
+def report_page_count(ds) -> int:
+    """Number of pages :func:`write_report` produces for this archive.
+
+    1 summary page + one page per figure + the exclusion list (at least one page)
+    + one QC page per excluded impact.
+    """
+    return 1 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(_fig.excluded_impacts(ds))
+
+
+def write_report(ds, out_pdf, figures_dir=None) -> Path:
+    """Write the session report as an A4 PDF, atomically.
+
+    Pages: (1) title, session metadata (with a red warning for synthetic data),
+    impact counts and the fitted parameters with 95 % intervals beside Table 2 of
+    Goodwill & Haake 2004; (2-7) one page per figure with a caption (Figs 7, 8, 9,
+    10, 2b and kCAL); then the list of excluded impacts with their reasons; then
+    the QC appendix, one page per excluded impact with its raw trace.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive (with the global attributes of
+        :func:`ballimpact.archive.add_metadata`).
+    out_pdf : str or Path
+        Destination PDF; its folder must exist.
+    figures_dir : str or Path, optional
+        Folder written by :func:`ballimpact.figures.save_all`. When given, its PNG
+        files are placed on the pages (identical to the figure files); figures
+        missing there, or all when None, are drawn from ``ds`` as vector graphics.
+
+    Returns
+    -------
+    Path
+        ``out_pdf``.
+    """
+    out_pdf = Path(out_pdf)
+    if not out_pdf.parent.is_dir():
+        raise FileNotFoundError(f"cannot write {out_pdf}: folder {out_pdf.parent} does not exist")
+    if figures_dir is not None and not Path(figures_dir).is_dir():
+        raise FileNotFoundError(f"figures_dir {figures_dir} does not exist")
+    info = _session_info(ds)
+    metadata = {
+        "Title": f"Tennis ball impact session report: {info['session_id']}",
+        "Author": "ballimpact",
+        "Subject": (
+            "Force-platform tennis ball impacts and the Goodwill & Haake (2004) ball model"
+            + (" (SYNTHETIC DATA)" if info["synthetic"] else "")
+        ),
+        "Keywords": "tennis ball, impact, force platform, viscoelastic model",
+        "Creator": f"ballimpact {info['software_version']}",
+        "CreationDate": datetime.datetime.now(datetime.timezone.utc),
+    }
+    fd, tmp = tempfile.mkstemp(dir=out_pdf.parent, prefix=f".{out_pdf.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        with PdfPages(tmp, metadata=metadata) as pdf:
+            pdf.savefig(_summary_page(ds, info))
+            for number, name in enumerate(FIGURE_CAPTIONS, 1):
+                pdf.savefig(_figure_page(ds, info, name, number, figures_dir))
+            for page in _excluded_pages(ds, info):
+                pdf.savefig(page)
+            excluded = _fig.excluded_impacts(ds)
+            for k, (impact_id, _, _) in enumerate(excluded, 1):
+                pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir))
+        os.replace(tmp, out_pdf)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return out_pdf

@@ -1,0 +1,346 @@
+"""The netCDF archive: schema, tables, metadata, round trip, compression and atomic writes."""
+
+import json
+import re
+
+import netCDF4
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from numpy.testing import assert_allclose
+
+import ballimpact
+import ballimpact.balls
+from ballimpact import archive
+from ballimpact.archive import (
+    IMPACT_COLUMNS,
+    PARAMETER_COLUMNS,
+    add_metadata,
+    impacts_dataset,
+    impacts_table,
+    open_dataset,
+    paper_parameters_dataset,
+    parameters_table,
+    write_dataset,
+)
+
+from types import SimpleNamespace
+
+from archive_fixture import FakeImpactResult, make_archive, make_results
+
+# shared/spec/outputs.md, copied by hand (independent of the module's constants)
+SPEC_IMPACT_COLUMNS = [
+    "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
+    "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
+    "kv_stiffness_kN_m", "kv_damping_N_s_m",
+]
+SPEC_PARAMETER_COLUMNS = [
+    "ball", "n_impacts", "mass_kg", "kb0_kN_m", "kb0_source", "ak_kN_m", "a", "ac_kN_s_m3",
+    "ak_lo", "ak_hi", "a_lo", "a_hi", "ac_lo", "ac_hi", "kb0_lo", "kb0_hi",
+    "contact_time_rmse_pct", "cor_rmse_pct",
+]
+
+
+@pytest.fixture(scope="module")
+def ds():
+    return make_archive()
+
+
+@pytest.fixture(scope="module")
+def written(ds, tmp_path_factory):
+    path = tmp_path_factory.mktemp("archive") / "session.nc"
+    write_dataset(ds, path)
+    return path
+
+
+def test_column_constants_match_spec():
+    assert IMPACT_COLUMNS == SPEC_IMPACT_COLUMNS
+    assert PARAMETER_COLUMNS == SPEC_PARAMETER_COLUMNS
+
+
+def test_round_trip_identical(ds, written):
+    back = open_dataset(written)
+    xr.testing.assert_identical(back, ds)
+    # strings survive exactly, including empty reasons of good impacts
+    for name in ("impact_id", "impact_ball", "status", "reason", "trace_file", "trace_sha256",
+                 "ball", "ball_label", "kb0_source", "fit_message"):
+        assert list(back[name].values) == list(ds[name].values), name
+        assert all(isinstance(v, str) for v in back[name].values), name
+    assert back["raw_voltage_V"].dtype == np.float32
+    assert back["raw_time_s"].dtype == np.float32
+    assert back.attrs["session_yaml"] == ds.attrs["session_yaml"]
+    assert json.loads(back.attrs["raw_sha256"]) == json.loads(ds.attrs["raw_sha256"])
+    assert int(back.attrs["synthetic"]) == 1
+
+
+def test_open_dataset_loads_and_closes(written):
+    from xarray.backends.file_manager import FILE_CACHE
+
+    before = len(FILE_CACHE)
+    back = open_dataset(written)
+    assert len(FILE_CACHE) == before  # no file handle kept open
+    assert all(v._in_memory for v in back.variables.values())
+
+
+def test_compression_on_every_numeric_variable(ds, written):
+    with netCDF4.Dataset(written, "r") as nc:
+        for name, var in nc.variables.items():
+            if var.dtype == str or var.size == 0:
+                continue
+            filters = var.filters()
+            assert filters["zlib"], name
+            assert filters["complevel"] == 4, name
+    with xr.open_dataset(written, engine="netcdf4") as f:
+        assert f["force_N"].encoding["zlib"] is True
+        assert f["force_N"].encoding["complevel"] == 4
+
+
+def test_every_variable_has_units_and_long_name(written):
+    back = open_dataset(written)
+    missing = [n for n in back.variables if not {"units", "long_name"} <= set(back[n].attrs)]
+    assert missing == []
+    assert back["force_N"].attrs["units"] == "N"
+    assert back["vin_m_s"].attrs["units"] == "m s-1"
+
+
+def test_schema_dimensions_and_grids(ds):
+    assert set(ds.dims) >= {"impact", "sample", "raw_sample", "ball", "speed", "model_time", "stiffness_x"}
+    assert ds["time_s"].dims == ("impact", "sample")
+    assert ds["raw_voltage_V"].dims == ("impact", "raw_sample")
+    assert ds["model_cor"].dims == ("ball", "speed")
+    assert ds["comp_momentum_flux_force_N"].dims == ("ball", "model_time")
+    assert ds["model_stiffness_kN_m"].dims == ("ball", "stiffness_x")
+    assert ds["impact_mass_kg"].dims == ("impact",)
+    assert ds["mass_kg"].dims == ("ball",)
+
+
+def test_impacts_table_matches_results_in_raw_order(ds):
+    results = make_results()
+    table = impacts_table(ds)
+    assert list(table.columns) == SPEC_IMPACT_COLUMNS
+    assert list(table["impact_id"]) == [r.impact_id for r in results]
+    assert list(table["ball"]) == [r.ball for r in results]
+    assert list(table["status"]) == [r.status for r in results]
+    ok = table["status"] == "ok"
+    assert (table.loc[ok, "reason"] == "").all()
+    assert (table.loc[~ok, "reason"] != "").all()
+    assert_allclose(table["vin_m_s"], [r.vin_m_s for r in results], rtol=0, atol=0, equal_nan=True)
+    assert_allclose(table["kcal_N_per_V"], [r.kcal_N_per_V for r in results], rtol=0, atol=0, equal_nan=True)
+
+
+def test_impacts_table_csv_round_trip(ds, tmp_path):
+    table = impacts_table(ds)
+    table.to_csv(tmp_path / "impacts.csv", index=False)
+    back = pd.read_csv(tmp_path / "impacts.csv", keep_default_na=False, na_values=[""])
+    assert list(back.columns) == SPEC_IMPACT_COLUMNS
+    assert len(back) == ds.sizes["impact"]
+
+
+def test_parameters_table(ds):
+    table = parameters_table(ds)
+    assert list(table.columns) == SPEC_PARAMETER_COLUMNS
+    assert list(table["ball"]) == ["pressurised", "punctured"]
+    # the fixture 'fits' Table 2 itself (Goodwill & Haake 2004, Table 2)
+    assert_allclose(table["kb0_kN_m"], [21.0, 16.0], rtol=1e-12)
+    assert_allclose(table["ak_kN_m"], [16_000.0, 60_000.0], rtol=1e-12)
+    assert_allclose(table["a"], [1.65, 2.0], rtol=1e-12)
+    assert_allclose(table["ac_kN_s_m3"], [3.5, 5.8], rtol=1e-12)
+    assert list(table["n_impacts"]) == [4, 4]
+    assert (table["ak_lo"] < table["ak_kN_m"]).all() and (table["ak_kN_m"] < table["ak_hi"]).all()
+
+
+def test_paper_parameters_are_table_2():
+    paper = paper_parameters_dataset(["pressurised", "pressureless", "oversize", "punctured", "club"])
+    assert_allclose(paper["paper_kb0_kN_m"].values[:4], [21, 23, 21, 16], rtol=1e-12)
+    assert_allclose(paper["paper_ak_kN_m"].values[:4], [16_000, 12_500, 3_600, 60_000], rtol=1e-12)
+    assert_allclose(paper["paper_a"].values[:4], [1.65, 1.70, 1.30, 2.00], rtol=1e-12)
+    assert_allclose(paper["paper_ac_kN_s_m3"].values[:4], [3.5, 4.0, 3.2, 5.8], rtol=1e-12)
+    assert np.isnan(paper["paper_a"].values[4])
+
+
+def test_metadata_attributes(ds):
+    attrs = ds.attrs
+    for key in ("title", "summary", "history", "source", "date_created", "references", "Conventions",
+                "software_version", "session_id", "synthetic", "session_yaml", "raw_sha256"):
+        assert key in attrs, key
+    assert "CF-1.10" in attrs["Conventions"] and "ACDD-1.3" in attrs["Conventions"]
+    assert "doi:10.1243/0954406042369125" in attrs["references"]
+    assert "Goodwill S R, Haake S J (2004)" in attrs["references"]
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", attrs["date_created"])
+    assert attrs["software_version"] == ballimpact.__version__
+    assert attrs["session_id"] == "fixture-session-01"
+    assert json.loads(attrs["raw_sha256"])["session.yaml"] == "0" * 64
+    assert attrs["session_date"] == "2026-11-21"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"session_id": ""}, "session_id must be a non-empty string"),
+        ({"raw_sha256": {"a": 1}}, "raw_sha256 must map str paths"),
+    ],
+)
+def test_metadata_validation(kwargs, match):
+    base = dict(session_id="s", session_yaml_text="", raw_sha256={}, synthetic=False, history="h")
+    base.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        add_metadata(xr.Dataset(), **base)
+
+
+def test_model_force_agrees_with_truth(ds):
+    # the fixture's 'measured' force is the model with Table 2 parameters plus N(0, 3 N) noise,
+    # and the 'fit' is Table 2: the model force must match within the noise
+    ok = ds["status"].values == "ok"
+    assert_allclose(ds["model_agreement_fraction"].values[ok], 1.0, atol=0)
+    assert_allclose(ds["model_rms_N"].values[ok], 3.0, rtol=0.15)
+
+
+def test_kelvin_voigt_force_starts_at_damping_times_speed(ds):
+    # Eq. (1) with x(0) = 0, x'(0) = VB: F(0) = cB VB
+    i = int(np.flatnonzero(ds["status"].values == "ok")[0])
+    expected = ds["kv_damping_N_s_m"].values[i] * ds["vin_m_s"].values[i]
+    assert_allclose(ds["kv_force_N"].values[i, 0], expected, rtol=1e-9)
+
+
+def test_series_padded_with_nan(ds):
+    n = np.isfinite(ds["time_s"].values).sum(axis=1)
+    for name in ("force_N", "voltage_V", "displacement_m", "velocity_m_s"):
+        assert (np.isfinite(ds[name].values).sum(axis=1) == n).all(), name
+    gate = int(np.flatnonzero(ds["impact_id"].values == "gate01")[0])
+    assert n[gate] == 0  # excluded before the contact was found
+    missing = int(np.flatnonzero(ds["impact_id"].values == "trace01")[0])
+    assert np.isnan(ds["raw_voltage_V"].values[missing]).all()
+
+
+def test_all_excluded_and_empty(tmp_path):
+    rng = np.random.default_rng(1)
+    results = [
+        FakeImpactResult("a", "pressurised", status="excluded", reason="missing gate time gate_in_1_s"),
+        FakeImpactResult("b", "pressurised", status="excluded", reason="clipping",
+                         raw_time_s=np.arange(5) * 1e-5, raw_voltage_V=rng.normal(size=5)),
+    ]
+    ds = impacts_dataset(results)
+    assert ds.sizes["impact"] == 2 and ds.sizes["sample"] == 1
+    assert np.isnan(ds["force_N"].values).all()
+    write_dataset(ds, tmp_path / "x.nc")
+    xr.testing.assert_identical(open_dataset(tmp_path / "x.nc"), ds)
+    empty = impacts_dataset([])
+    write_dataset(empty, tmp_path / "empty.nc")
+    assert open_dataset(tmp_path / "empty.nc").sizes["impact"] == 0
+    assert list(impacts_table(empty).columns) == SPEC_IMPACT_COLUMNS
+
+
+def test_max_raw_samples_decimates():
+    results = [FakeImpactResult("a", "pressurised", raw_time_s=np.arange(1000) * 1e-5,
+                                raw_voltage_V=np.arange(1000.0))]
+    ds = impacts_dataset(results, max_raw_samples=300)
+    assert ds.sizes["raw_sample"] <= 300
+    v = ds["raw_voltage_V"].values[0]
+    assert_allclose(v[:3], [0.0, 4.0, 8.0], atol=0)
+
+
+@pytest.mark.parametrize(
+    ("results", "kwargs", "match"),
+    [
+        ([FakeImpactResult("a", "p"), FakeImpactResult("a", "p")], {}, "duplicate impact_id 'a'"),
+        ([FakeImpactResult("a", "p", status="maybe")], {}, "status must be 'ok' or 'excluded'"),
+        ([FakeImpactResult("a", "p", time_s=np.zeros(3), voltage_V=np.zeros(3), force_N=np.zeros(2),
+                           velocity_m_s=np.zeros(3), displacement_m=np.zeros(3))], {}, "series force_N has 2"),
+        ([FakeImpactResult("a", "p")], {"max_raw_samples": 1}, "max_raw_samples must be"),
+    ],
+)
+def test_impacts_dataset_validation(results, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        impacts_dataset(results, **kwargs)
+
+
+def test_atomic_write_leaves_no_temp_file(ds, tmp_path):
+    write_dataset(ds, tmp_path / "a.nc")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc"]
+
+
+def test_interrupted_write_keeps_previous_file(ds, tmp_path, monkeypatch):
+    final = tmp_path / "a.nc"
+    final.write_bytes(b"previous archive")
+
+    def broken_to_netcdf(self, path, *args, **kwargs):
+        with open(path, "wb") as fh:
+            fh.write(b"CDF half written")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", broken_to_netcdf)
+    with pytest.raises(OSError, match="disk full"):
+        write_dataset(ds, final)
+    assert final.read_bytes() == b"previous archive"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc"]
+    with pytest.raises(OSError, match="disk full"):
+        write_dataset(ds, tmp_path / "new.nc")
+    assert not (tmp_path / "new.nc").exists()
+
+
+def test_write_into_missing_folder(ds, tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        write_dataset(ds, tmp_path / "nope" / "a.nc")
+
+
+def test_assemble_rejects_duplicate_fits(ds):
+    fit = ds[["n_impacts", "mass_kg"]].isel(ball=[0])
+    with pytest.raises(ValueError, match="more than one fit dataset"):
+        archive.assemble_archive(archive.impacts_dataset([]), [fit, fit])
+
+
+def _table2_fit(ball="pressurised"):
+    """A duck-typed BallFit holding Table 2 of Goodwill & Haake 2004 (SI units), no bootstrap."""
+    p = ballimpact.balls.BALLS[ball].params
+    nan = float("nan")
+    return SimpleNamespace(
+        mass_kg=p.mass_kg, n_impacts=7, kb0_N_m=p.kb0_N_m, kb0_lo=nan, kb0_hi=nan, kb0_source="config",
+        ak=p.ak, ak_lo=0.9 * p.ak, ak_hi=1.1 * p.ak, a=p.a, a_lo=p.a - 0.05, a_hi=p.a + 0.05,
+        ac=p.ac, ac_lo=0.9 * p.ac, ac_hi=1.1 * p.ac, ak_a_correlation=0.95,
+        contact_time_rmse_pct=1.0, cor_rmse_pct=2.0, interval_method="test", messages=["a note"], bootstrap=None,
+    )
+
+
+def test_fit_dataset_reproduces_the_spec_sanity_figures():
+    # shared/spec/model.md: ball 1 at 20 m/s gives TC about 3.7 ms, COR about 0.63, peak about
+    # 840 N, and the momentum-flux force is the largest component early in the contact
+    fit = archive.fit_dataset("pressurised", _table2_fit(), label="Ball 1: pressurised")
+    assert fit.sizes["ball"] == 1
+    at20 = fit.isel(speed=int(np.flatnonzero(fit["speed_m_s"].values == 20.0)[0]))
+    assert_allclose(at20["model_contact_time_ms"].values, 3.7, rtol=0.03)
+    assert_allclose(at20["model_cor"].values, 0.63, rtol=0.03)
+    assert_allclose(at20["model_peak_force_N"].values, 840.0, rtol=0.05)
+    assert_allclose(np.nanmax(fit["comp_total_force_N"].values), 840.0, rtol=0.05)
+    t = fit["model_time_s"].values
+    k = int(np.argmin(np.abs(t - 0.4e-3)))
+    comp = {n: fit[f"comp_{n}_force_N"].values[0, k] for n in ("stiffness", "damping", "momentum_flux")}
+    assert comp["momentum_flux"] > max(comp["stiffness"], comp["damping"])
+    # Eq. (4) on the stiffness grid, independent arithmetic: 21 + 16000 * 0.02**1.65 kN/m at 20 mm
+    x = fit["stiffness_x_m"].values
+    j = int(np.argmin(np.abs(x - 0.02)))
+    assert_allclose(fit["model_stiffness_kN_m"].values[0, j], 21 + 16000 * 0.02**1.65, rtol=1e-9)
+    assert_allclose(fit["paper_ak_kN_m"].values, [16000.0], rtol=0)
+    assert fit["fit_message"].values[0] == "ok; a note"
+    assert np.isnan(fit["model_cor_lo"].values).all()  # no bootstrap, no band
+
+
+def test_fit_dataset_without_fit_and_assembly(tmp_path):
+    results = make_results(balls=("pressurised", "oversize"), speeds_m_s=(20.0,), with_exclusions=False)
+    fits = [
+        archive.fit_dataset("pressurised", _table2_fit(), label="Ball 1"),
+        archive.fit_dataset("oversize", None, label="Ball 3", mass_kg=0.0567, n_impacts=1,
+                            kb0_source="config", message="needs at least 3 good impacts, got 1"),
+    ]
+    for f in fits:
+        assert all({"units", "long_name"} <= set(f[n].attrs) for n in f.variables)
+    ds = archive.assemble_archive(impacts_dataset(results), fits)
+    table = parameters_table(ds)
+    assert list(table["ball"]) == ["pressurised", "oversize"]
+    assert list(table["n_impacts"]) == [7, 1]
+    assert np.isnan(table.loc[1, "ak_kN_m"]) and table.loc[1, "mass_kg"] == 0.0567
+    assert ds["fit_message"].values[1] == "needs at least 3 good impacts, got 1"
+    oversize = ds["impact_ball"].values == "oversize"
+    assert np.isnan(ds["model_force_N"].values[oversize]).all()
+    write_dataset(ds, tmp_path / "a.nc")
+    xr.testing.assert_identical(open_dataset(tmp_path / "a.nc"), ds)

@@ -1,0 +1,152 @@
+"""Figures of the archive: every figure draws on complete and degenerate archives, save_all writes the files."""
+
+import matplotlib.image as mpimg
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from ballimpact import figures
+from ballimpact.archive import assemble_archive, impacts_dataset
+
+from archive_fixture import make_archive
+
+FIGURE_FUNCTIONS = [
+    figures.fig_contact_time_cor,
+    figures.fig_stiffness,
+    figures.fig_force_curves,
+    figures.fig_components,
+    figures.fig_kelvin_voigt,
+    figures.fig_kcal,
+]
+EXPECTED_FILES = [
+    "fig7_contact_time_cor.png",
+    "fig8_stiffness.png",
+    "fig9_force_curves.png",
+    "fig10_components.png",
+    "fig2b_kelvin_voigt.png",
+    "kcal.png",
+]
+
+
+@pytest.fixture(scope="module")
+def archives():
+    return {
+        "complete": make_archive(),
+        # one ball with no good impact (its fit failed) and one custom ball whose fit failed
+        "degenerate": make_archive(
+            balls=("pressurised", "oversize", "club"), no_good_ball="oversize", failed_fit_ball="club",
+            speeds_m_s=(18.0, 26.0),
+        ),
+        "single": make_archive(balls=("punctured",), speeds_m_s=(20.0,), with_exclusions=False),
+        "impacts_only": assemble_archive(impacts_dataset([]), []),
+    }
+
+
+def _texts(fig):
+    out = [t.get_text() for t in fig.findobj(match=lambda a: hasattr(a, "get_text"))]
+    return " ".join(out)
+
+
+@pytest.mark.parametrize("func", FIGURE_FUNCTIONS, ids=lambda f: f.__name__)
+@pytest.mark.parametrize("which", ["degenerate", "single", "impacts_only"])
+def test_figure_draws(archives, func, which):
+    # the complete archive is rendered by test_save_all_writes_expected_files
+    fig = func(archives[which])
+    assert isinstance(fig, Figure)
+    fig.canvas.draw()  # the whole figure renders
+    drawn = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    if which == "impacts_only":
+        assert "no impacts in this session" in _texts(fig)
+        return
+    assert drawn
+    assert all(ax.get_ylabel() for ax in drawn if ax.has_data())
+    assert any(ax.get_xlabel() for ax in drawn)
+    assert all("[" in ax.get_ylabel() for ax in drawn if ax.get_ylabel())  # units in brackets
+
+
+@pytest.mark.parametrize(
+    "func", [figures.fig_contact_time_cor, figures.fig_force_curves, figures.fig_components], ids=lambda f: f.__name__
+)
+def test_degenerate_balls_say_no_fit(archives, func):
+    text = _texts(func(archives["degenerate"]))
+    assert "no fit" in text
+    assert "Ball 3: oversize" in text  # labels come from ball_label
+
+
+def test_stiffness_lists_balls_without_fit(archives):
+    text = _texts(figures.fig_stiffness(archives["degenerate"]))
+    assert "no fit: Ball 3: oversize, Custom: club" in text
+
+
+def test_kelvin_voigt_shows_tensile_tail(archives):
+    # the Kelvin-Voigt force goes negative before x returns to zero (paper Fig. 2b)
+    text = _texts(figures.fig_kelvin_voigt(archives["complete"]))
+    assert "tensile tail: min -" in text
+
+
+def test_kcal_band_is_robust_median(archives):
+    ds = archives["complete"]
+    ok = ds["status"].values == "ok"
+    k = ds["kcal_N_per_V"].values[ok]
+    med, half = figures.kcal_band(ds)
+    assert med == pytest.approx(np.median(k), rel=1e-12)
+    mad = np.median(np.abs(k - np.median(k)))
+    assert half == pytest.approx(3 * 1.4826 * mad, rel=1e-9)
+
+
+@pytest.mark.parametrize("impact_id", ["clip01", "gate01", "trace01"])
+def test_qc_figure_has_reason_in_title(archives, impact_id):
+    ds = archives["complete"]
+    i = int(np.flatnonzero(ds["impact_id"].values == impact_id)[0])
+    fig = figures.fig_qc_impact(ds, impact_id)
+    fig.canvas.draw()
+    title = fig.get_suptitle().replace("\n", " ")
+    assert impact_id in title
+    assert ds["reason"].values[i].split(":")[0] in title
+
+
+def test_qc_figure_marks_contact_when_known(archives):
+    fig = figures.fig_qc_impact(archives["complete"], "clip01")
+    assert "contact end (TC" in _texts(fig)
+    fig = figures.fig_qc_impact(archives["complete"], "gate01")
+    assert "contact end" not in _texts(fig)
+
+
+def test_qc_unknown_impact(archives):
+    with pytest.raises(KeyError, match="impact_id 'nope' is not in the archive"):
+        figures.fig_qc_impact(archives["complete"], "nope")
+
+
+def test_save_all_writes_expected_files(archives, tmp_path):
+    ds = archives["complete"]
+    paths = figures.save_all(ds, tmp_path / "figures")
+    names = [p.relative_to(tmp_path / "figures").as_posix() for p in paths]
+    assert names == EXPECTED_FILES + ["qc/clip01.png", "qc/gate01.png", "qc/trace01.png"]
+    for p in paths:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # dpi 150 on a 7.5 in wide figure
+    assert mpimg.imread(paths[1]).shape[1] == int(round(7.5 * 150))
+    leftovers = [p for p in (tmp_path / "figures").rglob("*") if p.name.endswith(".tmp")]
+    assert leftovers == []
+
+
+def test_save_all_creates_empty_qc_folder(archives, tmp_path):
+    paths = figures.save_all(archives["single"], tmp_path)
+    assert (tmp_path / "qc").is_dir()
+    assert list((tmp_path / "qc").iterdir()) == []
+    assert [p.name for p in paths] == EXPECTED_FILES
+
+
+def test_save_figure_is_atomic(archives, tmp_path, monkeypatch):
+    target = tmp_path / "x.png"
+    target.write_bytes(b"old")
+    fig = figures.fig_kcal(archives["complete"])
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("renderer crashed")
+
+    monkeypatch.setattr(fig, "savefig", broken)
+    with pytest.raises(RuntimeError, match="renderer crashed"):
+        figures.save_figure(fig, target)
+    assert target.read_bytes() == b"old"
+    assert [p.name for p in tmp_path.iterdir()] == ["x.png"]

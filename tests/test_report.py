@@ -1,0 +1,145 @@
+"""The PDF report: page count and order, metadata, A4, text inside the page, atomic writing."""
+
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from ballimpact import figures, report
+
+from archive_fixture import make_archive
+
+N_FIGURES = 6  # Figs 7, 8, 9, 10, 2b and kCAL
+A4_POINTS = (595.44, 841.68)  # 8.27 x 11.69 in at 72 pt/in
+
+
+def _page_count(pdf_bytes: bytes) -> int:
+    return len(re.findall(rb"/Type /Page\b", pdf_bytes))
+
+
+@pytest.fixture(scope="module")
+def ds():
+    return make_archive()
+
+
+@pytest.fixture(scope="module")
+def pdf(ds, tmp_path_factory):
+    out = tmp_path_factory.mktemp("report") / "report.pdf"
+    report.write_report(ds, out)
+    return out
+
+
+def test_page_count(ds, pdf):
+    n_excluded = int((ds["status"].values == "excluded").sum())
+    assert n_excluded == 3
+    # summary + figures + one exclusion-list page + one QC page per excluded impact
+    assert _page_count(pdf.read_bytes()) == 1 + N_FIGURES + 1 + n_excluded
+    assert report.report_page_count(ds) == 1 + N_FIGURES + 1 + n_excluded
+
+
+def test_pdf_metadata_and_a4(pdf):
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF")
+    assert b"/Author (ballimpact)" in data
+    assert b"/Title (Tennis ball impact session report: fixture-session-01)" in data
+    assert b"/Subject (" in data
+    assert b"/CreationDate (D:" in data
+    boxes = re.findall(rb"/MediaBox \[ *([\d.]+) +([\d.]+) +([\d.]+) +([\d.]+) *\]", data)
+    assert boxes
+    for box in boxes:
+        w, h = float(box[2]), float(box[3])
+        assert (w, h) == pytest.approx(A4_POINTS, abs=0.5)
+
+
+@pytest.mark.skipif(shutil.which("pdftotext") is None, reason="pdftotext (poppler-utils) not installed")
+def test_first_page_text(pdf, ds):
+    text = subprocess.run(
+        ["pdftotext", "-f", "1", "-l", "1", "-layout", str(pdf), "-"], capture_output=True, text=True, check=True
+    ).stdout
+    assert "fixture-session-01" in text
+    assert "SYNTHETIC DATA" in text
+    assert "Fixture Operator" in text
+    assert "paper Table 2" in text
+    exclusions = subprocess.run(
+        ["pdftotext", "-f", "8", "-l", "8", str(pdf), "-"], capture_output=True, text=True, check=True
+    ).stdout
+    assert "Excluded impacts" in exclusions
+    for impact_id in ("clip01", "gate01", "trace01"):
+        assert impact_id in exclusions
+
+
+def _text_inside_page(fig):
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    width, height = fig.bbox.width, fig.bbox.height
+    bad = []
+    for t in fig.findobj(match=lambda a: hasattr(a, "get_window_extent") and hasattr(a, "get_text")):
+        if not t.get_visible() or not t.get_text():
+            continue
+        bb = t.get_window_extent(renderer)
+        if bb.x0 < -0.5 or bb.y0 < -0.5 or bb.x1 > width + 0.5 or bb.y1 > height + 0.5:
+            bad.append(t.get_text()[:40])
+    return bad
+
+
+def test_summary_page_text_fits(ds):
+    long = ds.copy()
+    long.attrs = dict(ds.attrs)
+    long.attrs["session_description"] = "A very long description of the session. " * 30
+    fig = report._summary_page(long, report._session_info(long))
+    assert _text_inside_page(fig) == []
+
+
+def test_long_exclusion_list_paginates(ds):
+    many = ds.copy()
+    n = many.sizes["impact"]
+    many["status"] = ("impact", np.array(["excluded"] * n, dtype=object))
+    many["reason"] = ("impact", np.array(
+        ["the trace shows something unusual that needs a long explanation, " * 3] * n, dtype=object))
+    many = many.isel(impact=np.tile(np.arange(n), 6))
+    many["impact_id"] = ("impact", np.array([f"x{k:03d}" for k in range(many.sizes["impact"])], dtype=object))
+    pages = report._excluded_pages(many, report._session_info(many))
+    assert len(pages) >= 2
+    for page in pages:
+        assert _text_inside_page(page) == []
+    assert report.report_page_count(many) == 1 + N_FIGURES + len(pages) + many.sizes["impact"]
+
+
+def test_report_from_figure_files(ds, tmp_path):
+    figures.save_all(ds, tmp_path / "figures")
+    out = report.write_report(ds, tmp_path / "report.pdf", figures_dir=tmp_path / "figures")
+    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + 1 + 3
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_no_exclusions_and_real_session(tmp_path):
+    ds = make_archive(balls=("pressurised",), speeds_m_s=(20.0,), with_exclusions=False, synthetic=False)
+    info = report._session_info(ds)
+    assert info["synthetic"] is False
+    out = report.write_report(ds, tmp_path / "r.pdf")
+    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + 1
+    if shutil.which("pdftotext"):
+        text = subprocess.run(["pdftotext", "-f", "1", "-l", "1", str(out), "-"], capture_output=True,
+                              text=True, check=True).stdout
+        assert "SYNTHETIC" not in text
+
+
+def test_failed_write_leaves_nothing(ds, tmp_path, monkeypatch):
+    target = tmp_path / "report.pdf"
+    target.write_bytes(b"old report")
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("page failed")
+
+    monkeypatch.setattr(report, "_figure_page", broken)  # after the first page is written
+    with pytest.raises(RuntimeError, match="page failed"):
+        report.write_report(ds, target)
+    assert target.read_bytes() == b"old report"
+    assert [p.name for p in tmp_path.iterdir()] == ["report.pdf"]
+
+
+def test_missing_output_folder(ds, tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        report.write_report(ds, tmp_path / "nope" / "r.pdf")

@@ -1,0 +1,587 @@
+"""Tests of the Snakemake workflow (dry runs, config and session validation) and ballimpact.pipeline."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import importlib.util
+import inspect
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ballimpact import pipeline
+
+REPO = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+SNAKEMAKE = BIN / "snakemake"
+BALLIMPACT = BIN / "ballimpact"
+
+FINAL_FIGURES = (
+    "fig7_contact_time_cor",
+    "fig8_stiffness",
+    "fig9_force_curves",
+    "fig10_components",
+    "fig2b_kelvin_voigt",
+    "kcal",
+)
+IMPACTS_CSV_COLUMNS = [  # shared/spec/outputs.md, in order
+    "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
+    "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
+    "kv_stiffness_kN_m", "kv_damping_N_s_m",
+]
+SYNTH_IMPACTS_PER_BALL = 3
+SYNTH_FAULTS_PER_KIND = 1
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def run_snakemake(*args, cwd=REPO, check=None):
+    """Run the venv's snakemake; returns the CompletedProcess (stdout + stderr merged)."""
+    env = dict(os.environ)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
+    proc = subprocess.run(
+        [str(SNAKEMAKE), *map(str, args)],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=1800,
+    )
+    if check is True:
+        assert proc.returncode == 0, proc.stdout
+    elif check is False:
+        assert proc.returncode != 0, proc.stdout
+    return proc
+
+
+def job_counts(output: str) -> dict[str, int]:
+    """Rule -> number of jobs from the 'Job stats' table of a (dry) run."""
+    match = re.search(r"Job stats:\n(.*?)\n\s*\n", output + "\n\n", re.S)
+    if not match:
+        return {}
+    counts = {}
+    for line in match.group(1).splitlines():
+        row = re.fullmatch(r"\s*(\w+)\s+(\d+)\s*", line)
+        if row and row.group(1) != "total":
+            counts[row.group(1)] = int(row.group(2))
+    return counts
+
+
+def synth_session(raw_dir: Path, session_id: str) -> Path:
+    """A small synthetic session raw_dir/session_id written by `ballimpact synth`."""
+    out = raw_dir / session_id
+    proc = subprocess.run(
+        [
+            str(BALLIMPACT), "synth", str(out),
+            "--impacts-per-ball", str(SYNTH_IMPACTS_PER_BALL),
+            "--faults-per-kind", str(SYNTH_FAULTS_PER_KIND),
+        ],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600,
+    )
+    assert proc.returncode == 0, proc.stdout
+    # the ground truth is written beside the session folder; keep raw_dir to session folders
+    for truth in raw_dir.glob(f"{session_id}.truth.*"):
+        truth.rename(raw_dir.parent / truth.name)
+    return out
+
+
+def copy_session(source: Path, raw_dir: Path, session_id: str) -> Path:
+    """Copy a session folder under a new id (session_id in session.yaml updated)."""
+    target = raw_dir / session_id
+    shutil.copytree(source, target)
+    yaml_path = target / "session.yaml"
+    text = re.sub(r"(?m)^session_id:.*$", f"session_id: {session_id}", yaml_path.read_text(encoding="utf-8"))
+    yaml_path.write_text(text, encoding="utf-8")
+    return target
+
+
+def raw_rows(session_dir: Path) -> list[dict]:
+    with open(session_dir / "impacts.csv", encoding="utf-8", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def n_balls_used(session_dir: Path) -> int:
+    return len({row["ball"] for row in raw_rows(session_dir)})
+
+
+def config_args(raw_dir, results_dir, *extra):
+    return ["--config", f"raw_dir={raw_dir}", f"results_dir={results_dir}", *extra]
+
+
+@pytest.fixture(scope="module")
+def synth_raw(tmp_path_factory) -> Path:
+    """raw/ folder holding one synthetic session 's1' (shared by the dry-run tests; never written)."""
+    raw = tmp_path_factory.mktemp("synth") / "raw"
+    raw.mkdir()
+    synth_session(raw, "s1")
+    return raw
+
+
+# ----------------------------------------------------------------------- dry runs
+
+
+def test_dry_run_repo_raw_dir():
+    """`snakemake -n --cores 2` in the repository parses and lists every rule for each session of raw/."""
+    proc = run_snakemake("-n", "--cores", "2", check=True)
+    raw = REPO / "raw"
+    sessions = sorted(p.name for p in raw.iterdir() if (p / "session.yaml").is_file()) if raw.is_dir() else []
+    if not sessions:
+        assert "no session folder" in proc.stdout
+        return
+    counts = job_counts(proc.stdout)
+    if not counts:  # results already up to date
+        assert "Nothing to be done" in proc.stdout
+        return
+    assert set(counts) <= {
+        "validate_session", "process_chunk", "collect_impacts", "fit_ball", "archive", "figures", "report", "all"
+    }
+    assert counts["all"] == 1
+
+
+def test_dry_run_lists_every_rule(synth_raw, tmp_path):
+    session = synth_raw / "s1"
+    n_impacts = len(raw_rows(session))
+    proc = run_snakemake("-n", "--cores", "2", *config_args(synth_raw, tmp_path / "results"), check=True)
+    counts = job_counts(proc.stdout)
+    assert counts == {
+        "validate_session": 1,
+        "process_chunk": min(n_impacts, max(2, math.ceil(n_impacts / 200))),
+        "collect_impacts": 1,
+        "fit_ball": n_balls_used(session),
+        "archive": 1,
+        "figures": 1,
+        "report": 1,
+        "all": 1,
+    }
+    for name in ("impacts.csv", "parameters.csv", "s1.nc", "report.pdf", "figures/qc",
+                 *(f"figures/{stem}.png" for stem in FINAL_FIGURES)):
+        assert f"{tmp_path / 'results' / 's1' / name}" in proc.stdout, name
+
+
+@pytest.mark.parametrize(
+    ("chunk_size", "min_chunks", "expected"),
+    [
+        pytest.param(5, 1, "ceil", marks=pytest.mark.slow),  # ceil(n / 5) chunks
+        pytest.param(1000, 3, 3, marks=pytest.mark.slow),  # min_chunks wins
+        pytest.param(1000, 1000, "n", marks=pytest.mark.slow),  # capped by the number of impacts
+    ],
+)
+def test_number_of_chunks(synth_raw, tmp_path, chunk_size, min_chunks, expected):
+    n_impacts = len(raw_rows(synth_raw / "s1"))
+    expected = {"ceil": math.ceil(n_impacts / 5), "n": n_impacts}.get(expected, expected)
+    proc = run_snakemake(
+        "-n", "--cores", "1",
+        *config_args(synth_raw, tmp_path / "results", f"chunk_size={chunk_size}", f"min_chunks={min_chunks}"),
+        check=True,
+    )
+    assert job_counts(proc.stdout)["process_chunk"] == expected
+
+
+def test_dry_run_slurm_profile(synth_raw, tmp_path):
+    """The SLURM profile's dry run needs no sbatch (the dry-run executor runs nothing)."""
+    proc = run_snakemake(
+        "-n", "--profile", "profiles/slurm", *config_args(synth_raw, tmp_path / "results"), check=True
+    )
+    assert "profiles/slurm" in proc.stdout
+    assert job_counts(proc.stdout)["fit_ball"] == n_balls_used(synth_raw / "s1")
+    # the profile's per-rule resources reached the jobs
+    fit_block = proc.stdout[proc.stdout.index("rule fit_ball:"):]
+    resources = re.search(r"resources: (.*)", fit_block).group(1)
+    assert "mem_mb=4000" in resources and "runtime=120" in resources
+
+
+def test_sessions_selects_only_those(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    for name in ("alpha", "beta"):
+        copy_session(synth_raw / "s1", raw, name)
+    (raw / "not-a-session").mkdir()  # no session.yaml: ignored
+    results = tmp_path / "results"
+
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results, "sessions=[beta]"), check=True)
+    assert f"{results / 'beta' / 'report.pdf'}" in proc.stdout
+    assert f"{results / 'alpha'}" not in proc.stdout
+    assert job_counts(proc.stdout)["validate_session"] == 1
+
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results), check=True)
+    assert f"{results / 'alpha' / 'report.pdf'}" in proc.stdout
+    assert f"{results / 'beta' / 'report.pdf'}" in proc.stdout
+    assert job_counts(proc.stdout)["validate_session"] == 2
+
+
+@pytest.mark.slow
+def test_unknown_session_fails_naming_it(synth_raw, tmp_path):
+    proc = run_snakemake("-n", "--cores", "1", *config_args(synth_raw, tmp_path / "results", "sessions=[gamma]"),
+                         check=False)
+    assert "config key 'sessions': session 'gamma' not found in raw_dir" in proc.stdout
+
+
+# ------------------------------------------------------------------ config validation
+
+
+@pytest.mark.parametrize(
+    ("entry", "expected"),
+    [
+        ("chunk_size=-1", r"key 'chunk_size': -1 is less than the minimum of 1"),
+        pytest.param("min_chunks=0", r"key 'min_chunks': 0 is less than the minimum of 1", marks=pytest.mark.slow),
+        pytest.param("bootstrap=many", r"key 'bootstrap': 'many' is not of type 'integer'", marks=pytest.mark.slow),
+        pytest.param(
+            "mains_hz=-50", r"key 'mains_hz': -50 is less than or equal to the minimum of 0", marks=pytest.mark.slow
+        ),
+        ("chunksize=10", r"unknown key 'chunksize' \(known keys: raw_dir, results_dir, sessions, chunk_size"),
+    ],
+)
+def test_bad_config_fails_naming_the_key(entry, expected):
+    proc = run_snakemake("-n", "--cores", "1", "--config", entry, check=False)
+    assert "invalid configuration" in proc.stdout
+    assert re.search(expected, proc.stdout), proc.stdout
+
+
+@pytest.mark.slow
+def test_bad_configfile_fails_naming_the_key(tmp_path):
+    config = tmp_path / "config.yaml"
+    config.write_text("raw_dir: raw\nresults_dir: results\nchunk_size: -1\n", encoding="utf-8")
+    proc = run_snakemake("-n", "--cores", "1", "--configfile", config, check=False)
+    assert "key 'chunk_size': -1 is less than the minimum of 1" in proc.stdout
+
+
+@pytest.mark.slow
+def test_results_dir_must_differ_from_raw_dir(tmp_path):
+    proc = run_snakemake("-n", "--cores", "1", *config_args(tmp_path, tmp_path), check=False)
+    assert "results_dir" in proc.stdout and "must differ from raw_dir" in proc.stdout
+
+
+# ----------------------------------------------------------- session schema (parse time)
+
+
+@pytest.mark.parametrize(
+    ("edit", "expected"),
+    [
+        (("sample_rate_hz: 66964.3", "sample_rate_hz: -5"), "key 'daq.sample_rate_hz': -5 is less than or equal"),
+        (("session_id: bad", "session_id: other"), "key 'session_id' is 'other' but the session folder is named 'bad'"),
+        pytest.param(
+            ("  polarity: 1", "  polarity: 2"), "key 'plate.polarity': 2 is not one of [1, -1]", marks=pytest.mark.slow
+        ),
+        pytest.param(
+            ("mass_g: 57.7", "mass_g: 0.0577"), "key 'balls.pressurised.mass_g': 0.0577", marks=pytest.mark.slow
+        ),
+        pytest.param(("gates:", "gate:"), "missing required key 'gates'", marks=pytest.mark.slow),
+        pytest.param(("balls:", "balls: [\n"), "invalid YAML", marks=pytest.mark.slow),
+    ],
+)
+def test_bad_session_yaml_fails_naming_the_file(synth_raw, tmp_path, edit, expected):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    session = copy_session(synth_raw / "s1", raw, "bad")
+    yaml_path = session / "session.yaml"
+    text = yaml_path.read_text(encoding="utf-8")
+    old, new = edit
+    assert old in text
+    yaml_path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"), check=False)
+    assert f"{yaml_path}: " in proc.stdout, proc.stdout
+    assert expected in proc.stdout, proc.stdout
+
+
+@pytest.mark.slow
+def test_session_yaml_exponent_without_dot_is_a_number(synth_raw, tmp_path):
+    """`resolution_s: 1e-6` (YAML 1.1 reads it as text) is accepted, as the library accepts it."""
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    session = copy_session(synth_raw / "s1", raw, "expo")
+    yaml_path = session / "session.yaml"
+    text = re.sub(r"resolution_s: .*", "resolution_s: 1e-6", yaml_path.read_text(encoding="utf-8"))
+    yaml_path.write_text(text, encoding="utf-8")
+    run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"), check=True)
+
+
+@pytest.mark.slow
+def test_impacts_csv_missing_column_fails_naming_the_file(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    session = copy_session(synth_raw / "s1", raw, "nocol")
+    csv_path = session / "impacts.csv"
+    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
+    lines[0] = lines[0].replace("trace,", "trace_file,", 1)
+    csv_path.write_text("".join(lines), encoding="utf-8")
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"), check=False)
+    assert f"{csv_path}: missing required column(s) in the header: trace" in proc.stdout
+
+
+# ------------------------------------------------------------------ ballimpact.pipeline
+
+
+def test_figure_names_agree_with_workflow():
+    text = (REPO / "workflow" / "rules" / "common.smk").read_text(encoding="utf-8")
+    block = re.search(r"FIGURES = \((.*?)\)", text, re.S).group(1)
+    assert tuple(re.findall(r'"(\w+)"', block)) == pipeline.FIGURE_STEMS == FINAL_FIGURES
+
+
+def test_snapshot_session_hashes_every_raw_file(synth_raw, tmp_path):
+    session = synth_raw / "s1"
+    out = tmp_path / "work" / "session.json"
+    pipeline.snapshot_session(session, out)
+    snapshot = json.loads(out.read_text(encoding="utf-8"))
+    rows = raw_rows(session)
+    assert snapshot["session_id"] == "s1"
+    assert snapshot["n_impacts"] == len(rows)
+    expected = {
+        name: hashlib.sha256((session / name).read_bytes()).hexdigest()
+        for name in ["session.yaml", "impacts.csv"] + [r["trace"] for r in rows if (session / r["trace"]).is_file()]
+    }
+    assert snapshot["raw_sha256"] == expected
+    # the missing trace planted by synth is reported, not hashed
+    assert any("trace file not found" in p for ps in snapshot["impact_problems"].values() for p in ps)
+    assert sum(snapshot["impacts_per_ball"].values()) == len(rows)
+    assert not list(out.parent.glob(".*tmp*"))
+
+
+def test_snapshot_session_fault_names_the_file(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    session = copy_session(synth_raw / "s1", raw, "dup")
+    csv_path = session / "impacts.csv"
+    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
+    csv_path.write_text("".join(lines + [lines[1]]), encoding="utf-8")  # duplicate impact id
+    from ballimpact.session import SessionError
+
+    with pytest.raises(SessionError, match=r"impacts\.csv: line \d+: impact_id .* duplicates line 2"):
+        pipeline.snapshot_session(session, tmp_path / "session.json")
+    assert not (tmp_path / "session.json").exists()
+
+
+def test_log_to_file_turns_session_error_into_one_line_exit(tmp_path):
+    from ballimpact.session import SessionError
+
+    log = tmp_path / "logs" / "rule.log"
+    with pytest.raises(SystemExit, match=r"^error: raw/x/session.yaml: missing required key 'date'$"):
+        with pipeline.log_to_file(log):
+            raise SessionError("raw/x/session.yaml: missing required key 'date'")
+    assert "missing required key 'date'" in log.read_text(encoding="utf-8")
+
+
+def test_atomic_path_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "out.csv"
+    with pytest.raises(RuntimeError, match="boom"):
+        with pipeline.atomic_path(target) as tmp:
+            assert tmp.parent == tmp_path and tmp.suffix == ".csv"
+            tmp.write_text("partial", encoding="utf-8")
+            raise RuntimeError("boom")
+    assert list(tmp_path.iterdir()) == []
+    with pipeline.atomic_path(target) as tmp:
+        tmp.write_text("done", encoding="utf-8")
+    assert target.read_text(encoding="utf-8") == "done"
+    assert list(tmp_path.iterdir()) == [target]
+
+
+def test_atomic_dir_replaces_the_folder(tmp_path):
+    target = tmp_path / "qc"
+    target.mkdir()
+    (target / "old.png").write_bytes(b"old")
+    with pipeline.atomic_dir(target) as tmp:
+        (tmp / "new.png").write_bytes(b"new")
+    assert sorted(p.name for p in target.iterdir()) == ["new.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["qc"]
+
+
+@pytest.mark.parametrize("n_chunks", [1, 2, 3, 7, 16])
+def test_chunks_partition_the_impacts(n_chunks):
+    ids = [f"i{k:02d}" for k in range(16)]
+    chunks = [pipeline.chunk_impact_ids(ids, c, n_chunks) for c in range(n_chunks)]
+    assert sorted(i for chunk in chunks for i in chunk) == ids
+    assert all(chunk for chunk in chunks)
+
+
+@pytest.mark.parametrize(("chunk", "n_chunks", "match"), [(2, 2, "smaller than n_chunks"), (0, 0, "n_chunks must be")])
+def test_chunk_impact_ids_rejects_bad_chunks(chunk, n_chunks, match):
+    with pytest.raises(ValueError, match=match):
+        pipeline.chunk_impact_ids(["a", "b"], chunk, n_chunks)
+
+
+@dataclass
+class _FakeResult:
+    """Duck-typed ImpactResult: contact series of a given length, a raw trace."""
+
+    impact_id: str
+    ball: str
+    n_samples: int
+    status: str = "ok"
+    reason: str = ""
+    vin_m_s: float = 20.0
+    mass_kg: float = 0.057
+    sample_rate_hz: float = 1.0e5
+
+    def __post_init__(self):
+        self.time_s = np.arange(self.n_samples) * 1.0e-5
+        for name in ("voltage_V", "force_N", "velocity_m_s", "displacement_m"):
+            setattr(self, name, np.full(self.n_samples, float(self.n_samples)))
+        self.raw_time_s = np.arange(2 * self.n_samples) * 1.0e-5
+        self.raw_voltage_V = np.ones(2 * self.n_samples)
+
+
+def _chunk_files(session: Path, out: Path, n_chunks: int, *, drop=None) -> list[Path]:
+    from ballimpact import archive
+
+    rows = raw_rows(session)
+    results = [
+        _FakeResult(r["impact_id"], r["ball"], n_samples=10 + 3 * k,
+                    status="excluded" if k == 1 else "ok", reason="missing gate time gate_in_2_s" if k == 1 else "")
+        for k, r in enumerate(rows)
+        if r["impact_id"] != drop
+    ]
+    files = []
+    for chunk in range(n_chunks):
+        path = out / f"chunk_{chunk}.nc"
+        archive.write_dataset(archive.impacts_dataset(results[chunk::n_chunks]), path)
+        files.append(path)
+    return files
+
+
+def test_collect_impacts_restores_raw_order_and_pads(synth_raw, tmp_path):
+    from ballimpact import archive
+
+    session = synth_raw / "s1"
+    rows = raw_rows(session)
+    chunks = _chunk_files(session, tmp_path, 3)
+    pipeline.collect_impacts(session, chunks[::-1], tmp_path / "impacts.csv", tmp_path / "impacts.nc")
+    with open(tmp_path / "impacts.csv", encoding="utf-8", newline="") as fh:
+        reader = csv.DictReader(fh)
+        assert reader.fieldnames == IMPACTS_CSV_COLUMNS
+        table = list(reader)
+    assert [r["impact_id"] for r in table] == [r["impact_id"] for r in rows]
+    assert [r["ball"] for r in table] == [r["ball"] for r in rows]
+    assert table[1]["status"] == "excluded" and table[1]["reason"] == "missing gate time gate_in_2_s"
+    ds = archive.open_dataset(tmp_path / "impacts.nc")
+    longest = 10 + 3 * (len(rows) - 1)
+    assert ds.sizes["sample"] == longest and ds.sizes["raw_sample"] == 2 * longest
+    for k in range(len(rows)):  # each impact keeps its own samples, NaN after them
+        force = ds["force_N"].values[k]
+        assert np.all(force[: 10 + 3 * k] == 10 + 3 * k) and np.all(np.isnan(force[10 + 3 * k:]))
+
+
+def test_collect_impacts_refuses_a_dropped_impact(synth_raw, tmp_path):
+    session = synth_raw / "s1"
+    dropped = raw_rows(session)[4]["impact_id"]
+    chunks = _chunk_files(session, tmp_path, 2, drop=dropped)
+    with pytest.raises(ValueError, match=rf"missing impacts \['{dropped}'\]"):
+        pipeline.collect_impacts(session, chunks, tmp_path / "impacts.csv", tmp_path / "impacts.nc")
+    assert not (tmp_path / "impacts.csv").exists() and not (tmp_path / "impacts.nc").exists()
+
+
+@pytest.mark.slow
+def test_archive_figures_and_report_from_pipeline(synth_raw, tmp_path):
+    """write_archive on collected impacts + fits, then make_figures and make_report on a complete archive."""
+    import xarray as xr
+
+    from archive_fixture import make_archive
+    from ballimpact import archive
+
+    session = synth_raw / "s1"
+    rows = raw_rows(session)
+    pipeline.collect_impacts(session, _chunk_files(session, tmp_path, 2), tmp_path / "impacts.csv",
+                             tmp_path / "impacts.nc")
+    fits = []
+    for ball in sorted({r["ball"] for r in rows}):
+        fit = xr.Dataset(
+            {"mass_kg": ("ball", [0.057]), "n_impacts": ("ball", [4]), "kb0_kN_m": ("ball", [21.0]),
+             "ak_kN_m": ("ball", [16000.0]), "a": ("ball", [1.65]), "ac_kN_s_m3": ("ball", [3.5])},
+            coords={"ball": np.array([ball], dtype=object)},
+        )
+        fits.append(archive.write_dataset(fit, tmp_path / f"fit_{ball}.nc"))
+    pipeline.write_archive(session, tmp_path / "impacts.nc", fits, tmp_path / "s1.nc", tmp_path / "parameters.csv")
+    ds = archive.open_dataset(tmp_path / "s1.nc")
+    assert ds.attrs["session_id"] == "s1"
+    raw_sha256 = json.loads(ds.attrs["raw_sha256"])
+    assert raw_sha256["session.yaml"] == hashlib.sha256((session / "session.yaml").read_bytes()).hexdigest()
+    with open(tmp_path / "parameters.csv", encoding="utf-8", newline="") as fh:
+        params = list(csv.DictReader(fh))
+    assert sorted(p["ball"] for p in params) == sorted({r["ball"] for r in rows})
+    assert {float(p["a"]) for p in params} == {1.65}
+
+    complete = tmp_path / "complete.nc"
+    archive.write_dataset(make_archive(), complete)
+    figures = tmp_path / "figures"
+    pipeline.make_figures(complete, figures)
+    assert sorted(p.name for p in figures.glob("*.png")) == sorted(f"{stem}.png" for stem in FINAL_FIGURES)
+    assert (figures / "qc").is_dir() and list((figures / "qc").glob("*.png"))
+    assert not [p for p in figures.iterdir() if p.name.startswith(".")]
+    pipeline.make_report(complete, figures, tmp_path / "report.pdf")
+    assert (tmp_path / "report.pdf").read_bytes().startswith(b"%PDF")
+
+
+# --------------------------------------------------------------------------- end to end
+
+RULE_FUNCTIONS = (
+    "snapshot_session", "process_chunk", "collect_impacts", "fit_ball", "write_archive", "make_figures", "make_report",
+)
+
+
+def _unfinished_rule_functions() -> list[str]:
+    """Rule functions still raising NotImplementedError, or waiting for a library module."""
+    unfinished = []
+    for name in RULE_FUNCTIONS:
+        source = inspect.getsource(getattr(pipeline, name))
+        waits_for = [m for m in re.findall(r'_requires\("(\w+)"\)', source)
+                     if importlib.util.find_spec(f"ballimpact.{m}") is None]
+        if "raise NotImplementedError" in source or waits_for:
+            unfinished.append(name + (f" (needs ballimpact.{', '.join(waits_for)})" if waits_for else ""))
+    return unfinished
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(
+    bool(_unfinished_rule_functions()),
+    reason=f"ballimpact.pipeline not finished: {', '.join(_unfinished_rule_functions())}",
+)
+def test_end_to_end_synthetic_session(tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    session = synth_session(raw, "e2e")
+    results = tmp_path / "results"
+    workdir = tmp_path / "work"  # .snakemake/ of this run stays out of the repository
+    workdir.mkdir()
+    common = [
+        "--snakefile", REPO / "Snakefile", "--configfile", REPO / "config.yaml", "--directory", workdir,
+        *config_args(raw, results, "bootstrap=10"),
+    ]
+    proc = run_snakemake("--cores", "2", *common, cwd=workdir)
+    assert proc.returncode == 0, proc.stdout
+
+    out = results / "e2e"
+    for name in ("impacts.csv", "parameters.csv", "e2e.nc", "report.pdf", "work/session.json",
+                 *(f"figures/{stem}.png" for stem in FINAL_FIGURES)):
+        assert (out / name).is_file(), name
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "figures" / "qc").is_dir()
+
+    rows = raw_rows(session)
+    with open(out / "impacts.csv", encoding="utf-8", newline="") as fh:
+        reader = csv.DictReader(fh)
+        assert reader.fieldnames == IMPACTS_CSV_COLUMNS
+        result_rows = list(reader)
+    assert [r["impact_id"] for r in result_rows] == [r["impact_id"] for r in rows]
+    assert {r["status"] for r in result_rows} <= {"ok", "excluded"}
+    n_faults = sum(1 for r in rows if r["note"].startswith("synthetic "))
+    assert sum(r["status"] == "excluded" for r in result_rows) >= n_faults
+    with open(out / "parameters.csv", encoding="utf-8", newline="") as fh:
+        assert sorted(r["ball"] for r in csv.DictReader(fh)) == sorted({r["ball"] for r in rows})
+    assert not [p for p in out.rglob("*") if ".tmp" in p.name]  # every write was atomic
+
+    again = run_snakemake("--cores", "2", "-n", *common, cwd=workdir, check=True)
+    assert "Nothing to be done" in again.stdout
+
+    html = tmp_path / "report.html"
+    run_snakemake("--report", html, *common, cwd=workdir, check=True)
+    assert html.stat().st_size > 0
