@@ -55,6 +55,9 @@ FOOT_MAX_S = 0.2e-3  # longest stretch of rising samples in the hinge fit [s]
 FOOT_PRE_S = 0.15e-3  # stretch before the first sample above the noise in the hinge fit [s]
 FOOT_PRE_SAMPLES = 4  # ... but at least this many samples [samples]
 FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample further than this from the hinge ends the foot [-]
+RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
+RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
+RING_SIGMA = 2.0  # rms after the end above this many noise deviations = ringing [-]
 HINGE_GRID_PER_SAMPLE = 50  # hinge corner search steps per sample [-]
 SECOND_IMPACT_FRACTION = 0.05  # another impact reaches this fraction of the main peak [-]
 SECOND_IMPACT_MIN_S = 0.3e-3  # ... and lasts longer than this [s]
@@ -76,9 +79,9 @@ class ContactResult:
     start_s, end_s : float
         Contact start and end on the trace's time axis ``t0_s + i / fs`` [s],
         sub-sample.
-    edge_start_s : float
-        Zero crossing of the steep rising edge, before walking back over the
-        cloth foot [s].
+    edge_start_s, edge_end_s : float
+        Zero crossings of the straight lines through the steep rising and
+        falling edges (between 3 % and 20 % of the peak), diagnostics [s].
     start_index : int
         First sample at or after the start [-].
     end_index : int
@@ -106,6 +109,7 @@ class ContactResult:
     start_s: float
     end_s: float
     edge_start_s: float
+    edge_end_s: float
     start_index: int
     end_index: int
     peak_index: int
@@ -275,15 +279,44 @@ def _hinge_fit(u: np.ndarray, y: np.ndarray, lower: float, upper: float):
     return float(corners[k]), float(b[k])
 
 
-def _foot_start(u, xs, i0: int, peak_index: int, sigma: float, fs: float) -> float:
-    """Start of the force: corner of a hinge fitted to the quiet samples and the foot of the rise.
+def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
+    """Zero crossing of the line through the lowest part of the rising edge between lo and hi.
 
-    The window holds FOOT_PRE_S of samples before the first sample above the
-    noise threshold (i0), so foot samples hidden in the noise are still fitted,
-    and the rising samples from i0 on for as long as the hinge refitted with
-    each next sample passes within FOOT_RESIDUAL_SIGMA noise deviations of it
-    (the steep rise after a cloth ramp departs from the ramp).
+    Returns (u, fallback): u in samples; fallback True when fewer than two
+    samples were in the band and the two samples around the lo crossing were used.
     """
+    below = np.flatnonzero(xs[:peak_index] < lo)
+    j_lo = int(below[-1]) if below.size else -1
+    if j_lo < 0:
+        return 0.0, False
+    seg = xs[j_lo + 1:peak_index + 1]
+    over = np.flatnonzero(seg > hi)
+    n_band = int(over[0]) if over.size else seg.size
+    u = np.arange(j_lo, j_lo + 1 + max(n_band, 1), dtype=float)
+    fallback = n_band < 2
+    zero = _line_zero(u[:2], xs[j_lo:j_lo + 2]) if fallback else _line_zero(u[1:], xs[j_lo + 1:j_lo + 1 + n_band])
+    if not math.isfinite(zero):
+        zero = float(j_lo)
+    return min(max(zero, j_lo - max(n_band, 2), 0.0), float(j_lo + 1)), fallback
+
+
+def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
+    """Where the force leaves zero before the peak [samples]; None when it never was zero.
+
+    Walks back from the peak to the first sample above FOOT_SIGMA noise
+    deviations (i0), then fits the hinge ``b * max(u - ts, 0)`` to a window
+    holding FOOT_PRE_S of samples before i0 (so foot samples hidden in the noise
+    are still used) and the rising samples from i0 on, for as long as adding
+    the next one raises the residual sum of squares by less than
+    (FOOT_RESIDUAL_SIGMA sigma)**2, i.e. while the hinge predicts it within
+    FOOT_RESIDUAL_SIGMA standard errors (the steep rise after a cloth ramp
+    departs from the ramp). Applied to the reversed trace it gives the end.
+    """
+    quiet = np.flatnonzero(xs[:peak_index + 1] <= FOOT_SIGMA * sigma)
+    if not quiet.size:
+        return None
+    i0 = int(quiet[-1]) + 1
+    u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
     wl = max(i0 - n_pre, 0)
@@ -295,23 +328,28 @@ def _foot_start(u, xs, i0: int, peak_index: int, sigma: float, fs: float) -> flo
         # foot? Then the hinge through it misses the sub-threshold foot samples
         # that the hinge through the first rising sample alone explains.
         ts1, b1 = _hinge_fit(u[wl:i0 + 1], xs[wl:i0 + 1], float(wl), float(i0))
-        uw, xw = u[wl:i0 + 1], xs[wl:i0 + 1]
-        sse1 = np.sum((xw - b1 * np.maximum(uw - ts1, 0.0)) ** 2)
-        sse2 = np.sum((xw - b * np.maximum(uw - ts, 0.0)) ** 2)
+        sse1 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts1, b1)
+        sse2 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts, b)
         if sse2 - sse1 > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
             return ts1
+    sse = _hinge_sse(u[wl:wr + 1], xs[wl:wr + 1], ts, b)
     while wr < last:
         nxt = wr + 1
         ts_n, b_n = _hinge_fit(u[wl:nxt + 1], xs[wl:nxt + 1], float(wl), float(i0))
-        if abs(xs[nxt] - b_n * max(u[nxt] - ts_n, 0.0)) > FOOT_RESIDUAL_SIGMA * sigma:
+        sse_n = _hinge_sse(u[wl:nxt + 1], xs[wl:nxt + 1], ts_n, b_n)
+        if sse_n - sse > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
             break
-        wr, ts, b = nxt, ts_n, b_n
+        wr, ts, b, sse = nxt, ts_n, b_n, sse_n
     return ts
+
+
+def _hinge_sse(u, y, ts, b) -> float:
+    return float(np.sum((y - b * np.maximum(u - ts, 0.0)) ** 2))
 
 
 def _not_found(noise, threshold, peak_index, peak, clipped, flags) -> ContactResult:
     return ContactResult(
-        found=False, start_s=math.nan, end_s=math.nan, edge_start_s=math.nan,
+        found=False, start_s=math.nan, end_s=math.nan, edge_start_s=math.nan, edge_end_s=math.nan,
         start_index=-1, end_index=-1, peak_index=int(peak_index), peak_V=float(peak),
         n_impacts=0, noise_rms_V=float(noise), threshold_V=float(threshold),
         clipped=bool(clipped), flags=tuple(flags) + ("no_contact",),
@@ -431,74 +469,54 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     if n_impacts > 1:
         flags.append("multiple_impacts")
 
-    u = np.arange(n, dtype=float)
-    lo, hi = EDGE_BAND[0] * peak, EDGE_BAND[1] * peak
-    lo = max(lo, min(FOOT_SIGMA * sigma, 0.5 * hi))
-
-    # --- rising edge: lowest contiguous part of the edge between lo and hi
-    below = np.flatnonzero(xs[:peak_index] < lo)
-    j_lo = int(below[-1]) if below.size else -1
-    seg = xs[j_lo + 1:peak_index + 1]
-    over = np.flatnonzero(seg > hi)
-    n_band = int(over[0]) if over.size else seg.size
-    u_edge = math.nan
-    if n_band >= 2:
-        u_edge = _line_zero(u[j_lo + 1:j_lo + 1 + n_band], xs[j_lo + 1:j_lo + 1 + n_band])
-    if not math.isfinite(u_edge) and j_lo >= 0:
+    lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
+    hi = EDGE_BAND[1] * peak
+    rev = xs[::-1]
+    # steep edges: line through the lowest part of each edge, extrapolated to zero
+    u_edge_start, fallback_start = _edge_zero(xs, peak_index, lo, hi)
+    u_edge_end, fallback_end = _edge_zero(rev, n - 1 - peak_index, lo, hi)
+    u_edge_end = n - 1 - u_edge_end
+    if fallback_start or fallback_end:
         flags.append("edge_fallback")
-        u_edge = _line_zero(u[j_lo:j_lo + 2], xs[j_lo:j_lo + 2])
-    if j_lo < 0:
+    # feet: hinge fits where the force leaves (returns to) zero
+    u_start = _foot_start(xs, peak_index, sigma, fs)
+    u_end = _foot_start(rev, n - 1 - peak_index, sigma, fs)
+    if u_end is not None:
+        # Plate ringing that outlasts the contact would pass for force: measure
+        # the disturbance just after the end and, when it is well above the
+        # noise, find the end again with it as the noise level.
+        a = int(math.ceil(n - 1 - u_end + RING_GAP_S * fs))
+        b = min(a + int(round(RING_WINDOW_S * fs)), n)
+        if b - a >= MIN_NOISE_SAMPLES:
+            ring = float(np.sqrt(np.mean(xs[a:b] ** 2)))
+            if ring > RING_SIGMA * sigma:
+                flags.append("ringing_after_contact")
+                u_end = _foot_start(rev, n - 1 - peak_index, ring, fs)
+    if u_start is None:
         flags.append("contact_at_trace_start")
-        u_edge = 0.0
-    if not math.isfinite(u_edge):
-        u_edge = float(j_lo + 1)
-    u_edge = min(max(u_edge, j_lo - max(n_band, 2), 0.0), float(j_lo + 1))
-
-    # --- start: walk back from the peak to the first sample above the noise, then a local hinge fit
-    foot_thr = FOOT_SIGMA * sigma
-    quiet = np.flatnonzero(xs[:peak_index + 1] <= foot_thr)
-    i0 = int(quiet[-1]) + 1 if quiet.size else 0
-    if i0 == 0:
-        if "contact_at_trace_start" not in flags:
-            flags.append("contact_at_trace_start")
         u_start = 0.0
-    else:
-        u_start = _foot_start(u, xs, i0, peak_index, sigma, fs)
-        if u_start < u_edge - 1.0:
-            flags.append("cloth_foot")
-
-    # --- falling edge: lowest contiguous part of the edge between lo and hi
-    after = np.flatnonzero(xs[peak_index + 1:] < lo)
-    j_hi = peak_index + 1 + int(after[0]) if after.size else n
-    seg = xs[peak_index:j_hi][::-1]
-    over = np.flatnonzero(seg > hi)
-    n_band = int(over[0]) if over.size else seg.size
-    u_end = math.nan
-    if j_hi >= n:
+    elif u_start < u_edge_start - 1.0:
+        flags.append("cloth_foot")
+    if u_end is None:
         flags.append("contact_at_trace_end")
         u_end = float(n - 1)
     else:
-        if n_band >= 2:
-            u_end = _line_zero(u[j_hi - n_band:j_hi], xs[j_hi - n_band:j_hi])
-        if not math.isfinite(u_end):
-            flags.append("edge_fallback")
-            u_end = _line_zero(u[j_hi - 1:j_hi + 1], xs[j_hi - 1:j_hi + 1])
-        if not math.isfinite(u_end):
-            u_end = float(j_hi - 1)
-        u_end = max(min(u_end, j_hi + max(n_band, 2), n - 1.0), float(j_hi - 1))
+        u_end = n - 1 - u_end
+        if u_end > u_edge_end + 1.0:
+            flags.append("end_tail")
 
-    # --- consistency: the run above threshold lies inside the contact, start < end inside the trace
+    # consistency: the run above threshold lies inside the contact, start < end inside the trace
     u_start = min(max(u_start, 0.0), float(run_a))
     u_end = max(min(u_end, n - 1.0), float(run_b))
-    u_edge = min(max(u_edge, u_start), float(run_a))
-    if not u_start < u_end:  # pragma: no cover - guaranteed by run_b - run_a >= 2
-        u_start, u_end = max(peak_index - 0.5, 0.0), min(peak_index + 0.5, n - 1.0)
+    u_edge_start = min(max(u_edge_start, u_start), float(run_a))
+    u_edge_end = max(min(u_edge_end, u_end), float(run_b))
 
     return ContactResult(
         found=True,
         start_s=t0_s + u_start / fs,
         end_s=t0_s + u_end / fs,
-        edge_start_s=t0_s + u_edge / fs,
+        edge_start_s=t0_s + u_edge_start / fs,
+        edge_end_s=t0_s + u_edge_end / fs,
         start_index=int(math.ceil(u_start)),
         end_index=int(math.floor(u_end)),
         peak_index=peak_index,

@@ -15,6 +15,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from . import archive as _archive
+
 __all__ = [
     "DPI",
     "FIGURE_FILES",
@@ -28,6 +30,7 @@ __all__ = [
     "fig_kcal",
     "fig_qc_impact",
     "excluded_impacts",
+    "kcal_band",
     "save_figure",
     "save_all",
 ]
@@ -47,7 +50,7 @@ FIGURE_FILES = {
 #: deviations (1.4826 x median absolute deviation of the good impacts) [-].
 KCAL_BAND_ROBUST_SD = 3.0
 #: Inbound speed of the force-component figure (Fig. 10 of the paper) [m/s].
-COMPONENT_SPEED_M_S = 20.0
+COMPONENT_SPEED_M_S = _archive.COMPONENT_SPEED_M_S
 #: A measured impact is overlaid on Fig. 10 when its speed is this close to 20 m/s [m/s].
 COMPONENT_SPEED_TOLERANCE_M_S = 2.5
 #: Width of the figures [in]; they are read on A4 paper.
@@ -157,9 +160,7 @@ def _series(ds, i, *names):
 
 def _fitted(ds, ball):
     """(mass_kg, kb0_N_m, ak, a, ac) in SI, None when the fit is missing or failed."""
-    from .archive import _fitted_si
-
-    return _fitted_si(ds, ball)
+    return _archive._fitted_si(ds, ball)
 
 
 def _simulate(ds, ball, vin, mass=None):

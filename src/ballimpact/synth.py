@@ -94,8 +94,8 @@ class SensorChain:
 
     kcal_N_per_V: float = 180.0
     kcal_spread: float = 0.03
-    plate_frequency_hz: float = 15_000.0
-    plate_damping_ratio: float = 0.25
+    plate_frequency_hz: float = 25_000.0
+    plate_damping_ratio: float = 0.3
     amplifier_time_constant_s: float = 0.8
     offset_V: float = 0.05
     hum_V: float = 0.012
