@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import importlib.util
-import inspect
 import json
 import math
 import os
@@ -523,28 +521,7 @@ def test_archive_figures_and_report_from_pipeline(synth_raw, tmp_path):
 
 # --------------------------------------------------------------------------- end to end
 
-RULE_FUNCTIONS = (
-    "snapshot_session", "process_chunk", "collect_impacts", "fit_ball", "write_archive", "make_figures", "make_report",
-)
-
-
-def _unfinished_rule_functions() -> list[str]:
-    """Rule functions still raising NotImplementedError, or waiting for a library module."""
-    unfinished = []
-    for name in RULE_FUNCTIONS:
-        source = inspect.getsource(getattr(pipeline, name))
-        waits_for = [m for m in re.findall(r'_requires\("(\w+)"\)', source)
-                     if importlib.util.find_spec(f"ballimpact.{m}") is None]
-        if "raise NotImplementedError" in source or waits_for:
-            unfinished.append(name + (f" (needs ballimpact.{', '.join(waits_for)})" if waits_for else ""))
-    return unfinished
-
-
 @pytest.mark.slow
-@pytest.mark.skipif(
-    bool(_unfinished_rule_functions()),
-    reason=f"ballimpact.pipeline not finished: {', '.join(_unfinished_rule_functions())}",
-)
 def test_end_to_end_synthetic_session(tmp_path):
     raw = tmp_path / "raw"
     raw.mkdir()
@@ -578,6 +555,10 @@ def test_end_to_end_synthetic_session(tmp_path):
     with open(out / "parameters.csv", encoding="utf-8", newline="") as fh:
         assert sorted(r["ball"] for r in csv.DictReader(fh)) == sorted({r["ball"] for r in rows})
     assert not [p for p in out.rglob("*") if ".tmp" in p.name]  # every write was atomic
+    umask = os.umask(0o022)
+    os.umask(umask)
+    for name in ("impacts.csv", "parameters.csv", "e2e.nc", "report.pdf", "figures/kcal.png"):
+        assert (out / name).stat().st_mode & 0o777 == 0o666 & ~umask, name  # readable as usual
 
     again = run_snakemake("--cores", "2", "-n", *common, cwd=workdir, check=True)
     assert "Nothing to be done" in again.stdout
@@ -585,3 +566,17 @@ def test_end_to_end_synthetic_session(tmp_path):
     html = tmp_path / "report.html"
     run_snakemake("--report", html, *common, cwd=workdir, check=True)
     assert html.stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"chunk": 0, "n_chunks": 2, "mains_hz": -50.0}, "mains_hz must be a positive number"),
+        ({"chunk": 2, "n_chunks": 2}, "chunk must be smaller than n_chunks"),
+        ({"chunk": -1, "n_chunks": 2}, "chunk must be an integer >= 0"),
+    ],
+)
+def test_process_chunk_rejects_bad_arguments(synth_raw, tmp_path, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        pipeline.process_chunk(synth_raw / "s1", out_nc=tmp_path / "chunk.nc", **kwargs)
+    assert not (tmp_path / "chunk.nc").exists()

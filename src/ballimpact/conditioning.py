@@ -12,7 +12,8 @@ After the contact V_true = 0, so the measured signal sits at the undershoot
 relative to the pre-contact baseline at the contact end.
 
 The baseline model, fitted by linear least squares to the quiet samples only
-(pre-trigger, and the post-contact stretch after a guard for plate ringing):
+(up to 100 ms of pre-trigger, and up to 50 ms of the post-contact stretch
+after a guard for plate ringing):
 offset + sin/cos at the mains frequency and its harmonics (one phase-continuous
 model for the whole trace) + on the post-contact stretch a step and a slope
 (the undershoot and its slow recovery). Offset and hum are subtracted
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
@@ -37,6 +38,8 @@ __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage"]
 
 PRE_GUARD_S = 0.5e-3  # quiet pre-trigger ends this long before the contact start [s]
 POST_GUARD_S = 2.0e-3  # quiet post stretch begins this long after the contact end (plate ringing) [s]
+PRE_WINDOW_S = 0.1  # longest pre-contact stretch used for the baseline fit [s]
+POST_WINDOW_S = 0.05  # longest post-contact stretch: the decay is close to a straight line over it [s]
 MIN_QUIET_SAMPLES = 20  # fewest samples for a pre or post baseline [samples]
 MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the undershoot step [s]
 UNDERSHOOT_SIGNIFICANCE = 5.0  # undershoot must exceed this many standard errors [-]
@@ -122,8 +125,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard) -> 
     """Least-squares offset + hum (+ post step and slope) on the quiet samples."""
     n = v.size
     idx = np.arange(n)
-    pre = idx < start_u - pre_guard
-    post = idx > end_u + post_guard
+    pre = (idx < start_u - pre_guard) & (idx >= start_u - pre_guard - PRE_WINDOW_S * fs)
+    post = (idx > end_u + post_guard) & (idx <= end_u + post_guard + POST_WINDOW_S * fs)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
     has_pre = np.count_nonzero(pre) >= MIN_QUIET_SAMPLES
     has_step = has_pre and np.count_nonzero(post) >= min_post
@@ -150,15 +153,17 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard) -> 
     y = v[quiet]
     norms = np.sqrt(np.sum(a * a, axis=0))
     norms[norms == 0] = 1.0
-    coef_n, *_ = np.linalg.lstsq(a / norms, y, rcond=None)
-    coef = coef_n / norms
+    an = a / norms
+    # normal equations of the column-normalised design: a few columns, many rows
+    ata_inv = np.linalg.pinv(an.T @ an, rcond=1e-12, hermitian=True)
+    coef = (ata_inv @ (an.T @ y)) / norms
     resid = y - a @ coef
     dof = max(y.size - a.shape[1], 1)
     s2 = float(resid @ resid) / dof
     baseline = a_full[:, :n_base] @ coef[:n_base]
     step = step_se = 0.0
     if has_step:
-        cov_n = np.linalg.pinv((a / norms).T @ (a / norms)) * s2
+        cov_n = ata_inv * s2
         step = float(coef[n_base])
         step_se = float(math.sqrt(max(cov_n[n_base, n_base], 0.0)) / norms[n_base])
     resid_all = v - a_full @ coef
@@ -266,7 +271,11 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         bad = np.flatnonzero(~np.isfinite(raw))
         raise ValueError(f"voltage_V holds {bad.size} non-finite samples (first at index {bad[0]})")
 
-    v = polarity * raw
+    # work in units of the largest magnitude: no overflow for any finite input
+    scale = float(np.max(np.abs(raw)))
+    if not (scale > 0 and math.isfinite(scale)):
+        scale = 1.0
+    v = polarity * (raw / scale)
     frequencies = []
     if mains_hz:
         frequencies = [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
@@ -279,7 +288,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         fit = _fit_baseline(v, fs, frequencies, -math.inf, -math.inf, 0.0, 0.0)
         y = v - fit.baseline
         contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-        return _result(y, fit, math.nan, "none", math.nan, contact, 0, messages, t0_s, math.nan)
+        return _result(y, fit, math.nan, "none", math.nan, contact, 0, messages, t0_s, math.nan, scale)
 
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
     tau = math.nan
@@ -290,7 +299,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         fit = _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard)
         y = v - fit.baseline
         integral = _integral_to(y, fs, start_u, end_u)
-        tau, source, pending = _choose_tau(tau_s, fit, integral, (end_u - start_u) / fs)
+        tau, source, pending = _choose_tau(tau_s, fit, integral, (end_u - start_u) / fs, scale)
         x = _decay_correct(y, fs, start_u, tau)
         c = detect_contact(x, fs, noise_rms_V=fit.noise)
         if not c.found:
@@ -305,10 +314,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         messages.append(msg)
     contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise)
     undershoot = -fit.step if fit.has_step else math.nan
-    return _result(x, fit, tau, source, undershoot, contact, n_iter, messages, t0_s, end_u / fs)
+    return _result(x, fit, tau, source, undershoot, contact, n_iter, messages, t0_s, end_u / fs, scale)
 
 
-def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
+def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, scale: float):
     """Time constant for the decay correction, its source and the warnings to give.
 
     A positive undershoot always gives tau = integral / undershoot (applying a
@@ -331,7 +340,8 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
         bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / (2.0 * integral)
         if bias > BIAS_WARN_FRACTION:
             messages.append(
-                f"charge-amplifier undershoot not measurable ({undershoot * 1e3:.3g} +/- {se * 1e3:.2g} mV): "
+                f"charge-amplifier undershoot not measurable ({undershoot * scale * 1e3:.3g} "
+                f"+/- {se * scale * 1e3:.2g} mV): "
                 f"the impulse may be off by up to {bias * 100:.2g} %"
             )
     if not integral > 0:
@@ -339,7 +349,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
     if undershoot < -UNDERSHOOT_SIGNIFICANCE * se:
         return math.inf, "none", [
             f"charge-amplifier decay not corrected: the baseline after the contact is "
-            f"{-undershoot * 1e3:.3g} mV above the one before it (expected an undershoot)"
+            f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)"
         ]
     if undershoot <= 0:
         return math.inf, "none", messages
@@ -354,22 +364,30 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float):
     return tau, "estimated", messages
 
 
-def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, messages, t0_s, anchor_s):
+def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, messages, t0_s, anchor_s, scale):
+    """Assemble the ConditionedSignal, back in volts."""
     coef = dict(fit.coef)
+    for key in ("offset_V", "post_step_V", "post_slope_V_per_s"):
+        coef[key] = coef[key] * scale
+    for key in ("hum_cos_V", "hum_sin_V"):
+        coef[key] = tuple(c * scale for c in coef[key])
     coef["post_anchor_s"] = t0_s + anchor_s if math.isfinite(anchor_s) else math.nan
-    return ConditionedSignal(
-        voltage_V=x,
-        noise_rms_V=float(fit.noise),
-        hum_amplitude_V=float(fit.hum_amplitudes[0]) if fit.hum_amplitudes else 0.0,
-        hum_harmonic_amplitudes_V=fit.hum_amplitudes,
-        tau_s=float(tau),
-        tau_source=source,
-        undershoot_V=float(undershoot),
-        undershoot_se_V=float(fit.step_se) if fit.has_step else math.nan,
-        offset_V=float(fit.coef["offset_V"]),
-        baseline_V=fit.baseline,
-        baseline_coefficients=coef,
-        contact=contact,
-        n_iterations=int(n_iter),
-        warnings=tuple(messages),
-    )
+    contact = replace(contact, peak_V=contact.peak_V * scale, noise_rms_V=contact.noise_rms_V * scale,
+                      threshold_V=contact.threshold_V * scale)
+    with np.errstate(over="ignore"):
+        return ConditionedSignal(
+            voltage_V=x * scale,
+            noise_rms_V=float(fit.noise * scale),
+            hum_amplitude_V=float(fit.hum_amplitudes[0] * scale) if fit.hum_amplitudes else 0.0,
+            hum_harmonic_amplitudes_V=tuple(a * scale for a in fit.hum_amplitudes),
+            tau_s=float(tau),
+            tau_source=source,
+            undershoot_V=float(undershoot * scale),
+            undershoot_se_V=float(fit.step_se * scale) if fit.has_step else math.nan,
+            offset_V=float(coef["offset_V"]),
+            baseline_V=fit.baseline * scale,
+            baseline_coefficients=coef,
+            contact=contact,
+            n_iterations=int(n_iter),
+            warnings=tuple(messages),
+        )

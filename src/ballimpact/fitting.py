@@ -410,56 +410,131 @@ def fit_restitution(vin_m_s, cor, mass_kg, kb0_N_m, ak, a, *, ac_start=3.5e3) ->
     return StageFit(float(ak), float(a), float(np.exp(res.x[0])), _rmse_pct(res.fun), res)
 
 
-def _batched_gauss_newton(vin, tc, cor, mass, kb0, weights, theta0, sigma_tc, sigma_cor, max_iter=8):
-    """Refit many weighted problems at once (bootstrap): damped Gauss-Newton, batched.
+def _batched_lm(resid, p0, lo, hi, max_iter=10):
+    """Levenberg-Marquardt on many independent problems at once.
 
-    weights : (B, n) case weights (counts of each impact in the resample).
-    kb0 : (B,) kB(0) per resample.
-    Returns theta (B, 3) and a converged flag (B,).
+    resid : callable mapping points (..., B, k) to residuals (..., B, m); it is
+        called with the current points and their forward-difference neighbours
+        stacked, so every iteration is one batched model simulation.
+    p0 : (B, k) starting points; lo, hi : bounds, (k,) or (B, k).
+    Returns the points (B, k) and a converged flag (B,).
     """
-    lo, hi = _theta_bounds()
-    b = weights.shape[0]
-    theta = np.repeat(theta0[None, :], b, axis=0)
+    p = np.array(p0, dtype=float)
+    b, k = p.shape
+    lo = np.broadcast_to(np.asarray(lo, dtype=float), p.shape)
+    hi = np.broadcast_to(np.asarray(hi, dtype=float), p.shape)
     lam = np.full(b, 1e-3)
-    sw = np.sqrt(np.concatenate([weights, weights], axis=1))  # (B, 2n)
-
-    def resid(th, kb, sw_):  # th (..., B, 3) -> (..., B, 2n)
-        tc_m, cor_m = _simulate(th, vin, mass, kb)
-        r = np.concatenate([(tc_m - tc) / tc / sigma_tc, (cor_m - cor) / cor / sigma_cor], axis=-1)
-        return np.where(np.isfinite(r), r, 1.0e3) * sw_
-
     converged = np.zeros(b, dtype=bool)
+    eye = np.eye(k)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         for _ in range(max_iter):
-            act = ~converged
-            if not act.any():
+            act = np.flatnonzero(~converged)
+            if not act.size:
                 break
-            th = theta[act]
-            pts = np.repeat(th[None], 4, axis=0)
-            for j in range(3):
+            pts = np.repeat(p[act][None], k + 1, axis=0)
+            for j in range(k):
                 pts[j + 1, :, j] += _FD_STEP
-            r_all = resid(pts, kb0[act], sw[act])
+            r_all = resid(pts, act)
             r0 = r_all[0]
-            jac = np.moveaxis((r_all[1:] - r0) / _FD_STEP, 0, -1)  # (Ba, 2n, 3)
+            jac = np.moveaxis((r_all[1:] - r0) / _FD_STEP, 0, -1)  # (Ba, m, k)
             jtj = np.einsum("bij,bik->bjk", jac, jac)
             jtr = np.einsum("bij,bi->bj", jac, r0)
             diag = np.einsum("bjj->bj", jtj)
-            a_mat = jtj + (lam[act][:, None, None] * np.eye(3)) * diag[:, None, :]
-            step = -np.linalg.solve(a_mat + 1e-12 * np.eye(3), jtr[..., None])[..., 0]
-            new = np.clip(th + step, lo, hi)
-            r_new = resid(new, kb0[act], sw[act])
+            a_mat = jtj + lam[act][:, None, None] * eye * diag[:, None, :] + 1e-12 * eye
+            step = -np.linalg.solve(a_mat, jtr[..., None])[..., 0]
+            new = np.clip(p[act] + step, lo[act], hi[act])
             c0 = np.sum(r0**2, axis=-1)
-            c1 = np.sum(r_new**2, axis=-1)
+            c1 = np.sum(resid(new[None], act)[0] ** 2, axis=-1)
             better = c1 < c0
-            idx = np.flatnonzero(act)
-            theta[idx[better]] = new[better]
-            lam[idx[better]] *= 0.3
-            lam[idx[~better]] *= 10.0
-            small = np.max(np.abs(step), axis=-1) < 1e-6
-            conv = (better & ((c0 - c1) < 1e-10 * np.maximum(c0, 1e-30))) | small
-            converged[idx[conv]] = True
-    return theta, converged
+            p[act[better]] = new[better]
+            lam[act[better]] *= 0.3
+            lam[act[~better]] *= 10.0
+            tiny = np.max(np.abs(step), axis=-1) < 1e-7
+            conv = (better & ((c0 - c1) <= 1e-9 * np.maximum(c0, 1e-30))) | tiny | (lam[act] > 1e8)
+            converged[act[conv]] = True
+    return p, converged
+
+
+def _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, kb0, sqrt_w, to_theta):
+    """Residual function for :func:`_batched_lm`: free points -> weighted relative residuals."""
+
+    def resid(pts, rows):
+        tc_m, cor_m = _simulate(to_theta(pts, rows), vin, mass, kb0[rows])
+        r = np.concatenate([(tc_m - tc) / tc / sigma_tc, (cor_m - cor) / cor / sigma_cor], axis=-1)
+        return np.where(np.isfinite(r), r, 1.0e3) * sqrt_w[rows]
+
+    return resid
+
+
+def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, theta, jac, confidence, n_grid=25):
+    """Profile-likelihood intervals of log AK, a and log AC (Bates & Watts 1988, ch. 6).
+
+    For each parameter psi on a grid about its estimate, the other two are refitted;
+    the interval is where (S(psi) - S_min) / s^2 stays below the F(1, N - P) quantile,
+    s^2 = S_min / (N - P) (N residuals, P = 3 parameters). Follows the curved AK-a
+    ridge instead of assuming an ellipse.
+    """
+    lo_b, hi_b = _theta_bounds()
+    r_opt = _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, np.array([kb0]), np.ones((1, 2 * vin.size)),
+                            lambda pts, rows: pts)(theta[None, None], np.array([0]))[0, 0]
+    n_res, n_par = r_opt.size, 3
+    s_min = float(np.sum(r_opt**2))
+    s2 = max(s_min / max(n_res - n_par, 1), 1e-12)
+    f_crit = stats.f.ppf(confidence, 1, max(n_res - n_par, 1))
+    # Wald standard errors in the profiled coordinates (log AK, a, log AC) set the grid.
+    log_xr = np.log(REFERENCE_DISPLACEMENT_M)
+    phi_hat = np.array([theta[0] - theta[1] * log_xr, theta[1], theta[2]])
+    dtheta_dphi = np.array([[1.0, log_xr, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    j_phi = jac @ dtheta_dphi
+    try:
+        cov = s2 * np.linalg.inv(j_phi.T @ j_phi)
+        se = np.sqrt(np.clip(np.diag(cov), 1e-12, None))
+    except np.linalg.LinAlgError:
+        se = np.array([1.0, 0.3, 0.2])
+    offsets = np.concatenate([-np.geomspace(12, 0.25, n_grid // 2), [0.0], np.geomspace(0.25, 12, n_grid // 2)])
+    g = offsets.size
+    # All three profiles in one batch: row r profiles parameter r // g at grid point r % g.
+    prof_of = np.repeat(np.arange(3), g)
+    psi = (phi_hat[:, None] + offsets[None, :] * se[:, None]).ravel()
+    free_idx = np.array([[i for i in range(3) if i != j] for j in range(3)])[prof_of]  # (3g, 2)
+
+    def to_theta(pts, rows):
+        phi = np.empty(pts.shape[:-1] + (3,))
+        idx = np.broadcast_to(free_idx[rows], pts.shape)
+        np.put_along_axis(phi, idx, pts, axis=-1)
+        fixed = np.broadcast_to(prof_of[rows][:, None], pts.shape[:-1] + (1,))
+        np.put_along_axis(phi, fixed, np.broadcast_to(psi[rows][:, None], pts.shape[:-1] + (1,)), axis=-1)
+        return np.stack([phi[..., 0] + phi[..., 1] * log_xr, phi[..., 1], phi[..., 2]], axis=-1)
+
+    resid = _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, np.full(3 * g, kb0),
+                            np.ones((3 * g, 2 * vin.size)), to_theta)
+    lo_phi = np.array([-np.inf, lo_b[1], lo_b[2]])
+    hi_phi = np.array([np.inf, hi_b[1], hi_b[2]])
+    p0 = phi_hat[free_idx]
+    pts, _ = _batched_lm(resid, p0, lo_phi[free_idx], hi_phi[free_idx], max_iter=12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        r = resid(pts[None], np.arange(3 * g))[0]
+    dev_all = ((np.sum(r**2, axis=-1) - s_min) / s2).reshape(3, g)
+    psi = psi.reshape(3, g)
+    centre = int(np.flatnonzero(offsets == 0)[0])
+    intervals = []
+    for j in range(3):
+        dev = dev_all[j]
+        dev[centre] = 0.0
+        ends = []
+        for step in (-1, 1):
+            prev, end, closed = centre, psi[j, 0 if step < 0 else g - 1], False
+            for i in range(centre + step, -1 if step < 0 else g, step):
+                if dev[i] > f_crit:
+                    w = (f_crit - dev[prev]) / (dev[i] - dev[prev])
+                    end, closed = psi[j, prev] + w * (psi[j, i] - psi[j, prev]), True
+                    break
+                prev = i
+            ends.append((end, closed))
+        intervals.append((ends[0][0], ends[1][0], ends[0][1] and ends[1][1]))
+    return intervals
 
 
 def fit_ball_model(
@@ -481,9 +556,10 @@ def fit_ball_model(
     stage one :func:`fit_contact_time`; stage two :func:`fit_restitution`; then
     a joint least-squares refinement of AK, a, AC on the relative TC and COR
     residuals, each kind weighted by its own RMS from the stages (so neither
-    dominates by its scale). Intervals: percentile bootstrap over impacts
-    (``n_bootstrap`` resamples refitted from the joint optimum; kB(0)
-    re-extrapolated in each when extrapolated). The model is Eqs. (4)-(16) of
+    dominates by its scale). Intervals: BCa bootstrap over impacts
+    (``n_bootstrap`` resamples refitted from the joint optimum, jackknife for
+    the acceleration; kB(0) re-extrapolated in each when extrapolated), widened
+    by sqrt(n / (n - p)) for the small-sample shrinkage of case resampling. The model is Eqs. (4)-(16) of
     Goodwill & Haake 2004.
 
     Parameters
@@ -554,9 +630,17 @@ def fit_ball_model(
     lo_hi = {k: (nan, nan) for k in ("kb0", "ak", "a", "ac")}
     if kb0_fit is not None:
         lo_hi["kb0"] = (kb0_fit.kb0_lo, kb0_fit.kb0_hi)
+    # 95 % intervals of AK, a, AC: profile likelihood (kB(0) held at its value).
+    prof = _profile_intervals(vin, tc, e, mass, kb0, sigma_tc, sigma_cor, theta, res.jac, confidence)
+    for key, (lo, hi, closed) in zip(("ak", "a", "ac"), prof):
+        lo_hi[key] = (float(np.exp(lo)), float(np.exp(hi))) if key != "a" else (float(lo), float(hi))
+        if not closed:
+            messages.append(f"the {key} interval reaches the end of the profile grid: the data barely constrain it")
+    method = "profile likelihood (F test)"
+
+    # Bootstrap over impacts: AK-a correlation, model-curve bands, and kB(0) propagation.
     corr = nan
     boot = np.empty((0, 4))
-    method = "none"
     if n_bootstrap > 0:
         rng = np.random.default_rng(seed)
         idx = rng.integers(0, n, size=(n_bootstrap, n))
@@ -569,40 +653,31 @@ def fit_ball_model(
                     kb0_b[i] = reg.intercept if reg.intercept > 0 else np.nan
                 else:
                     kb0_b[i] = np.nan
-        ok_kb0 = np.isfinite(kb0_b)
-        th_b, conv = _batched_gauss_newton(
-            vin, tc, e, mass, kb0_b[ok_kb0], weights[ok_kb0], theta, sigma_tc, sigma_cor
-        )
+        ok = np.isfinite(kb0_b)
+        kb0_b, weights = kb0_b[ok], weights[ok]
+        lo_b, hi_b = _theta_bounds()
+        resid = _weighted_resid(vin, tc, e, mass, sigma_tc, sigma_cor, kb0_b, np.sqrt(np.hstack([weights, weights])),
+                                lambda pts, rows: pts)
+        th_b, conv = _batched_lm(resid, np.repeat(theta[None], kb0_b.size, axis=0), lo_b, hi_b)
         ak_b, a_b, ac_b = _from_theta(th_b)
-        boot = np.column_stack([kb0_b[ok_kb0], ak_b, a_b, ac_b])[conv]
+        boot = np.column_stack([kb0_b, ak_b, a_b, ac_b])[conv]
         if boot.shape[0] < max(20, 0.8 * n_bootstrap):
             messages.append(
-                f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; intervals unreliable"
+                f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable"
             )
         if boot.shape[0] >= 10:
-            q = 100 * np.array([0.5 - confidence / 2, 0.5 + confidence / 2])
-            # Case resampling underestimates the spread with few impacts: its variance
-            # is low by about (n - p) / n for p fitted parameters. Widen the percentile
-            # interval about the estimate by sqrt(n / (n - p)) (p = 3; p = 2 for the
-            # kB(0) line), in the log scale for the positive AK, AC and kB(0).
-            widen3 = np.sqrt(n / max(n - 3, 1))
-            widen2 = np.sqrt(n / max(n - 2, 1))
-            for j, key in enumerate(("kb0", "ak", "a", "ac")):
-                if key == "kb0" and kb0_fit is None:
-                    continue
-                est = {"kb0": kb0, "ak": ak, "a": a, "ac": ac}[key]
-                w = widen2 if key == "kb0" else widen3
-                if key == "a":
-                    lo, hi = est + w * (np.percentile(boot[:, j], q) - est)
-                else:
-                    lg = np.log(est) + w * (np.log(np.percentile(boot[:, j], q)) - np.log(est))
-                    lo, hi = np.exp(lg)
-                lo_hi[key] = (float(min(lo, est)), float(max(hi, est)))
             corr = float(np.corrcoef(boot[:, 1], boot[:, 2])[0, 1])
-            method = (
-                f"percentile bootstrap over impacts ({boot.shape[0]} resamples), "
-                f"widened by sqrt(n/(n-p)) = {widen3:.2f} for n = {n} impacts"
-            )
+            method += f"; correlation and bands from {boot.shape[0]} bootstrap resamples over impacts"
+            if kb0_fit is not None:
+                # kB(0) was extrapolated: widen the intervals by the spread it adds, read off
+                # the bootstrap (in which kB(0) is re-extrapolated every time).
+                for j, key in ((1, "ak"), (2, "a"), (3, "ac")):
+                    f = np.log if key != "a" else (lambda x: x)
+                    q = np.percentile(f(boot[:, j]), 100 * np.array([0.5 - confidence / 2, 0.5 + confidence / 2]))
+                    lo, hi = (f(v) for v in lo_hi[key])
+                    lo, hi = min(lo, q[0]), max(hi, q[1])
+                    lo_hi[key] = (float(np.exp(lo)), float(np.exp(hi))) if key != "a" else (float(lo), float(hi))
+                method += " (union with bootstrap percentiles, kB(0) re-extrapolated in each)"
 
     return BallFit(
         mass_kg=float(np.mean(mass)),

@@ -103,7 +103,8 @@ def speed_uncertainty(speed_m_s, spacing_m, resolution_s):
 
     Each of the two beam-break times is rounded (or truncated) to the timer
     resolution r, an error uniform over one step (standard deviation
-    r / sqrt(12)); the two errors are independent, so the interval has standard
+    r / sqrt(12)); taken as independent (the interval falls at a random
+    position relative to the timer ticks), the interval has standard
     deviation r / sqrt(6). With v = s / dt, u(v) = v**2 / s * u(dt) =
     v**2 * r / (s * sqrt(6)). The worst case (both errors at their extremes) is
     v**2 * r / s, sqrt(6) = 2.45 times larger.

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import importlib.util
 import json
 import logging
 import math
@@ -23,6 +22,7 @@ __all__ = [
     "atomic_path",
     "atomic_dir",
     "snapshot_session",
+    "chunk_impact_ids",
     "process_chunk",
     "collect_impacts",
     "fit_ball",
@@ -41,7 +41,7 @@ FIGURE_STEMS = (
     "fig2b_kelvin_voigt",
     "kcal",
 )
-QC_DIR_NAME = "qc"  # sub-folder of the figures folder with one QC page per impact
+QC_DIR_NAME = "qc"  # sub-folder of the figures folder with one QC page per excluded impact
 
 SNAPSHOT_FORMAT_VERSION = 1  # version of the work/session.json layout
 CSV_FLOAT_FORMAT = "%.12g"  # numbers in impacts.csv / parameters.csv: 12 significant digits
@@ -170,6 +170,24 @@ def _umask() -> int:
     return mask
 
 
+def _usual_mode(*paths) -> None:
+    """Give files the permissions of a normally created file (0666 minus the umask).
+
+    The library writers create their temporary files with tempfile.mkstemp (mode 0600),
+    and os.replace keeps that mode: results would be unreadable for colleagues.
+    TODO(lead): better done in ballimpact.archive/figures/report themselves.
+    """
+    mode = 0o666 & ~_umask()
+    for path in paths:
+        path = Path(path)
+        if path.is_dir():
+            for child in path.rglob("*"):
+                if child.is_file():
+                    child.chmod(mode)
+        elif path.is_file():
+            path.chmod(mode)
+
+
 def _write_text_atomic(path, text: str) -> None:
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
@@ -269,12 +287,6 @@ def chunk_impact_ids(impact_ids, chunk: int, n_chunks: int) -> list:
     return list(impact_ids)[chunk::n_chunks]
 
 
-def _requires(module: str) -> None:
-    """NotImplementedError while the library module ``ballimpact.<module>`` is not written yet."""
-    if importlib.util.find_spec(f"ballimpact.{module}") is None:
-        raise NotImplementedError(f"this step waits for the library module ballimpact.{module}")
-
-
 def _trace_info(session, row) -> tuple[str, str]:
     """(trace path relative to the session folder, sha256) of a row; sha256 empty when unreadable."""
     if any(p.startswith(("missing trace path", "trace ")) for p in row.problems):
@@ -286,6 +298,25 @@ def _trace_info(session, row) -> tuple[str, str]:
         return path.resolve().relative_to(session.path.resolve()).as_posix(), file_sha256(path)
     except (OSError, ValueError):
         return row.trace, ""
+
+
+_CONTACT_SERIES = ("voltage_V", "force_N", "velocity_m_s", "displacement_m")
+
+
+def _fill_missing_series(result) -> None:
+    """NaN series where processing found the contact but could not compute a series.
+
+    E.g. a missing gate time: the contact (``time_s``) is known, the force is not (no
+    kCAL). The archive wants every contact series as long as ``time_s``.
+    TODO(lead): this belongs in ballimpact.archive.impacts_dataset (pad short series).
+    """
+    import numpy as np
+
+    n = np.asarray(getattr(result, "time_s", ())).size
+    for name in _CONTACT_SERIES:
+        values = np.asarray(getattr(result, name, ()), dtype=float)
+        if n and values.size == 0:
+            setattr(result, name, np.full(n, np.nan))
 
 
 def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: float | None = None) -> None:
@@ -312,7 +343,6 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
         raise ValueError(f"mains_hz must be a positive number of Hz or None, got {mains_hz!r}")
     _check_int("n_chunks", n_chunks, 1)
     _check_int("chunk", chunk, 0)
-    _requires("processing")
     from . import archive, processing
     from .session import read_session
 
@@ -325,6 +355,7 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
 
     def logged(results):
         for result in results:
+            _fill_missing_series(result)
             if result.status == "ok":
                 logger.info("%s (%s): ok", result.impact_id, result.ball)
             else:
@@ -341,6 +372,7 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
         )
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
+    _usual_mode(out_nc)
     logger.info("chunk %d of %d: %d impacts written to %s", chunk, n_chunks, len(ids), out_nc)
 
 
@@ -349,7 +381,10 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     Join the chunk files into all impacts in raw order: ``impacts.csv`` and ``work/impacts.nc``.
 
     Rule ``collect_impacts``. Every impact of the raw impacts.csv must be in exactly
-    one chunk (none dropped, none twice).
+    one chunk (none dropped, none twice). The session kCAL check
+    (:func:`ballimpact.processing.flag_calibration_outliers`) excludes impacts whose
+    calibration factor is far from the session's typical value; the session median
+    and robust standard deviation of kCAL [N/V] go into the file's attributes.
 
     Parameters
     ----------
@@ -367,9 +402,10 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ValueError
         An impact missing from the chunks, given twice, or not in the raw impacts.csv.
     """
+    import numpy as np
     import xarray as xr
 
-    from . import archive
+    from . import archive, processing
     from .session import read_session
 
     chunk_ncs = [Path(p) for p in chunk_ncs]
@@ -396,10 +432,23 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
             f"chunk files do not match {Path(session_dir) / 'impacts.csv'}: "
             f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
         )
-    ds = archive.set_variable_attrs(ds.isel(impact=[position[i] for i in order]))
-    # TODO(lead): session-level kCAL QC (compare each impact's kCAL with the session's
-    # robust spread, e.g. figures.kcal_band) once processing defines how it excludes.
+    ds = ds.isel(impact=[position[i] for i in order])
+    # session kCAL QC: a kCAL far from the session's typical value excludes the impact
+    status = np.array([str(v) for v in ds["status"].values], dtype=object)
+    reason = np.array([str(v) for v in ds["reason"].values], dtype=object)
+    flags, median, spread = processing.flag_calibration_outliers(ds["kcal_N_per_V"].values, status == "ok")
+    for k, flag in enumerate(flags):
+        if flag:
+            status[k] = "excluded"
+            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
+            logger.info("%s: excluded by the session kCAL check: %s", order[k], flag)
+    ds["status"] = ("impact", status, ds["status"].attrs)
+    ds["reason"] = ("impact", reason, ds["reason"].attrs)
+    ds.attrs["kcal_median_N_per_V"] = median
+    ds.attrs["kcal_robust_sd_N_per_V"] = spread
+    ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)
+    _usual_mode(out_nc)
     table = archive.impacts_table(ds)
     with atomic_path(out_csv) as tmp:
         table.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
@@ -412,7 +461,10 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     """
     Fit the ball model (kB(0), AK, a, AC) to the ok impacts of one ball type.
 
-    Rule ``fit_ball``.
+    Rule ``fit_ball``: :func:`ballimpact.fitting.fit_ball_model` on the impacts with
+    status ok, kB(0) fixed when session.yaml gives ``kb0_kN_m``, else extrapolated.
+    A ball whose fit fails (e.g. fewer than 3 ok impacts) still gets a file, with NaN
+    parameters and the reason in ``fit_message``, so the rest of the session goes on.
 
     Parameters
     ----------
@@ -421,26 +473,63 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     ball : str
         Ball type key (session.yaml ``balls``).
     session_dir : str or Path
-        The raw session folder (mass and an optional fixed kB(0) of the ball type).
+        The raw session folder (label, mass and an optional fixed kB(0) of the ball type).
     out_nc : str or Path
         ``work/fit_{ball}.nc`` to write (atomically).
     n_bootstrap : int
-        Bootstrap resamples for the 95 % intervals, >= 0.
+        Bootstrap resamples for the 95 % intervals, >= 0 (0: no intervals).
     seed : int
         Seed of the bootstrap random number generator, >= 0.
     """
     _check_int("n_bootstrap", n_bootstrap, 0)
     _check_int("seed", seed, 0)
-    if not ball:
-        raise ValueError("ball must be a ball type key, got an empty string")
-    # TODO(lead): ballimpact.fitting.fit_ball_model and model_curves exist; missing is the
-    # BallFit -> per-ball xarray.Dataset builder (ball dim of length 1: parameters in Table 2
-    # units with intervals, ball_label, fit_message, n_impacts, model curves on speed_m_s
-    # 10..32 m/s, components at 20 m/s on model_time_s, model_stiffness_kN_m on
-    # stiffness_x_m; layout as tests/archive_fixture.py _ball_fit), ideally in
-    # ballimpact.archive. A ball with fewer than 3 ok impacts (FitError) must still give a
-    # dataset with NaN parameters and the reason in fit_message, so the session goes on.
-    raise NotImplementedError("fit_ball waits for a fit-dataset builder in ballimpact.archive (or fitting)")
+    import numpy as np
+
+    from . import archive, fitting
+    from .session import read_session
+
+    session = read_session(session_dir)
+    if ball not in session.meta.balls:
+        raise ValueError(
+            f"ball {ball!r} is not defined in {session.path / 'session.yaml'} balls "
+            f"(defined: {', '.join(session.meta.balls)})"
+        )
+    ball_type = session.meta.balls[ball]
+    ds = archive.open_dataset(impacts_nc)
+    mass = np.asarray(ds["impact_mass_kg"].values, dtype=float)
+    mass = np.where(np.isfinite(mass) & (mass > 0), mass, ball_type.mass_kg)
+    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
+    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float) * 1e-3
+    cor = np.asarray(ds["cor"].values, dtype=float)
+    with np.errstate(invalid="ignore"):
+        use = (
+            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
+            & (np.array([str(v) for v in ds["status"].values]) == "ok")
+            & (vin > 0) & (tc_s > 0) & (cor > 0)
+        )
+    n_used = int(use.sum())
+    kb0_source = "config" if ball_type.kb0_N_m is not None else "extrapolated"
+    try:
+        fit = fitting.fit_ball_model(
+            vin[use], tc_s[use], cor[use], mass[use],
+            kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed,
+        )
+    except fitting.FitError as exc:
+        logger.warning("ball %s: fit failed with %d ok impacts: %s", ball, n_used, exc)
+        fit_ds = archive.fit_dataset(
+            ball, None, label=ball_type.label, mass_kg=ball_type.mass_kg, n_impacts=n_used,
+            kb0_source=kb0_source, message=f"fit failed: {exc}",
+        )
+    else:
+        logger.info(
+            "ball %s: %d impacts, kB(0) %.4g kN/m (%s), AK %.4g, a %.4g, AC %.4g kN s/m3; %s",
+            ball, fit.n_impacts, fit.kb0_N_m / 1e3, fit.kb0_source, fit.ak / 1e3, fit.a, fit.ac / 1e3,
+            "; ".join(fit.messages) or "no warnings",
+        )
+        fit_ds = archive.fit_dataset(ball, fit, label=ball_type.label)
+    Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
+    archive.write_dataset(fit_ds, out_nc)
+    _usual_mode(out_nc)
 
 
 def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) -> None:
@@ -485,6 +574,7 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
     )
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
+    _usual_mode(out_nc)
     with atomic_path(out_parameters_csv) as tmp:
         archive.parameters_table(ds).to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
     logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
@@ -520,6 +610,7 @@ def make_figures(archive_nc, out_dir) -> None:
     staging = Path(tempfile.mkdtemp(prefix=".figures.", suffix=".tmp", dir=out_dir))
     try:
         figures.save_all(ds, staging)
+        _usual_mode(staging)
         for stem in FIGURE_STEMS:
             os.replace(staging / f"{stem}.png", out_dir / f"{stem}.png")
         qc = out_dir / QC_DIR_NAME
@@ -553,4 +644,5 @@ def make_report(archive_nc, figures_dir, out_pdf) -> None:
     ds = archive.open_dataset(archive_nc)
     Path(out_pdf).parent.mkdir(parents=True, exist_ok=True)
     report.write_report(ds, out_pdf, figures_dir=figures_dir)
+    _usual_mode(out_pdf)
     logger.info("report %s: %d pages", out_pdf, report.report_page_count(ds))

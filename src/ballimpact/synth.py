@@ -139,6 +139,11 @@ class SynthConfig:
     total_impacts : int, optional
         When given, the number of good impacts is chosen so that the session holds
         exactly this many impacts (faults included), spread evenly over the balls.
+    ball_variability : float
+        Relative standard deviation of AK and AC between individual balls of one
+        type [-]: real balls of one type differ a little (felt, rubber, pressure),
+        which gives the scatter of measured TC and COR about the type's curve.
+        The type's parameters (truth) are the medians.
     kb0_in_config : bool
         Write each ball's kB(0) into session.yaml (kb0_source = config).
     chain : SensorChain
@@ -159,6 +164,7 @@ class SynthConfig:
     polarity: int = 1
     trace_format: str = "csv"
     total_impacts: int | None = None
+    ball_variability: float = 0.03
     kb0_in_config: bool = True
     chain: SensorChain = field(default_factory=SensorChain)
     date: str = "2026-11-21"
@@ -170,6 +176,8 @@ class SynthConfig:
             raise ValueError(f"trace_format must be 'csv', 'tdms' or 'mixed', got {self.trace_format!r}")
         if self.impacts_per_ball < 1:
             raise ValueError(f"impacts_per_ball must be at least 1, got {self.impacts_per_ball}")
+        if not 0 <= self.ball_variability < 0.5:
+            raise ValueError(f"ball_variability must be in [0, 0.5), got {self.ball_variability}")
         if self.faults_per_kind < 0:
             raise ValueError(f"faults_per_kind must be non-negative, got {self.faults_per_kind}")
         lo, hi = self.vin_range_m_s
@@ -331,7 +339,10 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
     n_time = int(round(chain.trace_duration_s * rate))
     for i, (key, vin, fault) in enumerate(plan):
         params = config.balls[key]
-        impact_id = f"{key[:4]}-{i + 1:03d}"
+        if config.ball_variability > 0:
+            jitter = np.exp(config.ball_variability * rng.standard_normal(2))
+            params = params.with_(ak=params.ak * jitter[0], ac=params.ac * jitter[1])
+        impact_id = f"{key}-{i + 1:03d}"
         sim, ft, ff = _impact_force(vin, params, chain)
         tc = float(sim.contact_time_s)
         vout = float(sim.rebound_speed_m_s)

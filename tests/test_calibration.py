@@ -1,0 +1,147 @@
+"""Tests for ballimpact.calibration: kCAL from the impulse, force, velocity and displacement."""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from tracekit import DIRTY, make_trace
+
+from ballimpact.calibration import (
+    calibration_factor,
+    contact_summary,
+    force_from_voltage,
+    integrate_motion,
+    voltage_impulse,
+)
+from ballimpact.conditioning import condition_voltage
+from ballimpact.contact import contact_samples
+
+MASS_KG = 0.0577
+
+
+def test_integrate_motion_constant_force():
+    """Analytic: v = vin - F t / m, x = vin t - F t^2 / (2 m)."""
+    t = np.linspace(0.0, 4e-3, 401)
+    force = np.full_like(t, 500.0)
+    v, x = integrate_motion(t, force, MASS_KG, 20.0)
+    assert_allclose(v, 20.0 - 500.0 * t / MASS_KG, rtol=1e-12, atol=1e-12)
+    assert_allclose(x, 20.0 * t - 500.0 * t**2 / (2 * MASS_KG), rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("k_N_m", [1.0e4, 5.0e4])
+def test_linear_spring_half_period(k_N_m):
+    """Ball on a linear spring: F = k x for half a period pi sqrt(m/k); x_max = vin sqrt(m/k)."""
+    vin = 20.0
+    w = math.sqrt(k_N_m / MASS_KG)
+    period = math.pi / w
+    t = np.linspace(0.0, period, 20001)
+    force = k_N_m * vin / w * np.sin(w * t)
+    v, x = integrate_motion(t, force, MASS_KG, vin)
+    assert_allclose(x.max(), vin / w, rtol=1e-6)
+    assert_allclose(x, vin / w * np.sin(w * t), atol=1e-6 * vin / w)
+    assert_allclose(v[-1], -vin, rtol=1e-6)
+    s = contact_summary(t, force, MASS_KG, vin)
+    assert_allclose(s.max_displacement_m, vin / w, rtol=1e-6)
+    assert_allclose(s.peak_force_N, vin * math.sqrt(MASS_KG * k_N_m), rtol=1e-6)
+    assert_allclose(s.time_to_peak_s, period / 2, rtol=1e-6)
+    assert_allclose(s.impulse_N_s, 2 * MASS_KG * vin, rtol=1e-6)
+    assert_allclose(s.final_velocity_m_s, -vin, rtol=1e-6)
+
+
+def test_voltage_impulse_exact_for_linear_voltage():
+    """The trapezium rule with interpolated end pieces is exact for a straight line."""
+    t = np.arange(200) / 50000.0
+    v = 0.3 + 120.0 * t
+    a, b = t[17] + 0.37 / 50000.0, t[150] + 0.81 / 50000.0
+    exact = 0.3 * (b - a) + 60.0 * (b**2 - a**2)
+    assert_allclose(voltage_impulse(t, v, a, b), exact, rtol=1e-12)
+
+
+@pytest.mark.parametrize("fs", [66964.3, 50000.0])
+@pytest.mark.parametrize("phase", [0.2, 0.7])
+def test_calibration_factor_half_sine(fs, phase):
+    """kCAL = m (vin + vout) / (2 A T / pi) for V = A sin(pi t / T), sub-sample start and end."""
+    amp, duration = 4.0, 4e-3
+    t = np.arange(int(0.02 * fs)) / fs
+    start = (200 + phase) / fs
+    v = np.where((t > start) & (t < start + duration), amp * np.sin(np.pi * (t - start) / duration), 0.0)
+    k = calibration_factor(t, v, start, start + duration, MASS_KG, 20.0, 12.0)
+    assert_allclose(k, MASS_KG * 32.0 / (2 * amp * duration / math.pi), rtol=1e-4)
+
+
+DIRTY_CASES = [
+    # (sample rate, polarity, peak [V], noise [V], half-sine [s], tau [s])
+    (66964.3, 1, 5.0, 0.002, 4e-3, 0.5),
+    (66964.3, -1, 5.0, 0.002, 4e-3, 0.3),
+    (50000.0, 1, 3.0, 0.003, 3e-3, 3.0),
+    (50000.0, -1, 8.0, 0.001, 5.5e-3, 1.0),
+    (66964.3, -1, 2.0, 0.002, 6e-3, 0.5),
+]
+
+
+@pytest.mark.parametrize("fs, polarity, peak, noise, half_sine, tau", DIRTY_CASES)
+@pytest.mark.parametrize("seed", range(4))
+def test_kcal_within_one_percent_on_dirty_traces(fs, polarity, peak, noise, half_sine, tau, seed):
+    kw = dict(DIRTY, noise_V=noise, tau_s=tau)
+    v, fs, truth = make_trace(sample_rate_hz=fs, polarity=polarity, peak_V=peak, half_sine_s=half_sine,
+                              seed=seed, **kw)
+    c = condition_voltage(v, fs, polarity=polarity)
+    ct = c.contact
+    k = calibration_factor(truth.time_s, c.voltage_V, ct.start_s, ct.end_s, truth.mass_kg, truth.vin_m_s,
+                           truth.vout_m_s)
+    assert_allclose(k, truth.kcal_N_per_V, rtol=0.01)
+
+
+def test_motion_from_a_dirty_trace():
+    """Whole chain on a half-sine (a linear spring): the displacement and peak force match the spring."""
+    vin, cor, half_sine = 20.0, 0.6, 4e-3
+    v, fs, truth = make_trace(half_sine_s=half_sine, vin_m_s=vin, cor=cor, seed=3,
+                              **dict(DIRTY, cloth_s=0.0))
+    c = condition_voltage(v, fs)
+    ct = c.contact
+    k = calibration_factor(truth.time_s, c.voltage_V, ct.start_s, ct.end_s, MASS_KG, vin, cor * vin)
+    t_rel, volts = contact_samples(truth.time_s, c.voltage_V, ct.start_s, ct.end_s)
+    force = force_from_voltage(volts, k)
+    s = contact_summary(t_rel, force, MASS_KG, vin)
+    # truth: F = Fp sin(pi t / T) with Fp T 2/pi = m vin (1 + cor)
+    fp = MASS_KG * vin * (1 + cor) * math.pi / (2 * half_sine)
+    tt = np.linspace(0, half_sine, 100001)
+    x_true = vin * tt - fp * half_sine / (math.pi * MASS_KG) * (tt - half_sine / math.pi * np.sin(math.pi * tt / half_sine))
+    assert_allclose(s.final_velocity_m_s, -cor * vin, rtol=1e-9)  # kCAL came from the same impulse
+    assert_allclose(s.impulse_N_s, MASS_KG * vin * (1 + cor), rtol=1e-9)
+    assert_allclose(s.max_displacement_m, x_true.max(), rtol=0.01)
+    # the plate ringing (3 % of the peak) is in the measured force
+    assert_allclose(s.peak_force_N, fp, rtol=0.04)
+    assert_allclose(s.time_to_peak_s, half_sine / 2, rtol=0.05)
+
+
+def test_force_from_voltage():
+    assert force_from_voltage(2.0, 150.0) == 300.0
+    assert_allclose(force_from_voltage(np.array([0.0, 1.0, -0.5]), 150.0), [0.0, 150.0, -75.0])
+    with pytest.raises(ValueError, match="kcal_N_per_V must be positive"):
+        force_from_voltage(1.0, 0.0)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(mass_kg=-0.05), "mass_kg must be positive"),
+    (dict(vin_m_s=0.0), "vin_m_s must be positive"),
+    (dict(vout_m_s=-1.0), "vout_m_s must be non-negative"),
+    (dict(vout_m_s=math.nan), "vout_m_s must be non-negative"),
+    (dict(voltage_V=np.zeros(100)), "voltage integral over the contact is not positive"),
+    (dict(end_s=1.0), "outside the trace"),
+])
+def test_calibration_factor_bad_input(kwargs, match):
+    t = np.arange(100) / 1000.0
+    args = dict(time_s=t, voltage_V=np.sin(np.pi * t / t[-1]), start_s=0.0, end_s=t[-1], mass_kg=MASS_KG,
+                vin_m_s=20.0, vout_m_s=12.0)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        calibration_factor(**args)
+
+
+def test_integrate_motion_bad_input():
+    with pytest.raises(ValueError, match="strictly increasing"):
+        integrate_motion(np.array([0.0, 0.0, 1.0]), np.ones(3), MASS_KG, 20.0)
+    with pytest.raises(ValueError, match="same length"):
+        integrate_motion(np.arange(3.0), np.ones(4), MASS_KG, 20.0)

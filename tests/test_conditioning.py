@@ -1,0 +1,172 @@
+"""Tests for ballimpact.conditioning: offset, hum and charge-amplifier decay removal."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from numpy.testing import assert_allclose
+from tracekit import HUM_HARMONICS, make_trace
+
+from ballimpact.calibration import voltage_impulse
+from ballimpact.conditioning import ConditioningWarning, condition_voltage
+
+CHAIN = dict(cloth_s=0.1e-3, cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
+
+
+def _quiet(**kw):
+    """Run condition_voltage turning any ConditioningWarning into an error."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConditioningWarning)
+        return condition_voltage(**kw)
+
+
+@pytest.mark.parametrize("polarity", [1, -1])
+@pytest.mark.parametrize("fs", [66964.3, 50000.0])
+def test_offset_and_hum_recovered(polarity, fs):
+    v, fs, _ = make_trace(sample_rate_hz=fs, polarity=polarity, tau_s=0.5, seed=4, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs, polarity=polarity)
+    # the baseline model is in the polarity-applied frame
+    assert_allclose(c.offset_V, polarity * 0.08, atol=3e-4)
+    expected = [rel * 0.02 for _, rel in HUM_HARMONICS]
+    assert_allclose(c.hum_harmonic_amplitudes_V, expected, atol=5e-4)
+    assert_allclose(c.hum_amplitude_V, 0.02, atol=5e-4)
+    assert_allclose(c.noise_rms_V, 0.002, rtol=0.1)
+    assert c.baseline_coefficients["hum_frequencies_hz"] == (50.0, 100.0, 150.0)
+
+
+def test_corrected_voltage_matches_clean_voltage():
+    v, fs, truth = make_trace(tau_s=0.3, seed=2, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs)
+    err = c.voltage_V - truth.clean_V
+    inside = (truth.time_s > truth.start_s) & (truth.time_s < truth.end_s)
+    after = truth.time_s > truth.end_s + 1e-3
+    # over the contact and after it, only the white noise is left (no offset, hum or undershoot)
+    assert np.sqrt(np.mean(err[inside] ** 2)) < 1.5 * 0.002
+    assert abs(np.mean(err[inside])) < 0.5e-3
+    assert abs(np.mean(c.voltage_V[after])) < 0.3e-3
+
+
+@pytest.mark.parametrize("tau", [0.3, 1.0, 3.0])
+def test_time_constant_estimated(tau):
+    v, fs, _ = make_trace(tau_s=tau, seed=1, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs)
+    assert c.tau_source == "estimated"
+    assert_allclose(c.tau_s, tau, rtol=0.1)
+    # undershoot = impulse / tau (the amplifier's charge balance)
+    assert c.undershoot_V > 5 * c.undershoot_se_V
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_impulse_not_biased_by_the_undershoot(seed):
+    """Same force and noise, with and without the amplifier decay: the same impulse."""
+    results = {}
+    for tau in (None, 0.3):
+        v, fs, truth = make_trace(tau_s=tau, seed=seed, **CHAIN)
+        c = _quiet(voltage_V=v, sample_rate_hz=fs)
+        results[tau] = voltage_impulse(truth.time_s, c.voltage_V, c.contact.start_s, c.contact.end_s)
+    assert_allclose(results[0.3], results[None], rtol=5e-4)
+    assert_allclose(results[0.3], truth.impulse_V_s, rtol=2e-3)
+    # without the decay correction the impulse would be low by about TC / (2 tau) = 0.7 %
+    v, fs, truth = make_trace(tau_s=0.3, seed=seed, **CHAIN)
+    raw = condition_voltage(v, fs, tau_s=math.inf)
+    assert raw.tau_source == "given"
+    naive = voltage_impulse(truth.time_s, raw.voltage_V, raw.contact.start_s, raw.contact.end_s)
+    assert naive < truth.impulse_V_s * (1 - 0.004)
+
+
+def test_given_time_constant_used():
+    v, fs, _ = make_trace(tau_s=0.5, seed=0, **CHAIN)
+    c = condition_voltage(v, fs, tau_s=0.5)
+    assert c.tau_source == "given" and c.tau_s == 0.5
+    assert c.undershoot_V > 0
+
+
+def test_no_hum_fitted_without_mains():
+    v, fs, _ = make_trace(seed=0, cloth_s=0.1e-3, noise_V=0.002, offset_V=0.05)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs, mains_hz=None)
+    assert c.hum_amplitude_V == 0.0 and c.hum_harmonic_amplitudes_V == ()
+    assert_allclose(c.offset_V, 0.05, atol=3e-4)
+
+
+def test_sixty_hertz_mains():
+    v, fs, _ = make_trace(seed=0, mains_hz=60.0, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs, mains_hz=60.0)
+    assert_allclose(c.hum_amplitude_V, 0.02, atol=5e-4)
+
+
+def test_warns_when_post_contact_stretch_too_short():
+    v, fs, _ = make_trace(tau_s=0.5, post_s=0.003, seed=0, **CHAIN)
+    with pytest.warns(ConditioningWarning, match="decay not corrected"):
+        c = condition_voltage(v, fs)
+    assert c.tau_source == "none" and math.isinf(c.tau_s)
+    assert c.contact.found and c.warnings
+
+
+def test_warns_when_undershoot_not_measurable():
+    # small impulse, large noise, DC-coupled: an undetected decay could matter
+    v, fs, _ = make_trace(peak_V=1.0, noise_V=0.02, seed=0)
+    with pytest.warns(ConditioningWarning, match="undershoot not measurable"):
+        c = condition_voltage(v, fs)
+    assert c.contact.found
+
+
+def test_warns_when_baseline_rises_after_contact():
+    v, fs, truth = make_trace(noise_V=0.002, seed=0)
+    v = v + 0.005 * (truth.time_s > truth.end_s)  # a shift up, not an undershoot
+    with pytest.warns(ConditioningWarning, match="above the one before it"):
+        c = condition_voltage(v, fs)
+    assert math.isinf(c.tau_s)
+
+
+def test_quiet_dc_coupled_trace_gives_no_warning():
+    v, fs, _ = make_trace(seed=0, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs)
+    assert c.contact.found and c.warnings == ()
+
+
+def test_no_contact_does_not_raise():
+    rng = np.random.default_rng(0)
+    t = np.arange(5000) / 66964.3
+    v = 0.1 + 0.02 * np.sin(2 * np.pi * 50 * t + 0.3) + rng.normal(0, 0.002, t.size)
+    c = condition_voltage(v, 66964.3)
+    assert not c.contact.found and math.isnan(c.tau_s)
+    assert_allclose(c.offset_V, 0.1, atol=3e-4)
+    assert_allclose(c.hum_amplitude_V, 0.02, atol=5e-4)
+    assert abs(np.mean(c.voltage_V)) < 1e-3
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(polarity=2), "polarity must be 1 or -1"),
+    (dict(tau_s=-1.0), "tau_s must be positive"),
+    (dict(mains_hz=-50.0), "mains_hz must be non-negative"),
+    (dict(sample_rate_hz=0.0), "sample_rate_hz must be positive"),
+])
+def test_bad_arguments(kwargs, match):
+    args = dict(voltage_V=np.zeros(100), sample_rate_hz=1000.0)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        condition_voltage(**args)
+
+
+def test_non_finite_samples_rejected():
+    with pytest.raises(ValueError, match="non-finite samples"):
+        condition_voltage(np.array([0.0, 1.0, np.inf, 0.0]), 1000.0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    x=arrays(np.float64, st.integers(3, 300), elements=st.floats(allow_nan=False, allow_infinity=False)),
+    fs=st.floats(10.0, 1e6),
+    polarity=st.sampled_from([1, -1]),
+)
+def test_condition_voltage_never_raises_on_finite_arrays(x, fs, polarity):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConditioningWarning)
+        c = condition_voltage(x, fs, polarity=polarity)
+    assert c.voltage_V.shape == x.shape
+    if c.contact.found:
+        assert 0.0 <= c.contact.start_s < c.contact.end_s <= (x.size - 1) / fs * (1 + 1e-12)

@@ -1,0 +1,190 @@
+"""Tests for ballimpact.contact: sub-sample contact start/end, impact counting, clipping."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from numpy.testing import assert_allclose
+from tracekit import DIRTY, make_trace
+
+from ballimpact.conditioning import condition_voltage
+from ballimpact.contact import contact_samples, detect_clipping, detect_contact, robust_noise
+
+RATES_HZ = [66964.3, 50000.0]
+
+
+@pytest.mark.parametrize("fs", RATES_HZ)
+@pytest.mark.parametrize("phase", [0.05, 0.5, 0.95])
+def test_clean_half_sine_edges(fs, phase):
+    """Noise-free, quantised half-sine: start and end within a small fraction of a sample."""
+    v, fs, truth = make_trace(sample_rate_hz=fs, start_phase=phase, half_sine_s=4e-3)
+    c = detect_contact(v, fs)
+    assert c.found and c.n_impacts == 1
+    assert_allclose(c.start_s, truth.start_s, atol=0.05 / fs)
+    assert_allclose(c.end_s, truth.end_s, atol=0.05 / fs)
+    assert c.start_index == math.ceil(c.start_s * fs) and c.end_index == math.floor(c.end_s * fs)
+    assert_allclose(c.contact_time_s, 4e-3, rtol=1e-3)
+
+
+@pytest.mark.parametrize("fs", RATES_HZ)
+@pytest.mark.parametrize("seed", range(4))
+def test_cloth_ramp_is_part_of_the_contact(fs, seed):
+    """The low cloth force before the steep rise counts: TC is the time any force acts."""
+    v, fs, truth = make_trace(sample_rate_hz=fs, cloth_s=0.1e-3, cloth_fraction=0.015, noise_V=0.001, seed=seed)
+    c = detect_contact(v, fs)
+    assert "cloth_foot" in c.flags
+    assert abs(c.start_s - truth.start_s) * fs < 1.0
+    # the straight line through the steep edge alone would miss the cloth phase
+    assert (c.edge_start_s - truth.start_s) > 0.5 * 0.1e-3
+    assert_allclose(c.contact_time_s, truth.contact_time_s, rtol=0.005)
+
+
+DIRTY_CASES = [
+    # (sample rate, polarity, peak [V], noise [V], half-sine [s], cloth fraction)
+    (66964.3, 1, 5.0, 0.002, 4e-3, 0.015),
+    (66964.3, -1, 5.0, 0.002, 4e-3, 0.015),
+    (50000.0, 1, 5.0, 0.002, 4e-3, 0.015),
+    (50000.0, -1, 3.0, 0.003, 3e-3, 0.02),
+    (66964.3, 1, 8.0, 0.001, 5.5e-3, 0.01),
+    (50000.0, -1, 2.0, 0.001, 6e-3, 0.02),
+    (66964.3, -1, 4.0, 0.003, 3e-3, 0.0),
+]
+
+
+@pytest.mark.parametrize("fs, polarity, peak, noise, half_sine, cloth", DIRTY_CASES)
+@pytest.mark.parametrize("seed", range(5))
+def test_contact_time_within_one_percent_on_dirty_traces(fs, polarity, peak, noise, half_sine, cloth, seed):
+    """Hum, offset, amplifier decay, noise, ringing, quantisation, polarity: TC within 1 %."""
+    kw = dict(DIRTY, noise_V=noise, cloth_fraction=cloth)
+    v, fs, truth = make_trace(sample_rate_hz=fs, polarity=polarity, peak_V=peak, half_sine_s=half_sine,
+                              seed=seed, **kw)
+    c = condition_voltage(v, fs, polarity=polarity).contact
+    assert c.found and c.n_impacts == 1 and not c.clipped
+    assert_allclose(c.contact_time_s, truth.contact_time_s, rtol=0.01)
+    assert abs(c.start_s - truth.start_s) * fs < 2.0
+    assert abs(c.end_s - truth.end_s) * fs < 1.0
+
+
+def test_double_impact_counted():
+    v, fs, truth = make_trace(noise_V=0.002, second_impact={"delay_s": 2e-3, "fraction": 0.2, "duration_s": 2e-3})
+    c = detect_contact(v, fs)
+    assert c.n_impacts == 2 and "multiple_impacts" in c.flags
+    # the main contact is still the first one
+    assert_allclose(c.contact_time_s, truth.contact_time_s, rtol=0.01)
+
+
+@pytest.mark.parametrize("second", [
+    {"delay_s": 2e-3, "fraction": 0.2, "duration_s": 0.2e-3},  # too short to be an impact
+    {"delay_s": 2e-3, "fraction": 0.03, "duration_s": 2e-3},  # too small
+])
+def test_blips_are_not_impacts(second):
+    v, fs, _ = make_trace(noise_V=0.001, second_impact=second)
+    assert detect_contact(v, fs).n_impacts == 1
+
+
+def test_ringing_is_not_a_second_impact():
+    v, fs, truth = make_trace(noise_V=0.001, ringing_fraction=0.05, ringing_hz=2500.0, ringing_decay_s=3e-3)
+    c = detect_contact(v, fs)
+    assert c.n_impacts == 1
+    assert "ringing_after_contact" in c.flags
+    assert abs(c.end_s - truth.end_s) * fs < 2.0
+
+
+def test_no_contact_in_pure_noise():
+    rng = np.random.default_rng(0)
+    c = detect_contact(rng.normal(0, 0.002, 5000), 66964.3)
+    assert not c.found and c.n_impacts == 0 and "no_contact" in c.flags
+    assert math.isnan(c.contact_time_s)
+
+
+@pytest.mark.parametrize("polarity", [1, -1])
+def test_clipping_flagged(polarity):
+    v, fs, _ = make_trace(peak_V=12.0, polarity=polarity, noise_V=0.001)
+    assert detect_clipping(v, (-10.0, 10.0))
+    c = detect_contact(polarity * v, fs, raw_voltage_V=v, adc_range_V=(-10.0, 10.0))
+    assert c.clipped and "clipped" in c.flags
+
+
+def test_no_clipping_below_the_rails():
+    v, _, _ = make_trace(peak_V=9.9, noise_V=0.001)
+    assert not detect_clipping(v, (-10.0, 10.0))
+    spike = np.zeros(100)
+    spike[50] = 10.0 - 2**-16 * 20  # one sample at the top code is not a clip
+    assert not detect_clipping(spike, (-10.0, 10.0))
+    spike[51] = spike[50]
+    assert detect_clipping(spike, (-10.0, 10.0))
+
+
+def test_clipping_bad_range():
+    with pytest.raises(ValueError, match="adc_range_V"):
+        detect_clipping(np.zeros(10), (10.0, -10.0))
+
+
+def test_robust_noise_ignores_outliers():
+    rng = np.random.default_rng(3)
+    x = rng.normal(0, 0.002, 20000)
+    x[:200] = 5.0
+    assert_allclose(robust_noise(x), 0.002, rtol=0.05)
+
+
+def test_non_finite_voltage_rejected():
+    with pytest.raises(ValueError, match="non-finite samples"):
+        detect_contact(np.array([0.0, np.nan, 1.0]), 1000.0)
+    with pytest.raises(ValueError, match="sample_rate_hz"):
+        detect_contact(np.zeros(10), 0.0)
+
+
+def test_contact_samples_with_ends():
+    t = np.arange(10) * 0.1
+    v = 2.0 * t
+    t_rel, vs = contact_samples(t, v, 0.25, 0.62)
+    assert_allclose(t_rel, [0.0, 0.05, 0.15, 0.25, 0.35, 0.37])
+    assert_allclose(vs, 2.0 * (t_rel + 0.25))
+    t_rel, vs = contact_samples(t, v, 0.25, 0.62, include_ends=False)
+    assert_allclose(t_rel, [0.05, 0.15, 0.25, 0.35])
+    with pytest.raises(ValueError, match="outside the trace"):
+        contact_samples(t, v, -0.1, 0.5)
+    with pytest.raises(ValueError, match="start_s < end_s"):
+        contact_samples(t, v, 0.5, 0.5)
+
+
+def _check_result(c, n, fs, t0):
+    if c.found:
+        assert t0 <= c.start_s < c.end_s <= t0 + (n - 1) / fs + 1e-12 * max(1.0, abs(t0))
+        assert 0 <= c.start_index <= c.end_index + 1 and c.end_index <= n - 1
+        assert c.n_impacts >= 1
+        assert 0 <= c.peak_index < n
+    else:
+        assert c.n_impacts == 0 and "no_contact" in c.flags
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    x=arrays(np.float64, st.integers(0, 300), elements=st.floats(allow_nan=False, allow_infinity=False)),
+    fs=st.floats(1.0, 1e6),
+    t0=st.floats(-10.0, 10.0),
+)
+def test_detect_contact_never_raises_on_finite_arrays(x, fs, t0):
+    _check_result(detect_contact(x, fs, t0_s=t0), x.size, fs, t0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    n=st.integers(20, 400),
+    centre=st.floats(0.0, 1.0),
+    width=st.integers(1, 200),
+    amp=st.floats(1e-6, 1e6),
+    noise=st.floats(0.0, 0.5),
+    seed=st.integers(0, 2**16),
+)
+def test_detect_contact_on_noisy_bumps(n, centre, width, amp, noise, seed):
+    """Bumps anywhere (also cut by the trace ends) in noise of any level."""
+    rng = np.random.default_rng(seed)
+    u = np.arange(n)
+    c0 = centre * (n - 1)
+    x = amp * np.clip(np.sin(np.pi * ((u - c0) / width + 0.5)), 0, None) * (np.abs(u - c0) < width / 2)
+    x = x + amp * noise * rng.normal(size=n)
+    _check_result(detect_contact(x, 1000.0), n, 1000.0, 0.0)

@@ -1,0 +1,76 @@
+"""Tests for ballimpact.gates: speeds, COR and timer-resolution uncertainty."""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from ballimpact.gates import check_gate_times, coefficient_of_restitution, gate_speeds, speed_uncertainty
+
+
+def test_gate_speeds_scalar():
+    # ball at 20 m/s in, 12 m/s out over 0.1 m: 5 ms in, 8.333 ms out
+    vin, vout = gate_speeds(10.0, 10.005, 10.020, 10.020 + 0.1 / 12.0, 0.1)
+    assert isinstance(vin, float) and isinstance(vout, float)
+    assert_allclose([vin, vout], [20.0, 12.0], rtol=1e-9)
+
+
+def test_gate_speeds_arrays_and_nan():
+    t1 = np.array([0.0, 0.0, np.nan, 0.0, 0.0])
+    t2 = np.array([0.004, 0.005, 0.005, 0.005, -0.001])  # last: interval negative
+    t3 = np.array([0.02, 0.02, 0.02, 0.02, 0.02])
+    t4 = np.array([0.03, 0.02, 0.03, np.nan, 0.03])  # second: zero interval
+    vin, vout = gate_speeds(t1, t2, t3, t4, 0.1)
+    assert_allclose(vin, [25.0, 20.0, np.nan, 20.0, np.nan], rtol=1e-12)
+    assert_allclose(vout, [10.0, np.nan, 10.0, np.nan, 10.0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("spacing", [0.0, -0.1, math.nan, math.inf])
+def test_gate_speeds_bad_spacing(spacing):
+    with pytest.raises(ValueError, match="spacing_m must be positive"):
+        gate_speeds(0.0, 0.005, 0.01, 0.02, spacing)
+
+
+def test_cor():
+    assert_allclose(coefficient_of_restitution(20.0, 12.0), 0.6, rtol=1e-12)
+    cor = coefficient_of_restitution(np.array([20.0, np.nan, 0.0, 10.0]), np.array([12.0, 5.0, 5.0, np.nan]))
+    assert_allclose(cor, [0.6, np.nan, np.nan, np.nan])
+
+
+def test_speed_uncertainty_formula():
+    # v^2 r / (s sqrt 6): 20 m/s, 1 us, 0.1 m
+    assert_allclose(speed_uncertainty(20.0, 0.1, 1e-6), 400 * 1e-6 / (0.1 * math.sqrt(6)), rtol=1e-12)
+    assert speed_uncertainty(20.0, 0.1, 0.0) == 0.0
+    assert_allclose(speed_uncertainty(np.array([10.0, 20.0]), 0.1, 1e-6)[1] / speed_uncertainty(10.0, 0.1, 1e-6),
+                    4.0, rtol=1e-12)
+
+
+def test_speed_uncertainty_monte_carlo():
+    """Independent check: round both beam-break times to the timer resolution.
+
+    The interval's position relative to the timer ticks is random from impact
+    to impact, which the speeds spread over +-0.5 m/s ensure.
+    """
+    rng = np.random.default_rng(1)
+    spacing, res = 0.1, 20e-6
+    v = rng.uniform(24.5, 25.5, 200_000)
+    t1 = rng.uniform(0, 1, v.size)
+    t2 = t1 + spacing / v
+    measured = spacing / (np.round(t2 / res) * res - np.round(t1 / res) * res)
+    assert_allclose(np.std(measured - v), speed_uncertainty(25.0, spacing, res), rtol=0.03)
+
+
+def test_speed_uncertainty_bad_resolution():
+    with pytest.raises(ValueError, match="resolution_s must be non-negative"):
+        speed_uncertainty(20.0, 0.1, -1e-6)
+
+
+def test_check_gate_times():
+    assert check_gate_times(0.0, 0.005, 0.02, 0.03) == []
+    assert check_gate_times(0.0, math.nan, 0.02, math.nan) == [
+        "missing gate time gate_in_2_s", "missing gate time gate_out_1_s"]
+    problems = check_gate_times(0.0, -0.005, 0.02, 0.01)
+    assert len(problems) == 2
+    assert problems[0].startswith("inbound gate interval not positive")
+    assert problems[1].startswith("rebound gate interval not positive")
