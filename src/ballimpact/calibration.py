@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
+from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from .contact import contact_samples
 
@@ -67,7 +67,7 @@ def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float) -> float:
     """
     t, v = _time_and_values(time_s, voltage_V, "voltage_V")
     t_rel, v_in = contact_samples(t, v, float(start_s), float(end_s), include_ends=True)
-    return float(np.trapezoid(v_in, t_rel))
+    return float(trapezoid(v_in, t_rel))
 
 
 def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg: float,
@@ -230,6 +230,6 @@ def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float) -> ContactS
         peak_force_N=peak,
         time_to_peak_s=t_peak - float(t[0]),
         max_displacement_m=float(np.max(displacement)),
-        impulse_N_s=float(np.trapezoid(f, t)),
+        impulse_N_s=float(trapezoid(f, t)),
         final_velocity_m_s=float(velocity[-1]),
     )

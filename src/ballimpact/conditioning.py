@@ -1,4 +1,4 @@
-"""Plate-voltage conditioning: polarity, offset, mains hum and charge-amplifier decay removed without biasing the impulse.
+"""Plate-voltage conditioning: polarity, offset, mains hum and charge-amplifier decay, without biasing the impulse.
 
 The charge amplifier acts as a first-order high-pass with time constant tau:
 ``dV_meas/dt = dV_true/dt - V_meas / tau``. Integrating from the contact start

@@ -84,7 +84,9 @@ class ContactResult:
     Attributes
     ----------
     found : bool
-        True when a contact was found; every other field is NaN/-1 otherwise.
+        True when a contact was found; otherwise the times are NaN, the
+        indices -1 (peak_index: the largest sample, -1 for an empty trace) and
+        n_impacts 0.
     start_s, end_s : float
         Contact start and end on the trace's time axis ``t0_s + i / fs`` [s],
         sub-sample.
@@ -230,9 +232,11 @@ def contact_samples(time_s, values, start_s: float, end_s: float, *, include_end
         raise ValueError(f"need finite start_s < end_s, got start_s={start_s!r}, end_s={end_s!r}")
     if t.size < 2:
         raise ValueError(f"need at least 2 samples, got {t.size}")
-    if start_s < t[0] or end_s > t[-1]:
+    tol = 1e-6 * (t[-1] - t[0]) / (t.size - 1)  # rounding of the time axis [s]
+    if start_s < t[0] - tol or end_s > t[-1] + tol:
         raise ValueError(f"contact [{start_s:.6g}, {end_s:.6g}] s lies outside the trace "
                          f"[{t[0]:.6g}, {t[-1]:.6g}] s")
+    start_s, end_s = max(start_s, t[0]), min(end_s, t[-1])
     inside = (t > start_s) & (t < end_s)
     ts, vs = t[inside], v[inside]
     if include_ends:
@@ -485,7 +489,7 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     else:
         sigma0 = robust_noise(xs)
         thr0 = max(THRESHOLD_SIGMA * sigma0, THRESHOLD_FRACTION * peak)
-        starts0, _, k0 = _main_run(xs > thr0, peak_index, merge_gap)
+        starts0, _, _ = _main_run(xs > thr0, peak_index, merge_gap)
         first_crossing = int(starts0[0]) if starts0.size else peak_index
         stop = first_crossing - max(int(round(PRETRIGGER_GUARD_S * fs)), 1)
         if stop >= MIN_NOISE_SAMPLES:

@@ -619,6 +619,14 @@ def fit_ball_model(
     sigma_cor = max(stage2.rmse_pct / 100.0, 1e-4)
     joint = _Problem(vin, tc, e, mass, kb0, True, True, sigma_tc, sigma_cor)
     res = _least_squares(joint, _to_theta(stage2.ak, stage2.a, stage2.ac), "joint refinement (AK, a, AC)")
+    # Re-weight once with the scatter of each kind left by the joint fit (so that both
+    # blocks of weighted residuals have unit variance, as the F test of the intervals
+    # assumes), then refine from there.
+    tc_m, cor_m = _simulate(res.x, vin, mass, kb0)
+    sigma_tc = max(float(np.sqrt(np.mean(((tc_m - tc) / tc) ** 2))), 1e-4)
+    sigma_cor = max(float(np.sqrt(np.mean(((cor_m - e) / e) ** 2))), 1e-4)
+    joint = _Problem(vin, tc, e, mass, kb0, True, True, sigma_tc, sigma_cor)
+    res = _least_squares(joint, res.x, "joint refinement (AK, a, AC)")
     theta = res.x
     ak, a, ac = (float(v) for v in _from_theta(theta))
     messages += _bound_messages(theta)

@@ -153,7 +153,11 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
 
     # The trace.
     path = session.trace_path(row)
-    if not path.is_file():
+    try:
+        is_file = path.is_file()
+    except (OSError, ValueError):  # e.g. a file name too long for the OS: Path.is_file() re-raises ENAMETOOLONG
+        is_file = False
+    if not is_file:
         if "trace" not in res.reason:
             res.exclude(f"trace file not found: {row.trace}")
         return res

@@ -496,17 +496,25 @@ def _check_trace(cell: str, session_dir: Path, problems: list[str]) -> None:
         problems.append(f"trace path escapes the session folder (absolute path): {trace}")
         return
     root = session_dir.resolve()
+    # ValueError: a NUL byte in the cell; OSError also covers a file name too long
+    # for the OS (ENAMETOOLONG), which Path.exists() re-raises. Both are faults of
+    # this one row, not of the session (bad-input suite: tests/test_bad_input.py).
     try:
         full = (root / normalised).resolve()
-    except (OSError, RuntimeError) as exc:  # symlink loops
-        problems.append(f"trace path cannot be resolved: {trace} ({exc})")
+    except (OSError, RuntimeError, ValueError) as exc:  # symlink loops, NUL bytes
+        problems.append(f"trace path cannot be resolved: {trace!r} ({exc})")
         return
     if full == root or not full.is_relative_to(root):
         problems.append(f"trace path escapes the session folder: {trace}")
         return
-    if not full.exists():
+    try:
+        exists, is_file = full.exists(), full.is_file()
+    except (OSError, ValueError) as exc:  # e.g. [Errno 36] File name too long
+        problems.append(f"trace path cannot be resolved: {trace!r} ({exc.strerror or exc})")
+        return
+    if not exists:
         problems.append(f"trace file not found: {trace}")
-    elif not full.is_file():
+    elif not is_file:
         problems.append(f"trace path is not a file: {trace}")
 
 
