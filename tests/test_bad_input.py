@@ -699,6 +699,15 @@ def test_allowed_variation_is_not_a_fault(name, session_copy, monkeypatch):
     assert report.ok, report.problems
 
 
+@pytest.mark.parametrize("cell", ["12:03:04.5", "nan", "inf"])
+def test_unreadable_gate_time_is_not_called_missing(cell, session_copy):
+    """A gate cell with text in it was not missed by the timer: the reason must not say so."""
+    set_cell("gate_in_2_s", cell)(session_copy)
+    result = list(iter_process(read_session(session_copy)))[VICTIM]
+    assert result.status == "excluded"
+    assert "gate time gate_in_2_s" in result.reason and "missing" not in result.reason, result.reason
+
+
 def test_many_faults_at_once_each_impact_judged_alone(session_copy, monkeypatch):
     """One fault on each of three impacts: three exclusions with their own reasons, the fourth ok."""
     rows = read_rows(session_copy)

@@ -64,6 +64,7 @@ FOOT_MIN_SAMPLES = 2  # fewest rising samples in the hinge fit [samples]
 FOOT_MAX_S = 0.2e-3  # longest stretch of rising samples in the hinge fit [s]
 FOOT_PRE_S = 0.15e-3  # stretch before the first sample above the noise in the hinge fit [s]
 FOOT_PRE_SAMPLES = 4  # ... but at least this many samples [samples]
+FOOT_MAX_WIDENINGS = 8  # a slow foot's pre window may grow to this many more FOOT_PRE_S [-]
 FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample predicted worse than this (standard errors) ends the foot [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
@@ -368,6 +369,16 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
     last = min(i0 + k_max - 1, peak_index)
     wr = min(i0 + FOOT_MIN_SAMPLES - 1, last)
     ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
+    # Slow foot (a gentle rise at low SNR, e.g. an 8 ms half-sine only 50x above the
+    # noise takes > FOOT_PRE_S to reach FOOT_SIGMA): the pre window then holds no quiet
+    # samples and the corner sticks to its first sample, giving a late start (TC up to
+    # 4 % short). Widen the window back, a pre window at a time, until the corner is
+    # free of it. A steep rise never sticks, so it is fitted exactly as before.
+    n_widen = 0
+    while ts < wl + 1.0 and wl > 0 and n_widen < FOOT_MAX_WIDENINGS:
+        wl = max(wl - n_pre, 0)
+        n_widen += 1
+        ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
     if wr > i0:
         # Is the second rising sample already on the steep rise after a faint
         # foot? Then the hinge through it misses the sub-threshold foot samples

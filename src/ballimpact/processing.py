@@ -139,6 +139,10 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     # Speeds from the gates (section 2): vin = spacing / (in_2 - in_1), vout = spacing / (out_1 - out_2).
     gate_problems = check_gate_times(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
     for p in gate_problems:
+        # A cell the reader already reported (e.g. "non-numeric gate time gate_in_2_s: 'x'")
+        # is NaN here: do not also call it "missing gate time gate_in_2_s".
+        if p.startswith("missing gate time ") and any(p.split()[-1] in q for q in row.problems):
+            continue
         if p not in res.reason:
             res.exclude(p)
     if not gate_problems:
@@ -206,6 +210,11 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
                                   res.vin_m_s, res.vout_m_s)
     except ValueError as exc:
         return res.exclude(f"no calibration: {exc}")
+    # A positive but vanishing (or overflowing) voltage integral gives kCAL = inf (or 0),
+    # which force_from_voltage rejects with a ValueError: exclude instead of raising.
+    if not (math.isfinite(kcal) and kcal > 0):
+        return res.exclude(f"no calibration: calibration factor is {kcal!r} N/V (voltage integral over the "
+                           "contact too small or too large to calibrate)")
     res.kcal_N_per_V = kcal
     force = force_from_voltage(v_contact, kcal)
     velocity, displacement = integrate_motion(t_rel, force, row.mass_kg, res.vin_m_s)
