@@ -496,7 +496,11 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, theta, jac,
     g = offsets.size
     # All three profiles in one batch: row r profiles parameter r // g at grid point r % g.
     prof_of = np.repeat(np.arange(3), g)
-    psi = (phi_hat[:, None] + offsets[None, :] * se[:, None]).ravel()
+    # grid points outside the search bounds of a and AC are clipped onto them
+    # log AK = log kR - a log xR, bounded by the kR and a bounds
+    lo_phi = np.array([lo_b[0] - lo_b[1] * log_xr, lo_b[1], lo_b[2]])
+    hi_phi = np.array([hi_b[0] - hi_b[1] * log_xr, hi_b[1], hi_b[2]])
+    psi = np.clip(phi_hat[:, None] + offsets[None, :] * se[:, None], lo_phi[:, None], hi_phi[:, None]).ravel()
     free_idx = np.array([[i for i in range(3) if i != j] for j in range(3)])[prof_of]  # (3g, 2)
 
     def to_theta(pts, rows):
@@ -509,8 +513,6 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, theta, jac,
 
     resid = _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, np.full(3 * g, kb0),
                             np.ones((3 * g, 2 * vin.size)), to_theta)
-    lo_phi = np.array([-np.inf, lo_b[1], lo_b[2]])
-    hi_phi = np.array([np.inf, hi_b[1], hi_b[2]])
     p0 = phi_hat[free_idx]
     pts, _ = _batched_lm(resid, p0, lo_phi[free_idx], hi_phi[free_idx], max_iter=12)
     with warnings.catch_warnings():
@@ -669,7 +671,7 @@ def fit_ball_model(
         th_b, conv = _batched_lm(resid, np.repeat(theta[None], kb0_b.size, axis=0), lo_b, hi_b)
         ak_b, a_b, ac_b = _from_theta(th_b)
         boot = np.column_stack([kb0_b, ak_b, a_b, ac_b])[conv]
-        if boot.shape[0] < max(20, 0.8 * n_bootstrap):
+        if boot.shape[0] < 0.8 * n_bootstrap:
             messages.append(
                 f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable"
             )
