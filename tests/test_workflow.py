@@ -370,30 +370,6 @@ def test_log_to_file_turns_session_error_into_one_line_exit(tmp_path):
     assert "missing required key 'date'" in log.read_text(encoding="utf-8")
 
 
-def test_atomic_path_leaves_nothing_on_failure(tmp_path):
-    target = tmp_path / "out.csv"
-    with pytest.raises(RuntimeError, match="boom"):
-        with pipeline.atomic_path(target) as tmp:
-            assert tmp.parent == tmp_path and tmp.suffix == ".csv"
-            tmp.write_text("partial", encoding="utf-8")
-            raise RuntimeError("boom")
-    assert list(tmp_path.iterdir()) == []
-    with pipeline.atomic_path(target) as tmp:
-        tmp.write_text("done", encoding="utf-8")
-    assert target.read_text(encoding="utf-8") == "done"
-    assert list(tmp_path.iterdir()) == [target]
-
-
-def test_atomic_dir_replaces_the_folder(tmp_path):
-    target = tmp_path / "qc"
-    target.mkdir()
-    (target / "old.png").write_bytes(b"old")
-    with pipeline.atomic_dir(target) as tmp:
-        (tmp / "new.png").write_bytes(b"new")
-    assert sorted(p.name for p in target.iterdir()) == ["new.png"]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["qc"]
-
-
 @pytest.mark.parametrize("n_chunks", [1, 2, 3, 7, 16])
 def test_chunks_partition_the_impacts(n_chunks):
     ids = [f"i{k:02d}" for k in range(16)]

@@ -24,8 +24,6 @@ from __future__ import annotations
 import datetime
 import json
 import math
-import os
-import tempfile
 import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -33,6 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import xarray as xr
+
+from .atomic import atomic_path
 
 __all__ = [
     "IMPACT_COLUMNS",
@@ -902,17 +902,8 @@ def write_dataset(ds: xr.Dataset, path) -> Path:
     ds = _text_to_object(ds)
     for var in ds.variables.values():
         var.encoding = {}
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, mode="w", engine="netcdf4", format="NETCDF4", encoding=_encoding(ds))
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
     return path
 
 

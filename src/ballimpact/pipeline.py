@@ -15,12 +15,11 @@ from collections import Counter
 from pathlib import Path
 
 from . import __version__
+from .atomic import atomic_path
 
 __all__ = [
     "FIGURE_STEMS",
     "log_to_file",
-    "atomic_path",
-    "atomic_dir",
     "snapshot_session",
     "chunk_impact_ids",
     "process_chunk",
@@ -98,94 +97,6 @@ def log_to_file(log_path):
         root.removeHandler(handler)
         root.setLevel(old_level)
         handler.close()
-
-
-@contextlib.contextmanager
-def atomic_path(path):
-    """
-    Write a file atomically: yield a temporary path in the same folder, then rename it.
-
-    The temporary file keeps the target's suffix (writers that infer the format from
-    it, such as matplotlib or xarray, work unchanged). On an exception the temporary
-    file is removed and the target is left untouched.
-
-    Parameters
-    ----------
-    path : str or Path
-        The final file.
-
-    Yields
-    ------
-    Path
-        The temporary file to write (it does not exist yet).
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    tmp.unlink()  # writers create it themselves (some refuse to overwrite)
-    try:
-        yield tmp
-        if not tmp.exists():
-            raise RuntimeError(f"{path}: nothing was written to the temporary file {tmp}")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-@contextlib.contextmanager
-def atomic_dir(path):
-    """
-    Fill a folder atomically: yield an empty temporary folder beside it, then rename it.
-
-    Parameters
-    ----------
-    path : str or Path
-        The final folder; an existing one is replaced.
-
-    Yields
-    ------
-    Path
-        The temporary folder to fill.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
-    tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it private (0700); a results folder is not
-    try:
-        yield tmp
-        if path.exists():
-            shutil.rmtree(path)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp)
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _usual_mode(*paths) -> None:
-    """Give files the permissions of a normally created file (0666 minus the umask).
-
-    The library writers create their temporary files with tempfile.mkstemp (mode 0600),
-    and os.replace keeps that mode: results would be unreadable for colleagues.
-    TODO(lead): better done in ballimpact.archive/figures/report themselves.
-    """
-    mode = 0o666 & ~_umask()
-    for path in paths:
-        path = Path(path)
-        if path.is_dir():
-            for child in path.rglob("*"):
-                if child.is_file():
-                    child.chmod(mode)
-        elif path.is_file():
-            path.chmod(mode)
 
 
 def _write_text_atomic(path, text: str) -> None:
@@ -372,7 +283,6 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
         )
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
-    _usual_mode(out_nc)
     logger.info("chunk %d of %d: %d impacts written to %s", chunk, n_chunks, len(ids), out_nc)
 
 
@@ -448,7 +358,6 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)
-    _usual_mode(out_nc)
     table = archive.impacts_table(ds)
     with atomic_path(out_csv) as tmp:
         table.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
@@ -529,7 +438,6 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
         fit_ds = archive.fit_dataset(ball, fit, label=ball_type.label)
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(fit_ds, out_nc)
-    _usual_mode(out_nc)
 
 
 def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) -> None:
@@ -574,7 +482,6 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
     )
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
-    _usual_mode(out_nc)
     with atomic_path(out_parameters_csv) as tmp:
         archive.parameters_table(ds).to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
     logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
@@ -610,7 +517,6 @@ def make_figures(archive_nc, out_dir) -> None:
     staging = Path(tempfile.mkdtemp(prefix=".figures.", suffix=".tmp", dir=out_dir))
     try:
         figures.save_all(ds, staging)
-        _usual_mode(staging)
         for stem in FIGURE_STEMS:
             os.replace(staging / f"{stem}.png", out_dir / f"{stem}.png")
         qc = out_dir / QC_DIR_NAME
@@ -644,5 +550,4 @@ def make_report(archive_nc, figures_dir, out_pdf) -> None:
     ds = archive.open_dataset(archive_nc)
     Path(out_pdf).parent.mkdir(parents=True, exist_ok=True)
     report.write_report(ds, out_pdf, figures_dir=figures_dir)
-    _usual_mode(out_pdf)
     logger.info("report %s: %d pages", out_pdf, report.report_page_count(ds))

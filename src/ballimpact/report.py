@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import datetime
-import os
-import tempfile
 import textwrap
 from pathlib import Path
 
@@ -14,6 +12,7 @@ from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 
 from . import figures as _fig
+from .atomic import atomic_path
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "write_report", "report_page_count"]
 
@@ -180,7 +179,6 @@ def _table(ax, cells, col_widths, *, header_rows=1, font_size=8, row_height=None
            shade_rows=()):
     """A plain table filling ``ax`` (cells: list of rows of str)."""
     ax.set_axis_off()
-    n_rows = len(cells)
     table = ax.table(cellText=cells, colWidths=col_widths, loc="upper center", cellLoc="center",
                      bbox=[0, 0, 1, 1])
     table.auto_set_font_size(False)
@@ -575,9 +573,7 @@ def write_report(ds, out_pdf, figures_dir=None) -> Path:
         "Creator": f"ballimpact {info['software_version']}",
         "CreationDate": datetime.datetime.now(datetime.timezone.utc),
     }
-    fd, tmp = tempfile.mkstemp(dir=out_pdf.parent, prefix=f".{out_pdf.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_path(out_pdf) as tmp:
         with PdfPages(tmp, metadata=metadata) as pdf:
             pdf.savefig(_summary_page(ds, info))
             for number, name in enumerate(FIGURE_CAPTIONS, 1):
@@ -587,11 +583,4 @@ def write_report(ds, out_pdf, figures_dir=None) -> Path:
             excluded = _fig.excluded_impacts(ds)
             for k, (impact_id, _, _) in enumerate(excluded, 1):
                 pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir))
-        os.replace(tmp, out_pdf)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
     return out_pdf
