@@ -48,17 +48,21 @@ def bench_model(n: int, repeats: int = 3) -> float:
 
 
 def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
-    from ballimpact.pipeline import fit_inputs
-    from ballimpact.processing import iter_process
-    from ballimpact.session import read_session
+    """Time fit_ball_model on every ball type of a session (processing not timed)."""
+    from ballimpact.archive import impacts_dataset
     from ballimpact.fitting import fit_ball_model
+    from ballimpact.pipeline import fit_arrays
+    from ballimpact.processing import apply_calibration_check, iter_process
+    from ballimpact.session import read_session
 
     session = read_session(session_dir)
     results = list(iter_process(session))
-    inputs = fit_inputs(results, session)
+    apply_calibration_check(results)
+    ds = impacts_dataset(results)
+    inputs = {key: fit_arrays(ds, key, ball.mass_kg) for key, ball in session.meta.balls.items()}
     t0 = time.perf_counter()
-    for ball, kw in inputs.items():
-        fit_ball_model(**kw, n_bootstrap=n_bootstrap)
+    for key, ball in session.meta.balls.items():
+        fit_ball_model(**inputs[key], kb0_N_m=ball.kb0_N_m, n_bootstrap=n_bootstrap)
     return {"fit_seconds": time.perf_counter() - t0, "fit_ball_types": len(inputs)}
 
 

@@ -456,6 +456,9 @@ IMPACT_CASES = [
                ("trace path escapes the session folder", "absolute")),
     ImpactCase("trace-absolute-inside", point_trace_at(lambda d: str(victim_trace(d).resolve())),
                ("trace path escapes the session folder", "absolute")),
+    ImpactCase("trace-symlink-out", point_trace_at(lambda d: "traces/link.csv", lambda d: (
+        copy_victim_outside(d), (d / "traces" / "link.csv").symlink_to(d.parent / "outside.csv"))),
+               ("trace path escapes the session folder", "traces/link.csv")),
     ImpactCase("trace-windows-drive", set_cell("trace", r"C:\daq\trace.csv"), ("trace path escapes the session folder",)),
     ImpactCase("trace-is-folder", set_cell("trace", "traces"), ("trace path is not a file",)),
     ImpactCase("trace-is-session-folder", set_cell("trace", "."), ("trace path escapes the session folder",)),
@@ -659,8 +662,10 @@ def test_session_level_fault(case, session_copy, monkeypatch):
     # validate_session raises it too
     with pytest.raises(SessionError):
         validate_session(session_copy)
-    # the command line: exit 2, exactly that one line on stderr, no traceback
+    # the command line: exit 2, exactly that one line on stderr, no traceback, nothing written
+    before = snapshot(session_copy) if session_copy.is_dir() else session_copy.read_bytes()
     r = run_cli_validate(session_copy)
+    assert (snapshot(session_copy) if session_copy.is_dir() else session_copy.read_bytes()) == before
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     assert "Traceback" not in r.stderr
     assert r.stderr.strip().splitlines() == [f"error: {message}"]

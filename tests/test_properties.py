@@ -198,20 +198,30 @@ def csv_session_dir(synth_dir, work_dir) -> Path:
 
 
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
-CELL = st.one_of(
+ANY_CELL = st.one_of(
     st.sampled_from(["pressurised", "oversize", "golf", "", " ", "a-1", "a_2", "a 3", "p-001"]),
-    st.sampled_from(["traces/pressurised-001.csv", "traces/oversize-002.csv", "traces/none.csv", "../x.csv",
-                     "/etc/passwd", "traces", ".", "C:\\x.csv", "traces\\oversize-002.csv", "t\x00.csv",
-                     "traces/" + "y" * 300 + ".csv", "traces/x.tdms"]),
-    st.sampled_from(["0", "1.5", "-2", "1e400", "nan", "inf", "1,5", "57.7", "0.0577", "abc"]),
+    st.sampled_from(["traces/pressurised-002.csv", "traces/oversize-001.csv", "traces/none.csv", "../x.csv",
+                     "/etc/passwd", "traces", ".", "C:\\x.csv", "traces\\oversize-001.csv", "t\x00.csv",
+                     "traces/" + "y" * 300 + ".csv", "traces/x.tdms", "~/x.csv", "traces/../traces/oversize-001.csv"]),
+    st.sampled_from(["0", "1.5", "-2", "1e400", "nan", "inf", "1,5", "57.7", "0.0577", "abc", "1e-300"]),
     FINITE.map(repr),
     st.text(max_size=15),
 )
+#: Plausible cells per column (a valid session comes out often), else any cell.
+PLAUSIBLE_CELL = {
+    "impact_id": st.from_regex(r"[A-Za-z0-9_-]{1,6}", fullmatch=True),
+    "ball": st.sampled_from(["pressurised", "oversize"]),
+    "trace": st.sampled_from(["traces/pressurised-002.csv", "traces/oversize-001.csv"]),
+    "mass_g": st.sampled_from(["", "57.1", "56", "0.5", "2000", "-1", "x"]),
+    "note": st.text(max_size=10),
+    **{gate: st.one_of(st.floats(0.0, 100.0).map(lambda x: f"{x:.6f}"), st.just("")) for gate in
+       ("gate_in_1_s", "gate_in_2_s", "gate_out_2_s", "gate_out_1_s")},
+}
 
 
 @st.composite
 def impacts_csv_text(draw) -> str:
-    """impacts.csv text: a header of (mostly) known columns, rows of random cells, random quoting."""
+    """impacts.csv text: a header of (mostly) known columns, rows of plausible or random cells, random quoting."""
     if draw(st.booleans()):
         columns = draw(st.permutations(KNOWN_COLUMNS))
         columns = [c for c in columns if c in REQUIRED_COLUMNS or draw(st.booleans())]
@@ -221,7 +231,11 @@ def impacts_csv_text(draw) -> str:
     rows = []
     for _ in range(n_rows):
         width = len(columns) if draw(st.integers(0, 5)) else draw(st.integers(0, len(columns) + 2))
-        rows.append(draw(st.lists(CELL, min_size=width, max_size=width)))
+        row = []
+        for k in range(width):
+            plausible = PLAUSIBLE_CELL.get(columns[k]) if k < len(columns) else None
+            row.append(draw(plausible if plausible is not None and draw(st.integers(0, 4)) else ANY_CELL))
+        rows.append(row)
     if draw(st.booleans()):
         out = io.StringIO()
         csv.writer(out, lineterminator=draw(st.sampled_from(["\n", "\r\n"]))).writerows([columns] + rows)
@@ -269,39 +283,51 @@ def process_session(synth_dir, work_dir):
     session = read_session(session_dir)
     row = session.impacts[0]
     assert session.trace_path(row).suffix == ".csv"
-    return session, row
+    recorded = read_trace(session.trace_path(row), session.meta.sample_rate_hz).voltage_V
+    return session, row, recorded
 
 
 @st.composite
-def trace_arrays(draw) -> np.ndarray:
-    """Float arrays of at least 100 samples: arbitrary, small, constant, or a pulse with arbitrary damage."""
-    n = draw(st.integers(MIN_SAMPLES, 3000))
-    kind = draw(st.sampled_from(["any", "small", "constant", "pulse"]))
+def trace_arrays(draw, recorded: np.ndarray) -> np.ndarray:
+    """Float arrays of at least 100 samples: arbitrary, small, constant, a noisy pulse, or a damaged recording."""
+    kind = draw(st.sampled_from(["any", "small", "constant", "pulse", "recorded"]))
+    n = recorded.size if kind == "recorded" else draw(st.integers(MIN_SAMPLES, 3000))
     if kind == "any":
         return draw(hnp.arrays(np.float64, n, elements=FINITE))
     if kind == "small":
         return draw(hnp.arrays(np.float64, n, elements=st.floats(-1.0, 1.0, width=32)))
     if kind == "constant":
         return np.full(n, draw(FINITE))
-    start = draw(st.integers(0, n - 1))
-    width = draw(st.integers(1, n))
-    amplitude = draw(st.floats(-20.0, 20.0))
-    x = np.zeros(n)
-    stop = min(start + width, n)
-    x[start:stop] = amplitude * np.sin(np.pi * (np.arange(stop - start) + 0.5) / width)
-    noise = draw(st.floats(0.0, 1.0))
-    seed = draw(st.integers(0, 2**32 - 1))
-    x += noise * np.random.default_rng(seed).standard_normal(n)
-    # arbitrary damage: some samples replaced by arbitrary finite values
-    for i, v in draw(st.lists(st.tuples(st.integers(0, n - 1), FINITE), max_size=3)):
-        x[i] = v
+    if kind == "pulse":
+        start = draw(st.integers(0, n - 1))
+        width = draw(st.integers(1, 800))  # [samples] up to 12 ms at the session's 67 kHz
+        x = np.zeros(n)
+        stop = min(start + width, n)
+        x[start:stop] = draw(st.floats(-12.0, 12.0)) * np.sin(np.pi * (np.arange(stop - start) + 0.5) / width)
+        x += draw(st.floats(0.0, 0.5)) * np.random.default_rng(draw(st.integers(0, 2**32 - 1))).standard_normal(n)
+        x += draw(st.floats(-1.0, 1.0))  # offset [V]
+    else:
+        # the real recording, scaled, shifted, cut, and with stretches overwritten
+        scale = draw(st.one_of(st.floats(0.3, 1.3), st.floats(-1e3, 1e3)))
+        x = recorded * scale + draw(st.one_of(st.floats(-0.5, 0.5), st.floats(-1e3, 1e3)))
+        if draw(st.booleans()):
+            a = draw(st.integers(0, n - MIN_SAMPLES))
+            x = x[a:a + draw(st.integers(MIN_SAMPLES, n - a))]
+        x = x.copy()
+        n = x.size
+        for _ in range(draw(st.integers(0, 3))):
+            i = draw(st.integers(0, n - 1))
+            x[i:i + draw(st.integers(1, 200))] = draw(FINITE)
+    for i, v in draw(st.lists(st.tuples(st.integers(0, n - 1), FINITE), max_size=2)):
+        x[i] = v  # arbitrary single samples
     return x
 
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(values=trace_arrays())
-def test_process_impact_on_arbitrary_trace_never_raises(process_session, values):
-    session, row = process_session
+@given(data=st.data())
+def test_process_impact_on_arbitrary_trace_never_raises(process_session, data):
+    session, row, recorded = process_session
+    values = data.draw(trace_arrays(recorded), label="trace")
     path = session.trace_path(row)
     path.write_text("# units: V\nvoltage_V\n" + "\n".join(map(repr, values.tolist())) + "\n", encoding="utf-8")
     with warnings.catch_warnings():
@@ -319,33 +345,61 @@ def test_process_impact_on_arbitrary_trace_never_raises(process_session, values)
         assert np.isfinite([result.contact_time_ms, result.kcal_N_per_V, result.peak_force_N]).all()
 
 
+@pytest.mark.parametrize("scale", [1e-310, 1e-320, 1e305])
+def test_process_impact_on_vanishing_or_huge_recording_is_excluded(process_session, scale):
+    """A real recording scaled to subnormal or near-overflow volts: excluded, no exception (kCAL would be inf/0)."""
+    session, row, recorded = process_session
+    session.trace_path(row).write_text(
+        "voltage_V\n" + "\n".join(map(repr, (recorded * scale).tolist())) + "\n", encoding="utf-8")
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        result = process_impact(row, session)
+    assert result.status == "excluded" and result.reason
+    assert math.isnan(result.kcal_N_per_V) or 0 < result.kcal_N_per_V < math.inf
+
+
 # ----------------------------------------------------------------------------- conditioning + contact: half-sines
+
+
+def half_sine_trace(fs, tc, pre, post, peak, snr, offset, mains, hum, phase, polarity, seed, start_fraction):
+    """Recorded voltage of a half-sine force pulse with white noise, DC offset and mains hum.
+
+    Returns (voltage [V], fs [Hz], polarity, mains [Hz], true start [s], true contact time [s]).
+    """
+    n = int((pre + tc + post) * fs)
+    t = np.arange(n) / fs
+    start = pre + start_fraction / fs  # [s] sub-sample start
+    u = (t - start) / tc
+    force = np.where((u > 0) & (u < 1), peak * np.sin(np.pi * np.clip(u, 0, 1)), 0.0)
+    v = polarity * force + offset + hum * peak * np.sin(2 * np.pi * mains * t + phase)
+    v += np.random.default_rng(seed).normal(0.0, peak / snr, n)
+    return v, fs, polarity, mains, start, tc
 
 
 @st.composite
 def half_sine_traces(draw, min_snr: float):
     """A half-sine force pulse of known start and duration, with noise, DC offset and mains hum."""
-    fs = draw(st.floats(40_000.0, 100_000.0))  # [Hz]
-    tc = draw(st.floats(2.0e-3, 8.0e-3))  # [s] true contact time
-    pre = draw(st.floats(0.02, 0.04))  # [s] pre-trigger
-    post = draw(st.floats(0.02, 0.04))  # [s] quiet signal after the contact
-    peak = draw(st.floats(0.2, 8.0))  # [V]
-    snr = draw(st.floats(min_snr, 5000.0))  # peak / noise standard deviation
-    offset = draw(st.floats(-0.5, 0.5))  # [V]
-    mains = draw(st.sampled_from([50.0, 60.0]))  # [Hz]
-    hum = draw(st.floats(0.0, 0.05)) * peak  # [V] fundamental amplitude
-    phase = draw(st.floats(0.0, 2 * math.pi))
-    polarity = draw(st.sampled_from([1, -1]))
-    seed = draw(st.integers(0, 2**32 - 1))
-    n = int((pre + tc + post) * fs)
-    t = np.arange(n) / fs
-    start = pre + draw(st.floats(0.0, 1.0)) / fs  # [s] sub-sample start
-    u = (t - start) / tc
-    force = np.where((u > 0) & (u < 1), peak * np.sin(np.pi * np.clip(u, 0, 1)), 0.0)
-    rng = np.random.default_rng(seed)
-    v = polarity * force + offset + hum * np.sin(2 * np.pi * mains * t + phase)
-    v += rng.normal(0.0, peak / snr, n)
-    return v, fs, polarity, mains, start, tc
+    return half_sine_trace(
+        fs=draw(st.floats(40_000.0, 100_000.0)),  # [Hz]
+        tc=draw(st.floats(2.0e-3, 8.0e-3)),  # [s] true contact time
+        pre=draw(st.floats(0.02, 0.04)),  # [s] pre-trigger
+        post=draw(st.floats(0.02, 0.04)),  # [s] quiet signal after the contact
+        peak=draw(st.floats(0.2, 8.0)),  # [V]
+        snr=draw(st.floats(min_snr, 5000.0)),  # peak / noise standard deviation
+        offset=draw(st.floats(-0.5, 0.5)),  # [V]
+        mains=draw(st.sampled_from([50.0, 60.0])),  # [Hz]
+        hum=draw(st.floats(0.0, 0.05)),  # hum fundamental amplitude / peak
+        phase=draw(st.floats(0.0, 2 * math.pi)),
+        polarity=draw(st.sampled_from([1, -1])),
+        seed=draw(st.integers(0, 2**32 - 1)),
+        start_fraction=draw(st.floats(0.0, 1.0)),
+    )
+
+
+#: A slow foot: an 8 ms pulse at SNR 50 needs more than the detector's 0.15 ms
+#: pre window to rise above 4 sigma (TC was 2-4 % short before contact.py widened it).
+SLOW_FOOT = dict(fs=66964.3, tc=8.0e-3, pre=0.03, post=0.03, peak=1.0, snr=50.0, offset=0.1, mains=50.0,
+                 hum=0.02, phase=1.0, polarity=1, start_fraction=0.5)
 
 
 def _check_half_sine(case) -> None:
@@ -369,6 +423,8 @@ def _check_half_sine(case) -> None:
 # it passes, and the randomised search runs from SNR 200 up.
 @settings(max_examples=40, deadline=None, derandomize=True)
 @given(case=half_sine_traces(min_snr=50.0))
+@example(case=half_sine_trace(**SLOW_FOOT, seed=4))
+@example(case=half_sine_trace(**{**SLOW_FOOT, "fs": 100_000.0, "polarity": -1}, seed=0))
 def test_half_sine_contact_tc_within_2_percent_from_snr_50(case):
     _check_half_sine(case)
 
@@ -377,3 +433,16 @@ def test_half_sine_contact_tc_within_2_percent_from_snr_50(case):
 @given(case=half_sine_traces(min_snr=200.0))
 def test_half_sine_contact_tc_within_2_percent_random_search(case):
     _check_half_sine(case)
+
+
+@pytest.mark.parametrize("fs", [40_000.0, 66964.3, 100_000.0])
+def test_slow_foot_gives_no_contact_time_bias(fs):
+    """Mean TC error over 8 noise realisations of the slow-foot pulse is below 0.5 % (it was -2 to -3 %)."""
+    errors = []
+    for seed in range(8):
+        v, fs_hz, polarity, mains, start, tc = half_sine_trace(**{**SLOW_FOOT, "fs": fs}, seed=seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            contact = condition_voltage(v, fs_hz, polarity=polarity, mains_hz=mains).contact
+        errors.append(contact.contact_time_s / tc - 1.0)
+    assert abs(np.mean(errors)) < 0.005, errors

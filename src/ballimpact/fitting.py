@@ -275,15 +275,21 @@ class _Problem:
         return np.where(np.isfinite(r), r, 1.0e3)
 
     def fun(self, p):
-        return self.residuals_batch(p)
-
-    def jac(self, p):
-        # All forward-difference points in one batched simulation.
+        # The residuals and all forward-difference points in one batched simulation;
+        # the Jacobian is kept for the call of jac() that follows at the same point.
         p = np.asarray(p, dtype=float)
         pts = np.repeat(p[None, :], p.size + 1, axis=0)
         pts[1:] += np.eye(p.size) * _FD_STEP
         r = self.residuals_batch(pts)
-        return ((r[1:] - r[0]) / _FD_STEP).T
+        self._jac_cache = (p.copy(), ((r[1:] - r[0]) / _FD_STEP).T)
+        return r[0]
+
+    def jac(self, p):
+        p = np.asarray(p, dtype=float)
+        cache = getattr(self, "_jac_cache", None)
+        if cache is None or not np.array_equal(cache[0], p):
+            self.fun(p)
+        return self._jac_cache[1]
 
 
 def _least_squares(problem: _Problem, p0, what):
@@ -292,7 +298,7 @@ def _least_squares(problem: _Problem, p0, what):
     p0 = np.clip(np.asarray(p0, dtype=float), lo[free] + 1e-9, hi[free] - 1e-9)
     res = optimize.least_squares(
         problem.fun, p0, jac=problem.jac, bounds=(lo[free], hi[free]), method="trf",
-        x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200,
+        x_scale=1.0, xtol=1e-8, ftol=1e-8, gtol=1e-8, max_nfev=200,
     )
     if not res.success:
         raise FitError(f"{what}: the optimiser did not converge ({res.message})")
@@ -426,32 +432,43 @@ def _batched_lm(resid, p0, lo, hi, max_iter=10):
     lam = np.full(b, 1e-3)
     converged = np.zeros(b, dtype=bool)
     eye = np.eye(k)
+
+    def with_jacobian(points, rows):
+        # the points and their forward-difference neighbours in one batched call
+        pts = np.repeat(points[None], k + 1, axis=0)
+        for j in range(k):
+            pts[j + 1, :, j] += _FD_STEP
+        r_all = resid(pts, rows)
+        return r_all[0], np.moveaxis((r_all[1:] - r_all[0]) / _FD_STEP, 0, -1)  # (B, m), (B, m, k)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
+        r0, jac = with_jacobian(p, np.arange(b))
         for _ in range(max_iter):
             act = np.flatnonzero(~converged)
             if not act.size:
                 break
-            pts = np.repeat(p[act][None], k + 1, axis=0)
-            for j in range(k):
-                pts[j + 1, :, j] += _FD_STEP
-            r_all = resid(pts, act)
-            r0 = r_all[0]
-            jac = np.moveaxis((r_all[1:] - r0) / _FD_STEP, 0, -1)  # (Ba, m, k)
-            jtj = np.einsum("bij,bik->bjk", jac, jac)
-            jtr = np.einsum("bij,bi->bj", jac, r0)
+            ja, ra = jac[act], r0[act]
+            jtj = np.einsum("bij,bik->bjk", ja, ja)
+            jtr = np.einsum("bij,bi->bj", ja, ra)
             diag = np.einsum("bjj->bj", jtj)
             a_mat = jtj + lam[act][:, None, None] * eye * diag[:, None, :] + 1e-12 * eye
             step = -np.linalg.solve(a_mat, jtr[..., None])[..., 0]
             new = np.clip(p[act] + step, lo[act], hi[act])
-            c0 = np.sum(r0**2, axis=-1)
-            c1 = np.sum(resid(new[None], act)[0] ** 2, axis=-1)
+            # One call per iteration: the trial point comes with its Jacobian, used
+            # at once when the trial is accepted (LM rejects rarely near the optimum).
+            r_new, jac_new = with_jacobian(new, act)
+            c0 = np.sum(ra**2, axis=-1)
+            c1 = np.sum(r_new**2, axis=-1)
             better = c1 < c0
-            p[act[better]] = new[better]
-            lam[act[better]] *= 0.3
+            acc = act[better]
+            p[acc], r0[acc], jac[acc] = new[better], r_new[better], jac_new[better]
+            lam[acc] *= 0.3
             lam[act[~better]] *= 10.0
-            tiny = np.max(np.abs(step), axis=-1) < 1e-7
-            conv = (better & ((c0 - c1) <= 1e-9 * np.maximum(c0, 1e-30))) | tiny | (lam[act] > 1e8)
+            # converged: the step moves no parameter by more than 1e-5 (log scale: a
+            # relative 1e-5) or no longer lowers the cost by a relative 1e-7
+            tiny = np.max(np.abs(step), axis=-1) < 1e-5
+            conv = (better & ((c0 - c1) <= 1e-7 * np.maximum(c0, 1e-30))) | tiny | (lam[act] > 1e8)
             converged[act[conv]] = True
     return p, converged
 

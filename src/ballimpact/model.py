@@ -321,34 +321,58 @@ def simulate_impact(
     xa, xpa, d2pa, fpa, vpa = x, x_prev, d2_prev, f_prev, v_prev
     ma, kb0a, aka, aa, aca = mass, kb0, ak_, a_, ac_
     dt2m, fluxc = dt2_over_m, flux_coef
+    peak_a, tpeak_a, xmax_a = peak.copy(), t_peak.copy(), x_max.copy()
+    cloth_phase = cloth_displacement_m > 0  # until every impact has passed the cloth
 
     step = 1
     while idx.size and step < n_steps:
         t = step * dt_s
         v = (xa - xpa) * inv_dt
         xc = np.maximum(xa, 0.0)
-        d = xc * (c1 + xc * (c2 + xc * (c3 + xc * c4)))
+        # Eq. (5), Horner form, in place
+        d = c4 * xc
+        d += c3
+        d *= xc
+        d += c2
+        d *= xc
+        d += c1
+        d *= xc
         d2 = d * d
-        if step < n_buckle:
-            kb = k_const_N_m
-        else:
-            kb = kb0a + aka * np.power(xc, aa)
-        fs = kb * xa
-        cb = aca * d2
+        if step < n_buckle:  # section 3.2.4: pre-buckling stiffness
+            fs = k_const_N_m * xa
+        else:  # Eq. (4)
+            fs = np.power(xc, aa)
+            fs *= aka
+            fs += kb0a
+            fs *= xa
         compress = v > 0.0
-        cm = np.where(compress, fluxc * (d2 - d2pa) / (ma - quarter_rho_pi * d2), 0.0)
-        fd = cb * v
-        fm = cm * v
-        f = fs + fd + fm
-        cloth = compress & (xa < cloth_displacement_m)
-        if cloth.any():
-            fc = cloth_stiffness_N_m * xa
-            f = np.where(cloth, fc, f)
-            fs = np.where(cloth, fc, fs)
-            fd = np.where(cloth, 0.0, fd)
-            fm = np.where(cloth, 0.0, fm)
+        # Eq. (13) in compression only, Eq. (7)
+        cm = d2 - d2pa
+        cm *= fluxc
+        cm /= ma - quarter_rho_pi * d2
+        cm *= compress
+        cb = aca * d2
+        if record:
+            fd = cb * v
+            fm = cm * v
+            f = fs + fd + fm
+        else:
+            cb += cm
+            cb *= v
+            f = cb
+            f += fs
+        if cloth_phase:
+            cloth = compress & (xa < cloth_displacement_m)
+            if cloth.any():
+                fc = cloth_stiffness_N_m * xa
+                f = np.where(cloth, fc, f)
+                if record:
+                    fs = np.where(cloth, fc, fs)
+                    fd = np.where(cloth, 0.0, fd)
+                    fm = np.where(cloth, 0.0, fm)
+            elif np.all(xa >= cloth_displacement_m):
+                cloth_phase = False  # x < 2 mm again only in restitution, where it does not apply
 
-        ended = (~compress) & (f <= 0.0)
         if record:
             cols = idx
             rec["x"][step, cols] = xa
@@ -357,13 +381,13 @@ def simulate_impact(
             rec["fs"][step, cols] = fs
             rec["fd"][step, cols] = fd
             rec["fm"][step, cols] = fm
-        new_peak = f > peak[idx]
-        if new_peak.any():
-            sel = idx[new_peak]
-            peak[sel] = f[new_peak]
-            t_peak[sel] = t
-        x_max[idx] = np.maximum(x_max[idx], xa)
+        upd = f > peak_a
+        np.copyto(tpeak_a, t, where=upd)
+        np.maximum(peak_a, f, out=peak_a)
+        np.maximum(xmax_a, xa, out=xmax_a)
 
+        ended = f <= 0.0
+        ended &= ~compress
         if ended.any():
             # Interpolate the zero crossing of F between the previous step and this one.
             fp = fpa[ended]
@@ -374,19 +398,25 @@ def simulate_impact(
             sel = idx[ended]
             t_end[sel] = t - dt_s + frac * dt_s
             v_end[sel] = vpa[ended] + frac * (v[ended] - vpa[ended])
+            peak[sel], t_peak[sel], x_max[sel] = peak_a[ended], tpeak_a[ended], xmax_a[ended]
             keep = ~ended
             idx = idx[keep]
             xa, xpa, d2, f, v = xa[keep], xpa[keep], d2[keep], f[keep], v[keep]
             ma, kb0a, aka, aa, aca = ma[keep], kb0a[keep], aka[keep], aa[keep], aca[keep]
             dt2m, fluxc = dt2m[keep], fluxc[keep]
+            peak_a, tpeak_a, xmax_a = peak_a[keep], tpeak_a[keep], xmax_a[keep]
             if not idx.size:
                 break
         # Eq. (16): x(t + dt) = 2 x(t) - x(t - dt) - dt^2 / m * F(t)
-        x_next = 2.0 * xa - xpa - dt2m * f
+        x_next = 2.0 * xa
+        x_next -= xpa
+        x_next -= dt2m * f
         xpa, xa = xa, x_next
         d2pa, fpa, vpa = d2, f, v
         step += 1
 
+    if idx.size:
+        peak[idx], t_peak[idx], x_max[idx] = peak_a, tpeak_a, xmax_a
     if idx.size:
         warnings.warn(
             f"{idx.size} simulated impact(s) did not end within {max_contact_time_s * 1e3:.1f} ms; "

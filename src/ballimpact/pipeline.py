@@ -24,6 +24,7 @@ __all__ = [
     "chunk_impact_ids",
     "process_chunk",
     "collect_impacts",
+    "fit_arrays",
     "fit_ball",
     "write_archive",
     "make_figures",
@@ -211,25 +212,6 @@ def _trace_info(session, row) -> tuple[str, str]:
         return row.trace, ""
 
 
-_CONTACT_SERIES = ("voltage_V", "force_N", "velocity_m_s", "displacement_m")
-
-
-def _fill_missing_series(result) -> None:
-    """NaN series where processing found the contact but could not compute a series.
-
-    E.g. a missing gate time: the contact (``time_s``) is known, the force is not (no
-    kCAL). The archive wants every contact series as long as ``time_s``.
-    TODO(lead): this belongs in ballimpact.archive.impacts_dataset (pad short series).
-    """
-    import numpy as np
-
-    n = np.asarray(getattr(result, "time_s", ())).size
-    for name in _CONTACT_SERIES:
-        values = np.asarray(getattr(result, name, ()), dtype=float)
-        if n and values.size == 0:
-            setattr(result, name, np.full(n, np.nan))
-
-
 def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: float | None = None) -> None:
     """
     Process impacts ``chunk, chunk + n_chunks, ...`` of a session into ``work/chunk_{chunk}.nc``.
@@ -266,7 +248,6 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
 
     def logged(results):
         for result in results:
-            _fill_missing_series(result)
             if result.status == "ok":
                 logger.info("%s (%s): ok", result.impact_id, result.ball)
             else:
@@ -366,6 +347,40 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
 
 
+def fit_arrays(ds, ball: str, default_mass_kg: float) -> dict:
+    """The good impacts of one ball type, as the keyword arguments of ``fit_ball_model``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Per-impact dataset (``work/impacts.nc`` or the archive).
+    ball : str
+        Ball type key.
+    default_mass_kg : float
+        The ball type's mass [kg], used where an impact has none.
+
+    Returns
+    -------
+    dict
+        ``vin_m_s`` [m/s], ``contact_time_s`` [s], ``cor`` [-], ``mass_kg`` [kg] of the
+        impacts with status ok and positive values.
+    """
+    import numpy as np
+
+    mass = np.asarray(ds["impact_mass_kg"].values, dtype=float)
+    mass = np.where(np.isfinite(mass) & (mass > 0), mass, default_mass_kg)
+    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
+    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float) * 1e-3
+    cor = np.asarray(ds["cor"].values, dtype=float)
+    with np.errstate(invalid="ignore"):
+        use = (
+            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
+            & (np.array([str(v) for v in ds["status"].values]) == "ok")
+            & (vin > 0) & (tc_s > 0) & (cor > 0)
+        )
+    return {"vin_m_s": vin[use], "contact_time_s": tc_s[use], "cor": cor[use], "mass_kg": mass[use]}
+
+
 def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, seed: int) -> None:
     """
     Fit the ball model (kB(0), AK, a, AC) to the ok impacts of one ball type.
@@ -392,8 +407,6 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     """
     _check_int("n_bootstrap", n_bootstrap, 0)
     _check_int("seed", seed, 0)
-    import numpy as np
-
     from . import archive, fitting
     from .session import read_session
 
@@ -404,24 +417,12 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
             f"(defined: {', '.join(session.meta.balls)})"
         )
     ball_type = session.meta.balls[ball]
-    ds = archive.open_dataset(impacts_nc)
-    mass = np.asarray(ds["impact_mass_kg"].values, dtype=float)
-    mass = np.where(np.isfinite(mass) & (mass > 0), mass, ball_type.mass_kg)
-    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
-    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float) * 1e-3
-    cor = np.asarray(ds["cor"].values, dtype=float)
-    with np.errstate(invalid="ignore"):
-        use = (
-            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
-            & (np.array([str(v) for v in ds["status"].values]) == "ok")
-            & (vin > 0) & (tc_s > 0) & (cor > 0)
-        )
-    n_used = int(use.sum())
+    arrays = fit_arrays(archive.open_dataset(impacts_nc), ball, ball_type.mass_kg)
+    n_used = arrays["vin_m_s"].size
     kb0_source = "config" if ball_type.kb0_N_m is not None else "extrapolated"
     try:
         fit = fitting.fit_ball_model(
-            vin[use], tc_s[use], cor[use], mass[use],
-            kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed,
+            **arrays, kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed,
         )
     except fitting.FitError as exc:
         logger.warning("ball %s: fit failed with %d ok impacts: %s", ball, n_used, exc)

@@ -203,6 +203,8 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s)
     res.time_s = t_rel
     res.voltage_V = v_contact
+    # every contact series as long as time_s: NaN until the calibration gives a force
+    res.force_N, res.velocity_m_s, res.displacement_m = (np.full(t_rel.size, np.nan) for _ in range(3))
     if not (math.isfinite(res.vin_m_s) and math.isfinite(res.vout_m_s) and math.isfinite(row.mass_kg)):
         return res  # excluded above: no calibration without speeds and mass
     try:
