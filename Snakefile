@@ -5,7 +5,8 @@
 #   snakemake --profile profiles/slurm                    on a SLURM cluster
 #   snakemake --report report.html                        HTML report of the figures
 
-configfile: "config.yaml"
+# config.yaml next to this Snakefile, whatever the working directory (--configfile adds to it)
+configfile: os.path.join(workflow.basedir, "config.yaml")
 
 
 report: "workflow/report/workflow.rst"

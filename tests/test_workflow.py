@@ -10,7 +10,6 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,49 +18,15 @@ import pytest
 
 from ballimpact import pipeline
 
-REPO = Path(__file__).resolve().parents[1]
-BIN = Path(sys.executable).parent
-SNAKEMAKE = BIN / "snakemake"
-BALLIMPACT = BIN / "ballimpact"
-
-FINAL_FIGURES = (
-    "fig7_contact_time_cor",
-    "fig8_stiffness",
-    "fig9_force_curves",
-    "fig10_components",
-    "fig2b_kelvin_voigt",
-    "kcal",
+from workflow_helpers import (  # noqa: E402  (shared with test_run.py)
+    BALLIMPACT, FINAL_FIGURES, IMPACTS_CSV_COLUMNS, REPO, run_snakemake,
 )
-IMPACTS_CSV_COLUMNS = [  # shared/spec/outputs.md, in order
-    "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
-    "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
-    "kv_stiffness_kN_m", "kv_damping_N_s_m",
-]
+
 SYNTH_IMPACTS_PER_BALL = 3
 SYNTH_FAULTS_PER_KIND = 1
 
 
 # --------------------------------------------------------------------------- helpers
-
-
-def run_snakemake(*args, cwd=REPO, check=None):
-    """Run the venv's snakemake; returns the CompletedProcess (stdout + stderr merged)."""
-    env = dict(os.environ)
-    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
-    proc = subprocess.run(
-        [str(SNAKEMAKE), *map(str, args)],
-        cwd=cwd,
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        timeout=1800,
-    )
-    if check is True:
-        assert proc.returncode == 0, proc.stdout
-    elif check is False:
-        assert proc.returncode != 0, proc.stdout
-    return proc
 
 
 def job_counts(output: str) -> dict[str, int]:

@@ -1,0 +1,174 @@
+"""End to end: the workflow on the bundled demo session and on an interrupted run.
+
+The demo run checks what issues 3-5 promise for raw/demo-2004 against its ground
+truth (raw/demo-2004.truth.csv, written by `ballimpact synth` beside the session):
+every raw impact in impacts.csv, faults excluded with the right reason, accuracy of
+the good ones, Table 2 inside the fitted 95 % intervals, the archive giving back the
+same numbers as the CSV files, raw/ untouched, and a second run doing nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from numpy.testing import assert_allclose
+
+from ballimpact.balls import BALLS
+from ballimpact.synth import SynthConfig, write_session
+from workflow_helpers import IMPACTS_CSV_COLUMNS, REPO, SNAKEMAKE, run_snakemake
+
+pytestmark = pytest.mark.slow
+
+DEMO = REPO / "raw" / "demo-2004"
+
+
+def _hashes(folder):
+    return {p.relative_to(folder).as_posix(): (hashlib.sha256(p.read_bytes()).hexdigest(), p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _args(workdir, raw_dir, results, *extra):
+    return ["--snakefile", REPO / "Snakefile", "--directory", workdir, "--cores", "2",
+            "--config", f"raw_dir={raw_dir}", f"results_dir={results}", *extra]
+
+
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("demo")
+    before = _hashes(DEMO)
+    results = tmp / "results"
+    proc = run_snakemake(*_args(tmp, REPO / "raw", results, "sessions=[demo-2004]"), cwd=tmp)
+    assert proc.returncode == 0, proc.stdout[-5000:]
+    return tmp, results / "demo-2004", before
+
+
+def test_raw_folder_untouched(demo_run):
+    _, _, before = demo_run
+    assert _hashes(DEMO) == before
+
+
+def test_second_run_does_nothing(demo_run):
+    tmp, results, _ = demo_run
+    proc = run_snakemake(*_args(tmp, REPO / "raw", results.parent, "sessions=[demo-2004]"), "-n", cwd=tmp)
+    assert proc.returncode == 0 and "Nothing to be done" in proc.stdout, proc.stdout[-3000:]
+
+
+def test_demo_impacts_against_truth(demo_run):
+    _, out, _ = demo_run
+    table = pd.read_csv(out / "impacts.csv", keep_default_na=False, na_values=[""])
+    assert list(table.columns) == IMPACTS_CSV_COLUMNS
+    raw = pd.read_csv(DEMO / "impacts.csv", dtype=str, keep_default_na=False)
+    assert list(table.impact_id) == list(raw.impact_id)  # none dropped, raw order
+    truth = pd.read_csv(REPO / "raw" / "demo-2004.truth.csv", keep_default_na=False).set_index("impact_id")
+    table = table.set_index("impact_id")
+    for impact_id, t in truth.iterrows():
+        row = table.loc[impact_id]
+        if t.fault:
+            assert row.status == "excluded" and t.expected_reason in row.reason, (impact_id, row.reason)
+        else:
+            assert row.status == "ok", (impact_id, row.reason)
+    good = truth.index[truth.fault == ""]
+    m, t = table.loc[good], truth.loc[good]
+    assert_allclose(m.contact_time_ms, t.contact_time_ms, rtol=0.01)
+    assert_allclose(m.kcal_N_per_V, t.kcal_N_per_V, rtol=0.01)
+    assert_allclose(m.peak_force_N, t.peak_force_N, rtol=0.03)
+    assert_allclose(m.cor, t.cor, atol=0.002)
+
+
+def test_demo_recovers_table2_within_intervals(demo_run):
+    _, out, _ = demo_run
+    params = pd.read_csv(out / "parameters.csv").set_index("ball")
+    assert sorted(params.index) == sorted(BALLS)
+    for ball, row in params.iterrows():
+        true = BALLS[ball].params.table_units()
+        assert row.kb0_source == "config" and row.n_impacts == 10
+        for name, key in (("ak", "ak_kN_m"), ("a", "a"), ("ac", "ac_kN_s_m3")):
+            assert row[f"{name}_lo"] <= true[key] <= row[f"{name}_hi"], (ball, name, row[f"{name}_lo"],
+                                                                        true[key], row[f"{name}_hi"])
+        # the paper reports model and experiment within 5 % for TC and COR
+        assert row.contact_time_rmse_pct < 5 and row.cor_rmse_pct < 5
+
+
+def test_archive_round_trip_equals_csv(demo_run):
+    _, out, _ = demo_run
+    with xr.open_dataset(out / "demo-2004.nc") as ds:
+        ds = ds.load()
+    table = pd.read_csv(out / "impacts.csv", keep_default_na=False, na_values=[""])
+    assert [str(i) for i in ds.impact_id.values] == list(table.impact_id)
+    for col in IMPACTS_CSV_COLUMNS[4:]:
+        assert_allclose(ds[col].values.astype(float), table[col].to_numpy(float), rtol=1e-9, equal_nan=True,
+                        err_msg=col)
+    assert [str(s) for s in ds.status.values] == list(table.status)
+    params = pd.read_csv(out / "parameters.csv").set_index("ball")
+    for col in ("ak_kN_m", "a", "ac_kN_s_m3", "ak_lo", "ak_hi", "a_lo", "a_hi", "ac_lo", "ac_hi",
+                "contact_time_rmse_pct", "cor_rmse_pct"):
+        assert_allclose(ds[col].sel(ball=list(params.index)).values.astype(float), params[col].to_numpy(float),
+                        rtol=1e-9, err_msg=col)
+    for name, var in ds.variables.items():
+        assert "units" in var.attrs and "long_name" in var.attrs, name
+    for key in ("title", "summary", "history", "source", "date_created", "references", "Conventions"):
+        assert ds.attrs.get(key), key
+    recorded = json.loads(ds.attrs["raw_sha256"])
+    for rel, digest in recorded.items():
+        assert hashlib.sha256((DEMO / rel).read_bytes()).hexdigest() == digest, rel
+    assert "impacts.csv" in recorded and "session.yaml" in recorded
+    # the contact series start at contact start, velocity at vin
+    ok = np.array([str(s) == "ok" for s in ds.status.values])
+    v0 = ds.velocity_m_s.isel(sample=0).values[ok]
+    assert_allclose(v0, ds.vin_m_s.values[ok], rtol=1e-9)
+
+
+def test_report_pages(demo_run):
+    _, out, _ = demo_run
+    pdf = (out / "report.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF")
+    n_pages = len(__import__("re").findall(rb"/Type\s*/Page\b", pdf))
+    n_excluded = (pd.read_csv(out / "impacts.csv", keep_default_na=False).status == "excluded").sum()
+    assert n_pages >= 1 + 6 + 1 + n_excluded  # summary, figures, exclusion list, one QC page each
+    assert len(list((out / "figures" / "qc").glob("*.png"))) == n_excluded
+
+
+def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_path):
+    raw = tmp_path / "raw"
+    write_session(raw / "cut", SynthConfig(session_id="cut", impacts_per_ball=3, faults_per_kind=1, seed=5))
+    for truth in raw.glob("cut.truth.*"):
+        truth.unlink()
+    results = tmp_path / "results"
+    cmd = [str(SNAKEMAKE), *map(str, _args(tmp_path, raw, results))]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    deadline = time.monotonic() + 300
+    try:
+        # kill the whole run (snakemake and its jobs) as soon as the first chunk is written
+        while time.monotonic() < deadline and not list((results / "cut" / "work").glob("chunk_*.nc")):
+            if proc.poll() is not None:
+                pytest.fail("the run ended before it could be interrupted")
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    # whatever is under a final name is complete
+    for nc in results.rglob("*.nc"):
+        with xr.open_dataset(nc) as ds:
+            ds.load()
+    for csv in results.rglob("*.csv"):
+        pd.read_csv(csv)
+    assert not (results / "cut" / "report.pdf").exists()
+    # a hard kill leaves Snakemake's lock: unlock (as the README says), then the rerun
+    # (profiles/default: rerun-incomplete) completes
+    run_snakemake(*_args(tmp_path, raw, results), "--unlock", cwd=tmp_path, check=True)
+    again = run_snakemake(*_args(tmp_path, raw, results), cwd=tmp_path)
+    assert again.returncode == 0, again.stdout[-5000:]
+    table = pd.read_csv(results / "cut" / "impacts.csv", keep_default_na=False)
+    assert len(table) == len(pd.read_csv(raw / "cut" / "impacts.csv"))
+    assert (results / "cut" / "report.pdf").read_bytes().startswith(b"%PDF")
+    assert not [p for p in results.rglob("*") if ".tmp" in p.name]

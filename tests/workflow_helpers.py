@@ -1,0 +1,46 @@
+"""Helpers shared by the tests that run Snakemake."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+SNAKEMAKE = BIN / "snakemake"
+BALLIMPACT = BIN / "ballimpact"
+
+FINAL_FIGURES = (
+    "fig7_contact_time_cor",
+    "fig8_stiffness",
+    "fig9_force_curves",
+    "fig10_components",
+    "fig2b_kelvin_voigt",
+    "kcal",
+)
+IMPACTS_CSV_COLUMNS = [  # shared/spec/outputs.md, in order
+    "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
+    "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
+    "kv_stiffness_kN_m", "kv_damping_N_s_m",
+]
+
+def run_snakemake(*args, cwd=REPO, check=None):
+    """Run the venv's snakemake; returns the CompletedProcess (stdout + stderr merged)."""
+    env = dict(os.environ)
+    env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
+    proc = subprocess.run(
+        [str(SNAKEMAKE), *map(str, args)],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=1800,
+    )
+    if check is True:
+        assert proc.returncode == 0, proc.stdout
+    elif check is False:
+        assert proc.returncode != 0, proc.stdout
+    return proc
