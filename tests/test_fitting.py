@@ -115,3 +115,33 @@ def test_too_few_impacts_raises():
 def test_rejects_mismatched_lengths():
     with pytest.raises(ValueError, match="contact_time_s must have 3 values"):
         fit_ball_model([14.0, 20, 30], [4e-3, 3.8e-3], [0.7, 0.6, 0.5], 0.057, kb0_N_m=2e4)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kb0_in_config", [True, False], ids=["kb0-config", "kb0-extrapolated"])
+def test_synthetic_session_through_the_sensor_chain(tmp_path, kb0_in_config):
+    """Issue 4: a session made with parameters unlike Table 2, through the whole sensor
+    chain and the processing; the fitted TC and COR curves within 2 % of the true ones."""
+    from ballimpact.pipeline import fit_arrays
+    from ballimpact.archive import impacts_dataset
+    from ballimpact.processing import apply_calibration_check, iter_process
+    from ballimpact.session import read_session
+    from ballimpact.synth import SynthConfig, write_session
+
+    config = SynthConfig(session_id="unlike", balls={"custom": UNLIKE_TABLE2}, labels={"custom": "custom"},
+                         impacts_per_ball=10, faults_per_kind=0, seed=21, kb0_in_config=kb0_in_config)
+    session_dir, _ = write_session(tmp_path / "unlike", config)
+    session = read_session(session_dir)
+    results = list(iter_process(session))
+    apply_calibration_check(results)
+    assert all(r.status == "ok" for r in results)
+    ball = session.meta.balls["custom"]
+    f = fit_ball_model(**fit_arrays(impacts_dataset(results), "custom", ball.mass_kg),
+                       kb0_N_m=ball.kb0_N_m, n_bootstrap=50, seed=0)
+    assert f.kb0_source == ("config" if kb0_in_config else "extrapolated")
+    p = UNLIKE_TABLE2
+    speeds = np.linspace(14, 30, 9)
+    true = simulate_impact(speeds, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+    c = model_curves(f, speeds)
+    assert_allclose(c["contact_time_s"], true.contact_time_s, rtol=0.02)
+    assert_allclose(c["cor"], true.cor, rtol=0.02)
