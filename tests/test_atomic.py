@@ -52,3 +52,18 @@ def test_atomic_path_refuses_when_nothing_written(tmp_path):
         with atomic_path(tmp_path / "empty.csv"):
             pass
     assert list(tmp_path.iterdir()) == []
+
+
+def test_stale_temporary_files_of_a_killed_writer_are_removed(tmp_path):
+    stale = tmp_path / ".out.nc.abc123.tmp.nc"
+    stale.write_bytes(b"half")
+    other = tmp_path / ".other.nc.abc123.tmp.nc"  # another output's: left alone
+    other.write_bytes(b"x")
+    with atomic_path(tmp_path / "out.nc") as tmp:
+        tmp.write_bytes(b"whole")
+    assert not stale.exists() and other.exists()
+    stale_dir = tmp_path / ".qc.xyz.tmp"
+    stale_dir.mkdir()
+    with atomic_dir(tmp_path / "qc") as tmp:
+        (tmp / "a.png").write_bytes(b"x")
+    assert not stale_dir.exists()

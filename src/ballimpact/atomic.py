@@ -17,6 +17,16 @@ def _umask() -> int:
     return mask
 
 
+def _remove_stale(path: Path, suffix: str) -> None:
+    """Remove temporary files a killed writer of ``path`` left behind (``kill -9``,
+    power cut). One job writes a given output at a time, so they are all stale."""
+    for stale in path.parent.glob(f".{path.name}.*{suffix}"):
+        if stale.is_dir():
+            shutil.rmtree(stale, ignore_errors=True)
+        else:
+            stale.unlink(missing_ok=True)
+
+
 @contextlib.contextmanager
 def atomic_path(path):
     """Write a file atomically: yield a temporary path in the same folder, then rename it.
@@ -40,6 +50,7 @@ def atomic_path(path):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale(path, f".tmp{path.suffix}")
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp_name)
@@ -71,6 +82,7 @@ def atomic_dir(path):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale(path, ".tmp")
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
     mode_dir, mode_file = 0o777 & ~_umask(), 0o666 & ~_umask()
     try:
