@@ -51,7 +51,15 @@ def test_accuracy_against_truth(processed):
     get = lambda name: np.array([getattr(r, name) for r in good])
     assert_allclose(get("contact_time_ms"), t.contact_time_ms, rtol=0.01)
     assert_allclose(get("kcal_N_per_V"), t.kcal_N_per_V, rtol=0.01)
-    assert_allclose(get("peak_force_N"), t.peak_force_N, rtol=0.03)
+    # Peak force within 3 %. Exception: at high speed the model's largest force is the
+    # spike just before buckling (kB drops from kCONST at 0.2 ms, section 3.2.4): a
+    # ramp of ~5 N/us ending in a sudden drop, whose top falls between samples. At
+    # 50 kHz (20 us) that alone can hide up to ~7 %; measured worst case 3.2 % over 120
+    # impacts (bench/accuracy.py). Those impacts get 5 %; at 67 kHz every one is in 3 %.
+    spike = (t.time_to_peak_ms < 0.25).to_numpy() & (np.array(get("sample_rate_hz")) < 60e3)
+    peak, true_peak = get("peak_force_N"), t.peak_force_N.to_numpy()
+    assert_allclose(peak[~spike], true_peak[~spike], rtol=0.03)
+    assert_allclose(peak[spike], true_peak[spike], rtol=0.05)
     assert_allclose(get("cor"), t.cor, atol=0.002)
     assert_allclose(get("vin_m_s"), t.vin_m_s, rtol=1e-3)
     assert_allclose(get("max_displacement_mm"), t.max_displacement_mm, rtol=0.03)
