@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
 
+from ._checks import positive_scalar
 from .contact import contact_samples
 
 __all__ = [
@@ -18,16 +19,6 @@ __all__ = [
     "integrate_motion",
     "voltage_impulse",
 ]
-
-
-def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return v
 
 
 def _time_and_values(time_s, values, name: str):
@@ -103,8 +94,8 @@ def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg:
         For a non-positive mass or inbound speed, a negative rebound speed, or
         a voltage integral that is not positive.
     """
-    m = _positive("mass_kg", mass_kg)
-    vin = _positive("vin_m_s", vin_m_s)
+    m = positive_scalar("mass_kg", mass_kg)
+    vin = positive_scalar("vin_m_s", vin_m_s)
     vout = float(vout_m_s)
     if not math.isfinite(vout) or vout < 0:
         raise ValueError(f"vout_m_s must be non-negative and finite, got {vout_m_s!r}")
@@ -131,7 +122,7 @@ def force_from_voltage(voltage_V, kcal_N_per_V: float):
     float or numpy.ndarray
         Force [N].
     """
-    k = _positive("kcal_N_per_V", kcal_N_per_V)
+    k = positive_scalar("kcal_N_per_V", kcal_N_per_V)
     if np.ndim(voltage_V) == 0:
         return float(voltage_V) * k
     return np.asarray(voltage_V, dtype=float) * k
@@ -162,7 +153,7 @@ def integrate_motion(time_s, force_N, mass_kg: float, vin_m_s: float):
     displacement_m : numpy.ndarray
         Centre-of-mass displacement towards the plate [m].
     """
-    m = _positive("mass_kg", mass_kg)
+    m = positive_scalar("mass_kg", mass_kg)
     vin = float(vin_m_s)
     if not math.isfinite(vin):
         raise ValueError(f"vin_m_s must be finite, got {vin_m_s!r}")

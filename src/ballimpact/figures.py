@@ -502,6 +502,15 @@ def _draw_components(fig, ds):
     fig.suptitle(f"Force components of the fitted model at {COMPONENT_SPEED_M_S:.0f} m/s (cf. Fig. 10)")
 
 
+def _two_column_figure(ds, draw) -> Figure:
+    """A figure with one panel per ball type in two columns, filled by ``draw(fig, ds)``."""
+    n = len(_balls(ds))
+    with _style():
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
+        draw(fig, ds)
+    return fig
+
+
 def fig_components(ds) -> Figure:
     """Structural, damping and momentum-flux force components at 20 m/s (paper Fig. 10).
 
@@ -519,11 +528,7 @@ def fig_components(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    n = len(_balls(ds))
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
-        _draw_components(fig, ds)
-    return fig
+    return _two_column_figure(ds, _draw_components)
 
 
 # ----------------------------------------------------------------------------- Fig. 2b
@@ -617,11 +622,7 @@ def fig_kelvin_voigt(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    n = len(_balls(ds))
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
-        _draw_kelvin_voigt(fig, ds)
-    return fig
+    return _two_column_figure(ds, _draw_kelvin_voigt)
 
 
 # ----------------------------------------------------------------------------- kCAL

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from ._checks import positive_scalar
+
 __all__ = [
     "gate_speeds",
     "coefficient_of_restitution",
@@ -17,16 +19,6 @@ __all__ = [
 def _as_result(value: np.ndarray, scalar: bool):
     """Return a float for all-scalar input, else the array."""
     return float(value) if scalar else value
-
-
-def _check_positive_scalar(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} must be positive and finite, got {value!r}")
-    return v
 
 
 def gate_speeds(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s, spacing_m):
@@ -58,7 +50,7 @@ def gate_speeds(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s, spacing_m)
     ValueError
         If spacing_m is not positive and finite, or the times do not broadcast.
     """
-    spacing = _check_positive_scalar("spacing_m", spacing_m)
+    spacing = positive_scalar("spacing_m", spacing_m)
     times = [gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s]
     scalar = all(np.ndim(t) == 0 for t in times)
     try:
@@ -123,7 +115,7 @@ def speed_uncertainty(speed_m_s, spacing_m, resolution_s):
     float or numpy.ndarray
         Standard uncertainty of the speed [m/s]; NaN where the speed is NaN.
     """
-    spacing = _check_positive_scalar("spacing_m", spacing_m)
+    spacing = positive_scalar("spacing_m", spacing_m)
     try:
         res = float(resolution_s)
     except (TypeError, ValueError):
