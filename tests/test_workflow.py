@@ -253,9 +253,29 @@ def test_bad_session_yaml_fails_naming_the_file(synth_raw, tmp_path, edit, expec
     old, new = edit
     assert old in text
     yaml_path.write_text(text.replace(old, new, 1), encoding="utf-8")
-    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"), check=False)
+    # the dry run names the file and the fault; the session is reduced to the rule
+    # validate_session, which fails with that message (see the test below)
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"))
     assert f"{yaml_path}: " in proc.stdout, proc.stdout
     assert expected in proc.stdout, proc.stdout
+    assert "cannot be processed" in proc.stdout
+
+
+@pytest.mark.slow
+def test_bad_session_stops_only_itself(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    copy_session(synth_raw / "s1", raw, "good")
+    bad = copy_session(synth_raw / "s1", raw, "bad")
+    text = (bad / "session.yaml").read_text(encoding="utf-8")
+    (bad / "session.yaml").write_text(text.replace("  polarity: 1", "  polarity: 2", 1), encoding="utf-8")
+    results = tmp_path / "results"
+    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"),
+                         check=False)  # keep-going (profiles/default): the good session completes
+    assert (results / "good" / "report.pdf").is_file(), proc.stdout[-3000:]
+    assert not (results / "bad" / "work" / "session.json").exists()
+    log = (results / "bad" / "logs" / "validate_session.log").read_text(encoding="utf-8")
+    assert "session.yaml" in log and "polarity" in log
 
 
 @pytest.mark.slow
@@ -279,7 +299,7 @@ def test_impacts_csv_missing_column_fails_naming_the_file(synth_raw, tmp_path):
     lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
     lines[0] = lines[0].replace("trace,", "trace_file,", 1)
     csv_path.write_text("".join(lines), encoding="utf-8")
-    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"), check=False)
+    proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"))
     assert f"{csv_path}: missing required column(s) in the header: trace" in proc.stdout
 
 

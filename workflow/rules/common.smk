@@ -214,8 +214,23 @@ def _session_info(session):
     }
 
 
+def _session_info_or_fault(session):
+    """_session_info, or the session-level fault: such a session is reduced to rule
+    validate_session, which fails with the reader's one-line message, while the other
+    sessions go on (keep-going, profiles/default)."""
+    try:
+        return _session_info(session)
+    except WorkflowError as exc:
+        message = " ".join(str(exc).split())
+        logger.warning(f"ballimpact: session {session!r} cannot be processed: {message}")
+        session_dir = Path(RAW_DIR) / session
+        present = [session_dir / name for name in (SESSION_FILE, IMPACTS_FILE) if (session_dir / name).is_file()]
+        return {"dir": session_dir.as_posix(), "fault": message, "balls": [], "n_impacts": 0,
+                "n_chunks": 0, "traces": [], "present": [p.as_posix() for p in present]}
+
+
 SESSIONS = _list_sessions()
-SESSION_INFO = {session: _session_info(session) for session in SESSIONS}
+SESSION_INFO = {session: _session_info_or_fault(session) for session in SESSIONS}
 if not SESSIONS:
     logger.warning(f"ballimpact: no session folder with a {SESSION_FILE} in raw_dir {RAW_DIR!r}; nothing to do")
 
@@ -259,8 +274,11 @@ FIGURES = (
 
 
 def session_targets(session):
-    """Final outputs of one session (outputs.md)."""
+    """Final outputs of one session (outputs.md); only the snapshot of a faulty session,
+    whose rule then fails naming the fault."""
     base = f"{RESULTS_DIR}/{session}"
+    if "fault" in SESSION_INFO[session]:
+        return [f"{base}/work/session.json"]
     return [
         f"{base}/impacts.csv",
         f"{base}/parameters.csv",
@@ -287,6 +305,8 @@ def _info(wildcards):
 def session_raw_files(wildcards):
     """session.yaml, impacts.csv and every existing trace: editing any of them re-runs the session."""
     info = _info(wildcards)
+    if "fault" in info:
+        return info["present"]
     traces = sorted({t for t in info["traces"] if t is not None})
     return [f"{info['dir']}/{SESSION_FILE}", f"{info['dir']}/{IMPACTS_FILE}", *traces]
 
