@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -172,3 +173,10 @@ def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_pat
     assert len(table) == len(pd.read_csv(raw / "cut" / "impacts.csv"))
     assert (results / "cut" / "report.pdf").read_bytes().startswith(b"%PDF")
     assert not [p for p in results.rglob("*") if ".tmp" in p.name]
+    # a new session folder dropped into raw/: the next run plans only its jobs
+    shutil.copytree(raw / "cut", raw / "new")
+    yaml_path = raw / "new" / "session.yaml"
+    yaml_path.write_text(yaml_path.read_text(encoding="utf-8").replace("session_id: cut", "session_id: new"),
+                         encoding="utf-8")
+    plan = run_snakemake(*_args(tmp_path, raw, results), "-n", cwd=tmp_path, check=True).stdout
+    assert "wildcards: session=new" in plan and "session=cut" not in plan, plan[-3000:]
