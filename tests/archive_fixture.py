@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
@@ -19,6 +18,7 @@ from ballimpact.archive import (
     set_variable_attrs,
 )
 from ballimpact.balls import BALLS
+from ballimpact.processing import ImpactResult
 from ballimpact.model import kelvin_voigt_parameters, simulate_impact, structural_stiffness
 
 SAMPLE_RATE_HZ = 1.0e5  # [Hz] the model's own step (0.01 ms), so no resampling is needed
@@ -41,34 +41,10 @@ balls:
 """
 
 
-@dataclass
-class FakeImpactResult:
-    """Duck-typed stand-in for ballimpact.processing.ImpactResult."""
-
-    impact_id: str
-    ball: str
-    status: str = "ok"
-    reason: str = ""
-    vin_m_s: float = np.nan
-    vout_m_s: float = np.nan
-    cor: float = np.nan
-    contact_time_ms: float = np.nan
-    kcal_N_per_V: float = np.nan
-    impulse_N_s: float = np.nan
-    peak_force_N: float = np.nan
-    time_to_peak_ms: float = np.nan
-    max_displacement_mm: float = np.nan
-    kv_stiffness_kN_m: float = np.nan
-    kv_damping_N_s_m: float = np.nan
-    mass_kg: float = np.nan
-    sample_rate_hz: float = SAMPLE_RATE_HZ
-    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
-    voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
-    force_N: np.ndarray = field(default_factory=lambda: np.empty(0))
-    velocity_m_s: np.ndarray = field(default_factory=lambda: np.empty(0))
-    displacement_m: np.ndarray = field(default_factory=lambda: np.empty(0))
-    raw_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
-    raw_voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
+def impact_result(impact_id, ball, **fields):
+    """A ballimpact.processing.ImpactResult, sampled at the fixture's rate unless given."""
+    fields.setdefault("sample_rate_hz", SAMPLE_RATE_HZ)
+    return ImpactResult(impact_id=impact_id, ball=ball, **fields)
 
 
 def _params(ball):
@@ -98,7 +74,7 @@ def _measured(impact_id, ball, vin, rng, *, status="ok", reason="", keep_series=
     if clip_v is not None:
         raw_v = np.minimum(raw_v, clip_v)
     raw_t = (np.arange(raw_v.size) - PRE_TRIGGER_SAMPLES) / SAMPLE_RATE_HZ
-    r = FakeImpactResult(
+    r = impact_result(
         impact_id=impact_id,
         ball=ball,
         status=status,
@@ -129,7 +105,7 @@ def _measured(impact_id, ball, vin, rng, *, status="ok", reason="", keep_series=
 
 def _excluded_early(impact_id, ball, vin, rng, reason, *, with_raw=True):
     """An impact excluded before its contact was found: no series, raw time from the first sample."""
-    r = FakeImpactResult(impact_id=impact_id, ball=ball, status="excluded", reason=reason, vin_m_s=vin)
+    r = impact_result(impact_id=impact_id, ball=ball, status="excluded", reason=reason, vin_m_s=vin)
     r.mass_kg = _params(ball).mass_kg
     if with_raw:
         n = 900

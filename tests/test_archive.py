@@ -27,7 +27,7 @@ from ballimpact.archive import (
 
 from types import SimpleNamespace
 
-from archive_fixture import FakeImpactResult, make_archive, make_results
+from archive_fixture import impact_result, make_archive, make_results
 
 # shared/spec/outputs.md, copied by hand (independent of the module's constants)
 SPEC_IMPACT_COLUMNS = [
@@ -216,8 +216,8 @@ def test_series_padded_with_nan(ds):
 def test_all_excluded_and_empty(tmp_path):
     rng = np.random.default_rng(1)
     results = [
-        FakeImpactResult("a", "pressurised", status="excluded", reason="missing gate time gate_in_1_s"),
-        FakeImpactResult("b", "pressurised", status="excluded", reason="clipping",
+        impact_result("a", "pressurised", status="excluded", reason="missing gate time gate_in_1_s"),
+        impact_result("b", "pressurised", status="excluded", reason="clipping",
                          raw_time_s=np.arange(5) * 1e-5, raw_voltage_V=rng.normal(size=5)),
     ]
     ds = impacts_dataset(results)
@@ -232,7 +232,7 @@ def test_all_excluded_and_empty(tmp_path):
 
 
 def test_max_raw_samples_decimates():
-    results = [FakeImpactResult("a", "pressurised", raw_time_s=np.arange(1000) * 1e-5,
+    results = [impact_result("a", "pressurised", raw_time_s=np.arange(1000) * 1e-5,
                                 raw_voltage_V=np.arange(1000.0))]
     ds = impacts_dataset(results, max_raw_samples=300)
     assert ds.sizes["raw_sample"] <= 300
@@ -243,11 +243,11 @@ def test_max_raw_samples_decimates():
 @pytest.mark.parametrize(
     ("results", "kwargs", "match"),
     [
-        ([FakeImpactResult("a", "p"), FakeImpactResult("a", "p")], {}, "duplicate impact_id 'a'"),
-        ([FakeImpactResult("a", "p", status="maybe")], {}, "status must be 'ok' or 'excluded'"),
-        ([FakeImpactResult("a", "p", time_s=np.zeros(3), voltage_V=np.zeros(3), force_N=np.zeros(2),
+        ([impact_result("a", "p"), impact_result("a", "p")], {}, "duplicate impact_id 'a'"),
+        ([impact_result("a", "p", status="maybe")], {}, "status must be 'ok' or 'excluded'"),
+        ([impact_result("a", "p", time_s=np.zeros(3), voltage_V=np.zeros(3), force_N=np.zeros(2),
                            velocity_m_s=np.zeros(3), displacement_m=np.zeros(3))], {}, "series force_N has 2"),
-        ([FakeImpactResult("a", "p")], {"max_raw_samples": 1}, "max_raw_samples must be"),
+        ([impact_result("a", "p")], {"max_raw_samples": 1}, "max_raw_samples must be"),
     ],
 )
 def test_impacts_dataset_validation(results, kwargs, match):
