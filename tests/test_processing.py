@@ -10,7 +10,6 @@ from ballimpact.processing import (
     apply_calibration_check,
     flag_calibration_outliers,
     iter_process,
-    process_impact,
 )
 from ballimpact.session import read_session
 
