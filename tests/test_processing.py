@@ -116,3 +116,37 @@ def test_excluded_result_row_has_reason():
     r = ImpactResult(impact_id="x", ball="b").exclude("no contact found").exclude("clipping at the ADC rails")
     assert r.row()["status"] == "excluded"
     assert r.row()["reason"] == "no contact found; clipping at the ADC rails"
+
+
+@pytest.mark.parametrize("kcal_range, excluded", [("[100, 300]", False), ("[250, 400]", True)])
+def test_plate_kcal_range_from_session_yaml(synth_session, tmp_path, kcal_range, excluded):
+    import shutil
+
+    session_dir, truth = synth_session
+    copy = tmp_path / session_dir.name
+    shutil.copytree(session_dir, copy)
+    text = (copy / "session.yaml").read_text(encoding="utf-8")
+    (copy / "session.yaml").write_text(
+        text.replace("plate:\n", f"plate:\n  kcal_range_N_per_V: {kcal_range}\n", 1), encoding="utf-8")
+    session = read_session(copy)
+    good = [r for r in iter_process(session) if truth.loc[r.impact_id].fault == ""]
+    reasons = [r.reason for r in good]
+    if excluded:  # the synthetic plate's kCAL is about 180 N/V
+        assert all("outside the plate's range [250, 400] N/V" in reason for reason in reasons)
+    else:
+        assert all(r.status == "ok" for r in good), reasons
+
+
+def test_bad_kcal_range_is_a_session_fault(synth_session, tmp_path):
+    import shutil
+
+    from ballimpact.session import SessionError
+
+    session_dir, _ = synth_session
+    copy = tmp_path / session_dir.name
+    shutil.copytree(session_dir, copy)
+    text = (copy / "session.yaml").read_text(encoding="utf-8")
+    (copy / "session.yaml").write_text(text.replace("plate:\n", "plate:\n  kcal_range_N_per_V: [300, 100]\n", 1),
+                                       encoding="utf-8")
+    with pytest.raises(SessionError, match=r"session.yaml: key 'plate.kcal_range_N_per_V' must be two numbers"):
+        read_session(copy)

@@ -218,6 +218,11 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
         return res.exclude(f"no calibration: calibration factor is {kcal!r} N/V (voltage integral over the "
                            "contact too small or too large to calibrate)")
     res.kcal_N_per_V = kcal
+    if meta.kcal_range_N_per_V is not None:
+        lo, hi = meta.kcal_range_N_per_V
+        if not lo <= kcal <= hi:
+            res.exclude(f"calibration factor {kcal:.4g} N/V outside the plate's range [{lo:g}, {hi:g}] "
+                        "N/V (plate.kcal_range_N_per_V)")
     force = force_from_voltage(v_contact, kcal)
     velocity, displacement = integrate_motion(t_rel, force, row.mass_kg, res.vin_m_s)
     summary = contact_summary(t_rel, force, row.mass_kg, res.vin_m_s)

@@ -47,7 +47,7 @@ FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the ti
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
 _KNOWN_SECTION_KEYS = {
-    "plate": {"polarity"},
+    "plate": {"polarity", "kcal_range_N_per_V"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
     "gates": {"spacing_m", "resolution_s"},
 }
@@ -90,6 +90,7 @@ class SessionMeta:
     mains_hz: float  # [Hz] mains frequency, optional `daq.mains_hz`, default 50
     synthetic: bool  # optional top-level `synthetic`, default False
     raw: dict  # the parsed YAML, for the archive
+    kcal_range_N_per_V: tuple[float, float] | None = None  # [N/V] optional `plate.kcal_range_N_per_V`
 
 
 @dataclass
@@ -332,6 +333,16 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
     polarity_number = _to_float(polarity_value)
     if polarity_number not in (1.0, -1.0):
         raise SessionError(f"{file}: key 'plate.polarity' must be 1 or -1, got {polarity_value!r}")
+    kcal_range = None
+    if plate.get("kcal_range_N_per_V") is not None:
+        value = plate["kcal_range_N_per_V"]
+        bounds = [_to_float(v) for v in value] if isinstance(value, (list, tuple)) else []
+        if len(bounds) != 2 or None in bounds or not 0 < bounds[0] < bounds[1]:
+            raise SessionError(
+                f"{file}: key 'plate.kcal_range_N_per_V' must be two numbers [lo, hi] with 0 < lo < hi, "
+                f"got {value!r}"
+            )
+        kcal_range = (bounds[0], bounds[1])
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
 
     daq = _section(data, "daq", file)
@@ -412,6 +423,7 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
         mains_hz=mains_hz,
         synthetic=synthetic,
         raw=data,
+        kcal_range_N_per_V=kcal_range,
     )
 
 
