@@ -209,6 +209,28 @@ def _interval(value, lo, hi, fmt) -> str:
     return f"{main}\n[{lo_s}, {hi_s}]"
 
 
+def _force_curve_validation(ds) -> list[str]:
+    """One line per ball: mean share of the contact after 0.2 ms where model and measured
+    force agree within 10 % of the peak, and the mean RMS difference [N]."""
+    needed = ("model_agreement_fraction", "model_rms_N", "impact_ball", "status")
+    if not all(name in ds for name in needed):
+        return []
+    balls = np.array([str(b) for b in ds["impact_ball"].values])
+    ok = np.array([str(v) == "ok" for v in ds["status"].values])
+    share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
+    rms = np.asarray(ds["model_rms_N"].values, dtype=float)
+    lines = []
+    for ball in _fig._balls(ds):
+        use = ok & (balls == ball) & np.isfinite(share) & np.isfinite(rms)
+        if use.any():
+            lines.append(
+                f"{_fig._label(ds, ball)}: within 10 % of the peak for {100 * share[use].mean():.1f} % of the "
+                f"contact after 0.2 ms (lowest {100 * share[use].min():.1f} %), RMS difference "
+                f"{rms[use].mean():.0f} N, over {int(use.sum())} impacts"
+            )
+    return lines
+
+
 def _summary_page(ds, info) -> Figure:
     fig = _page()
     w, h = A4_PORTRAIT_IN
@@ -408,6 +430,11 @@ _DRAW = {
 
 def _figure_page(ds, info, name, number, figures_dir) -> Figure:
     title, caption = FIGURE_CAPTIONS[name]
+    if name.startswith("fig9"):
+        validation = _force_curve_validation(ds)
+        if validation:
+            caption += (" Force-curve validation over every good impact (section 4 of the paper): "
+                        + "; ".join(validation) + ".")
     w, h = A4_PORTRAIT_IN
     top = _MARGIN_IN
     caption_lines = len(textwrap.wrap(caption, 105))
