@@ -143,3 +143,11 @@ def test_failed_write_leaves_nothing(ds, tmp_path, monkeypatch):
 def test_missing_output_folder(ds, tmp_path):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         report.write_report(ds, tmp_path / "nope" / "r.pdf")
+
+
+def test_force_curve_validation_lines_per_ball():
+    ds = make_archive()
+    lines = report._force_curve_validation(ds)
+    balls = {str(b) for b in ds["ball"].values}
+    assert len(lines) == len(balls)
+    assert all("within 10 % of the peak for" in line and "RMS difference" in line for line in lines)
