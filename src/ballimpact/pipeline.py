@@ -325,16 +325,15 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
         )
     ds = ds.isel(impact=[position[i] for i in order])
     # session kCAL QC: a kCAL far from the session's typical value excludes the impact
-    status = np.array([str(v) for v in ds["status"].values], dtype=object)
-    reason = np.array([str(v) for v in ds["reason"].values], dtype=object)
-    flags, median, spread = processing.flag_calibration_outliers(ds["kcal_N_per_V"].values, status == "ok")
-    for k, flag in enumerate(flags):
-        if flag:
-            status[k] = "excluded"
-            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
-            logger.info("%s: excluded by the session kCAL check: %s", order[k], flag)
-    ds["status"] = ("impact", status, ds["status"].attrs)
-    ds["reason"] = ("impact", reason, ds["reason"].attrs)
+    before = [str(v) for v in ds["status"].values]
+    status, reason, median, spread = processing.exclude_calibration_outliers(
+        before, ds["reason"].values, ds["kcal_N_per_V"].values
+    )
+    for impact_id, old, new, why in zip(order, before, status, reason):
+        if old != new:
+            logger.info("%s: excluded by the session kCAL check: %s", impact_id, why)
+    ds["status"] = ("impact", np.array(status, dtype=object), ds["status"].attrs)
+    ds["reason"] = ("impact", np.array(reason, dtype=object), ds["reason"].attrs)
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds = archive.set_variable_attrs(ds)

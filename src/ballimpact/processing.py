@@ -33,6 +33,8 @@ __all__ = [
     "process_impact",
     "iter_process",
     "flag_calibration_outliers",
+    "exclude_calibration_outliers",
+    "apply_calibration_check",
 ]
 
 #: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
@@ -305,12 +307,38 @@ def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_
     return reasons, med, spread
 
 
+def exclude_calibration_outliers(status, reason, kcal_N_per_V):
+    """The session kCAL check on table columns: new status and reason per impact.
+
+    Parameters
+    ----------
+    status, reason : sequence of str
+        Per impact: ``ok`` / ``excluded`` and the reasons so far.
+    kcal_N_per_V : array_like
+        Per impact kCAL [N/V].
+
+    Returns
+    -------
+    status, reason : list of str
+        With the outliers of :func:`flag_calibration_outliers` excluded, their
+        reason appended.
+    median, spread : float
+        Session median and robust standard deviation of kCAL [N/V].
+    """
+    status, reason = [str(s) for s in status], [str(r) for r in reason]
+    flags, median, spread = flag_calibration_outliers(kcal_N_per_V, [s == "ok" for s in status])
+    for k, flag in enumerate(flags):
+        if flag:
+            status[k] = "excluded"
+            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
+    return status, reason, median, spread
+
+
 def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
     """Exclude, in place, impacts whose kCAL is an outlier of the session; returns (median, spread) [N/V]."""
-    reasons, med, spread = flag_calibration_outliers(
-        [r.kcal_N_per_V for r in results], [r.status == "ok" for r in results]
+    status, reason, median, spread = exclude_calibration_outliers(
+        [r.status for r in results], [r.reason for r in results], [r.kcal_N_per_V for r in results]
     )
-    for r, reason in zip(results, reasons):
-        if reason:
-            r.exclude(reason)
-    return med, spread
+    for r, st, why in zip(results, status, reason):
+        r.status, r.reason = st, why
+    return median, spread
