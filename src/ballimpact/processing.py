@@ -140,12 +140,10 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
 
     # Speeds from the gates (section 2): vin = spacing / (in_2 - in_1), vout = spacing / (out_1 - out_2).
     gate_problems = check_gate_times(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
-    for p in gate_problems:
-        # A cell the reader already reported (e.g. "non-numeric gate time gate_in_2_s: 'x'")
-        # is NaN here: do not also call it "missing gate time gate_in_2_s".
-        if p.startswith("missing gate time ") and any(p.split()[-1] in q for q in row.problems):
-            continue
-        if p not in res.reason:
+    # The reader already names every gate fault of its rows (missing, non-numeric, out of
+    # order); these messages are for rows it did not check, and would only repeat it.
+    if not any("gate time" in q for q in row.problems):
+        for p in gate_problems:
             res.exclude(p)
     if not gate_problems:
         vin, vout = gate_speeds(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s,
