@@ -258,7 +258,9 @@ def test_read_session_on_arbitrary_impacts_csv_gives_session_or_session_error(cs
             session = read_session(csv_session_dir)
         except SessionError as exc:
             message = str(exc)
-            assert "\n" not in message and "impacts.csv" in message, message
+            # one line per session-level problem (all reported at once), each naming the file
+            assert all("impacts.csv" in line for line in message.splitlines()), message
+            assert message.splitlines() == exc.problems, message
             event("SessionError")
             return
     event("Session")

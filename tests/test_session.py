@@ -500,3 +500,61 @@ def test_file_sha256_known_vector(tmp_path):
     payload = bytes(range(256)) * 20000  # > 1 chunk
     big.write_bytes(payload)
     assert file_sha256(str(big)) == hashlib.sha256(payload).hexdigest()
+
+
+# --------------------------------------------------------------- every problem at once (issue 14)
+
+
+def test_every_session_level_problem_is_reported_at_once(tmp_path):
+    meta = copy.deepcopy(BASE_META)
+    meta["date"] = "21.11.2026"
+    meta["daq"]["sample_rate_hz"] = -5
+    meta["balls"]["pressureless"]["mass_g"] = 0.0577
+    rows = GOOD_ROWS + ["b1-01,pressurised,traces/x.csv,3.0,3.004,3.010,3.0145,,",
+                        "b9-01,nosuchball,traces/x.csv,4.0,4.004,4.010,4.0145,,"]
+    folder = make_session(tmp_path, meta=meta, rows=rows)
+    with pytest.raises(SessionError) as info:
+        read_session(folder)
+    problems = info.value.problems
+    assert str(info.value).splitlines() == problems
+    expected = ["key 'date'", "key 'daq.sample_rate_hz'", "key 'balls.pressureless.mass_g'",
+                "impact_id 'b1-01' duplicates line 2"]
+    for fragment in expected:
+        assert sum(fragment in p for p in problems) == 1, (fragment, problems)
+    # the ball of the last row is defined in no readable ball type: also reported
+    assert any("'nosuchball' is not defined" in p for p in problems), problems
+
+
+def test_one_problem_stays_one_line(tmp_path):
+    folder = make_session(tmp_path, meta=patched("plate.polarity", 2))
+    with pytest.raises(SessionError) as info:
+        read_session(folder)
+    assert info.value.problems == [str(info.value)]
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(("present", "expected"), [("session.yml", "session.yaml"), ("Session.yaml", "session.yaml"),
+                                                   ("impacts.CSV", "impacts.csv")])
+def test_near_miss_file_name_is_named(tmp_path, present, expected):
+    folder = make_session(tmp_path)
+    (folder / expected).rename(folder / present)
+    if present.lower() == expected and (folder / expected).exists():
+        pytest.skip("case-insensitive file system")
+    with pytest.raises(SessionError, match=rf"{re.escape(expected)}: file not found, but '{re.escape(present)}' "
+                                           rf"is there: rename it to '{re.escape(expected)}'"):
+        read_session(folder)
+
+
+def test_semicolon_separated_impacts_csv_gets_a_separator_hint(tmp_path):
+    text = HEADER.replace(",", ";") + "\n" + "\n".join(r.replace(",", ";") for r in GOOD_ROWS) + "\n"
+    folder = make_session(tmp_path, csv_text=text)
+    with pytest.raises(SessionError, match="missing required column.*separated by semicolons: save impacts.csv "
+                                           "comma-separated"):
+        read_session(folder)
+
+
+def test_decimal_commas_in_impacts_csv_get_a_hint(tmp_path):
+    rows = ['b1-01,pressurised,traces/b1-01.csv,0,0,0,004,0,010,0,0145,,']
+    folder = make_session(tmp_path, rows=rows)
+    with pytest.raises(SessionError, match=r"line 2: expected 9 fields, got 13 \(decimal commas\?"):
+        read_session(folder)

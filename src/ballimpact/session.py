@@ -47,15 +47,59 @@ FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the ti
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
 _KNOWN_SECTION_KEYS = {
-    "plate": {"polarity", "kcal_range_N_per_V"},
+    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
-    "gates": {"spacing_m", "resolution_s"},
+    "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
 }
-_KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m"}
+_KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m", "itf_rebound_cm"}
+#: File names a lab may give session.yaml / impacts.csv by mistake (near misses).
+_NEAR_MISS_NAMES = {
+    SESSION_FILE: ("session.yml", "Session.yaml", "SESSION.yaml", "session.YAML", "session.yaml.txt",
+                   "session.txt", "Session.yml", "session_yaml"),
+    IMPACTS_FILE: ("Impacts.csv", "IMPACTS.csv", "impacts.CSV", "impacts.csv.txt", "impacts.txt",
+                   "impact.csv", "impacts.tsv", "impacts.xlsx"),
+}
 
 
 class SessionError(ValueError):
-    """Session-level fault; ``str(e)`` is the one-line message for the user."""
+    """Session-level fault; ``str(e)`` is the message for the user, one line per problem.
+
+    ``problems`` lists every session-level problem found (one line each): the reader
+    collects them all instead of stopping at the first, so that one round of
+    ``ballimpact validate`` shows everything to fix.
+    """
+
+    def __init__(self, message: str, problems: list[str] | None = None):
+        self.problems = list(problems) if problems else [str(message)]
+        super().__init__(message)
+
+
+MAX_REPORTED_PROBLEMS = 30  # session-level problems listed in full; the rest are counted
+
+
+def _raise_collected(problems: list[str]) -> None:
+    """Raise one SessionError holding every problem (no-op when there is none)."""
+    if not problems:
+        return
+    shown = problems[:MAX_REPORTED_PROBLEMS]
+    if len(problems) > len(shown):
+        shown = shown + [f"... and {len(problems) - len(shown)} more session-level problem(s) of the same kinds"]
+    raise SessionError("\n".join(shown), shown)
+
+
+class _Collector:
+    """Runs independent checks, keeping the SessionError of each instead of stopping."""
+
+    def __init__(self):
+        self.problems: list[str] = []
+        self.balls: dict | None = None  # ball types of session.yaml, when they could be read
+
+    def __call__(self, check, *args, **kwargs):
+        try:
+            return check(*args, **kwargs)
+        except SessionError as exc:
+            self.problems.extend(exc.problems)
+            return None
 
 
 class SessionWarning(UserWarning):
@@ -180,8 +224,44 @@ def _decode_utf8(data: bytes, file: str) -> str:
         ) from None
 
 
+def near_miss_name(folder: Path, expected: str) -> str | None:
+    """
+    A file in ``folder`` whose name is a likely mistake for ``expected`` (e.g. session.yml).
+
+    Parameters
+    ----------
+    folder : Path
+        The session folder.
+    expected : str
+        The file name the format requires (``session.yaml`` or ``impacts.csv``).
+
+    Returns
+    -------
+    str or None
+        The name found, None when there is none.
+    """
+    try:
+        names = {p.name for p in Path(folder).iterdir() if p.is_file()}
+    except OSError:
+        return None
+    if expected in names:
+        return None
+    for name in _NEAR_MISS_NAMES.get(expected, ()):
+        if name in names:
+            return name
+    lower = {n.lower(): n for n in names}
+    stem = expected.rsplit(".", 1)[0]
+    for low, name in sorted(lower.items()):
+        if low != expected and low.startswith(stem) and low.split(".")[0] == stem:
+            return name
+    return None
+
+
 def _read_bytes(path: Path, file: str, what: str) -> bytes:
     if not path.exists():
+        other = near_miss_name(path.parent, path.name) if path.parent.is_dir() else None
+        if other is not None:
+            raise SessionError(f"{file}: file not found, but {other!r} is there: rename it to {path.name!r}")
         raise SessionError(f"{file}: file not found ({what})")
     if not path.is_file():
         raise SessionError(f"{file}: is not a file ({what})")
@@ -304,8 +384,7 @@ def _parse_ball(key: str, spec, file: str) -> BallType:
     return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m)
 
 
-def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
-    # session_id
+def _parse_session_id(data: dict, folder_name: str, file: str) -> str:
     session_id_value = _require(data, "session_id", "session_id", file)
     if isinstance(session_id_value, (dict, list, bool)):
         raise SessionError(f"{file}: key 'session_id' must be text, got {session_id_value!r}")
@@ -316,7 +395,10 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
             f"{file}: key 'session_id' is {session_id!r} but the session folder is named {folder_name!r}; "
             f"they must be equal{hint}"
         )
-    # date
+    return session_id
+
+
+def _parse_date(data: dict, file: str) -> str:
     date_value = _require(data, "date", "date", file)
     date = str(date_value).strip() if isinstance(date_value, str) else None
     ok = date is not None and ISO_DATE_PATTERN.fullmatch(date) is not None
@@ -327,7 +409,10 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
             ok = False
     if not ok:
         raise SessionError(f"{file}: key 'date' must be an ISO date YYYY-MM-DD, got {date_value!r}")
+    return date
 
+
+def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None]:
     plate = _section(data, "plate", file)
     polarity_value = _require(plate, "polarity", "plate.polarity", file)
     polarity_number = _to_float(polarity_value)
@@ -344,7 +429,10 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
             )
         kcal_range = (bounds[0], bounds[1])
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
+    return int(polarity_number), kcal_range
 
+
+def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float]:
     daq = _section(data, "daq", file)
     sample_rate_hz = _number(
         _require(daq, "sample_rate_hz", "daq.sample_rate_hz", file), "daq.sample_rate_hz", file, positive=True
@@ -359,7 +447,10 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
     if daq.get("mains_hz") is not None:
         mains_hz = _number(daq["mains_hz"], "daq.mains_hz", file, positive=True)
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
+    return sample_rate_hz, (adc[0], adc[1]), mains_hz
 
+
+def _parse_gates(data: dict, file: str) -> tuple[float, float]:
     gates = _section(data, "gates", file)
     spacing_m = _number(_require(gates, "spacing_m", "gates.spacing_m", file), "gates.spacing_m", file, positive=True)
     if spacing_m > MAX_GATE_SPACING_M:
@@ -388,35 +479,75 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
             stacklevel=3,
         )
     _warn_unknown(gates, _KNOWN_SECTION_KEYS["gates"], "gates", file)
+    return spacing_m, resolution_s
 
+
+def _parse_balls(data: dict, file: str, collect: _Collector | None = None) -> dict[str, BallType]:
     balls_value = _require(data, "balls", "balls", file)
     if not isinstance(balls_value, dict) or not balls_value:
         raise SessionError(
             f"{file}: key 'balls' must be a mapping of ball types (key: {{mass_g: ...}}), got {balls_value!r}"
         )
-    balls: dict[str, BallType] = {}
+    balls: dict[str, BallType | None] = {}
+    outer, collect = collect, _Collector()
     for key_value, spec in balls_value.items():
         key = str(key_value)
         if not IMPACT_ID_PATTERN.fullmatch(key):
-            raise SessionError(f"{file}: ball key {key!r} under 'balls' must match [A-Za-z0-9_-]+")
+            collect.problems.append(f"{file}: ball key {key!r} under 'balls' must match [A-Za-z0-9_-]+")
+            continue
         if key in balls:
-            raise SessionError(f"{file}: ball key {key!r} is given twice under 'balls'")
-        balls[key] = _parse_ball(key, spec, file)
+            collect.problems.append(f"{file}: ball key {key!r} is given twice under 'balls'")
+            continue
+        balls[key] = collect(_parse_ball, key, spec, file)  # None when unusable
+    if outer is not None:
+        outer.balls = balls  # every key, for the checks of impacts.csv
+    _raise_collected(collect.problems)
+    return balls
 
+
+def _parse_synthetic(data: dict, file: str) -> bool:
     synthetic = data.get("synthetic", False)
     if synthetic is None:
         synthetic = False
     if not isinstance(synthetic, bool):
         raise SessionError(f"{file}: key 'synthetic' must be true or false, got {synthetic!r}")
+    return synthetic
 
+
+def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | None = None) -> SessionMeta | None:
+    """SessionMeta of session.yaml; every independent problem is collected first.
+
+    With ``collect`` given, problems are appended to it and None is returned when there
+    is any (the ball types parsed so far are in ``collect.balls``); without, one
+    SessionError holding all of them is raised.
+    """
+    own = collect is None
+    collect = collect or _Collector()
+    n_before = len(collect.problems)
+    session_id = collect(_parse_session_id, data, folder_name, file)
+    date = collect(_parse_date, data, file)
+    plate = collect(_parse_plate, data, file)
+    daq = collect(_parse_daq, data, file)
+    gates = collect(_parse_gates, data, file)
+    balls = collect(_parse_balls, data, file, collect)
+    synthetic = collect(_parse_synthetic, data, file)
+    operator = collect(_text, data.get("operator"), "operator", file)
+    description = collect(_text, data.get("description"), "description", file)
+    if len(collect.problems) > n_before:
+        if own:
+            _raise_collected(collect.problems)
+        return None
+    polarity, kcal_range = plate
+    sample_rate_hz, adc, mains_hz = daq
+    spacing_m, resolution_s = gates
     return SessionMeta(
         session_id=session_id,
         date=date,
-        operator=_text(data.get("operator"), "operator", file),
-        description=_text(data.get("description"), "description", file),
-        polarity=int(polarity_number),
+        operator=operator,
+        description=description,
+        polarity=polarity,
         sample_rate_hz=sample_rate_hz,
-        adc_range_v=(adc[0], adc[1]),
+        adc_range_v=adc,
         gate_spacing_m=spacing_m,
         gate_resolution_s=resolution_s,
         balls=balls,
@@ -530,7 +661,23 @@ def _check_trace(cell: str, session_dir: Path, problems: list[str]) -> None:
         problems.append(f"trace path is not a file: {trace}")
 
 
-def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
+def _separator_hint(header: list[str]) -> str:
+    """Why a header lacks the required columns, when the cause is the separator."""
+    joined = ",".join(header)
+    for sep, name in ((";", "semicolons"), ("\t", "tabs"), ("|", "'|'")):
+        if sep in joined and sum(c in joined for c in REQUIRED_COLUMNS) >= 3:
+            return (
+                f"; the columns are separated by {name}: save {IMPACTS_FILE} comma-separated "
+                "(in a spreadsheet: CSV, comma as separator, point as decimal mark)"
+            )
+    return ""
+
+
+def _read_impacts(session_dir: Path, meta) -> list[ImpactRow]:
+    """Impact rows; ``meta`` is a SessionMeta or None (session.yaml unusable: the rows'
+    structure is still checked, every session-level problem collected)."""
+    balls = meta.balls if meta is not None else None
+    session_problems: list[str] = []
     path = session_dir / IMPACTS_FILE
     file = str(path)
     data = _read_bytes(path, file, "every session folder needs an impacts.csv")
@@ -565,7 +712,7 @@ def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
             if missing:
                 raise SessionError(
                     f"{file}: line {line}: missing required column(s): {', '.join(missing)} "
-                    f"(header has: {_one_line(', '.join(header))})"
+                    f"(header has: {_one_line(', '.join(header))})" + _separator_hint(header)
                 )
             unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
             if unknown:
@@ -577,27 +724,40 @@ def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
             index = {name: i for i, name in enumerate(header)}
             continue
         if len(record) != len(header):
-            raise SessionError(f"{file}: line {line}: expected {len(header)} fields, got {len(record)}")
+            hint = ""
+            if len(record) > len(header) and re.search(r"\d,\d", ",".join(record)):
+                hint = " (decimal commas? write gate times with a decimal point, e.g. 4.219063 not 4,219063)"
+            session_problems.append(f"{file}: line {line}: expected {len(header)} fields, got {len(record)}{hint}")
+            continue
         cells = {name: record[i] for name, i in index.items()}
         impact_id = cells["impact_id"].strip()
         if not IMPACT_ID_PATTERN.fullmatch(impact_id):
-            raise SessionError(
+            session_problems.append(
                 f"{file}: line {line}: impact_id {impact_id!r} is not valid "
                 "(allowed: letters, digits, '_' and '-', at least one)"
             )
+            continue
         if impact_id in first_line:
-            raise SessionError(f"{file}: line {line}: impact_id {impact_id!r} duplicates line {first_line[impact_id]}")
+            session_problems.append(
+                f"{file}: line {line}: impact_id {impact_id!r} duplicates line {first_line[impact_id]}"
+            )
+            continue
         first_line[impact_id] = line
         ball_key = cells["ball"].strip()
-        if ball_key not in meta.balls:
-            raise SessionError(
+        if balls is None:
+            continue  # session.yaml balls unusable: only the structure of the rows is checked
+        if ball_key in balls and balls[ball_key] is None:
+            continue  # a ball type with problems of its own in session.yaml
+        if ball_key not in balls:
+            session_problems.append(
                 f"{file}: line {line}: ball {ball_key!r} is not defined in {SESSION_FILE} balls "
-                f"(valid: {', '.join(meta.balls)})"
+                f"(valid: {', '.join(balls)})"
             )
+            continue
         problems: list[str] = []
         gates = {column: _parse_gate(cells[column], column, problems) for column in GATE_COLUMNS}
         _check_gate_order(gates, cells, problems)
-        mass_kg = _parse_mass(cells.get("mass_g", ""), meta.balls[ball_key], problems, f"{file}: line {line}")
+        mass_kg = _parse_mass(cells.get("mass_g", ""), balls[ball_key], problems, f"{file}: line {line}")
         trace = cells["trace"].strip()
         _check_trace(trace, session_dir, problems)
         rows.append(
@@ -619,7 +779,8 @@ def _read_impacts(session_dir: Path, meta: SessionMeta) -> list[ImpactRow]:
         raise SessionError(
             f"{file}: file is empty (expected a header row with columns {', '.join(REQUIRED_COLUMNS)})"
         )
-    if not rows:
+    _raise_collected(session_problems)
+    if not rows and balls is not None:
         raise SessionError(f"{file}: no impact rows (only the header)")
     return rows
 
@@ -659,10 +820,29 @@ def read_session(path) -> Session:
     if not session_dir.is_dir():
         raise SessionError(f"{session_dir}: session folder not found")
     yaml_path = session_dir / SESSION_FILE
-    data = _load_yaml(yaml_path, str(yaml_path))
-    meta = _parse_meta(data, session_dir.resolve().name, str(yaml_path))
-    impacts = _read_impacts(session_dir, meta)
+    collect = _Collector()
+    data = collect(_load_yaml, yaml_path, str(yaml_path))
+    meta = None
+    if data is not None:
+        meta = _parse_meta(data, session_dir.resolve().name, str(yaml_path), collect)
+    # impacts.csv is checked too when session.yaml has problems (its ball keys only
+    # when the balls section could be read), so that every problem is reported at once
+    if meta is None and collect.balls is not None:
+        meta_for_rows = _BallsOnly(collect.balls)
+    else:
+        meta_for_rows = meta
+    impacts = None
+    if yaml_path.is_file():  # without any session.yaml the folder is hardly a session
+        impacts = collect(_read_impacts, session_dir, meta_for_rows)
+    _raise_collected(collect.problems)
     return Session(path=session_dir, meta=meta, impacts=impacts)
+
+
+@dataclass(frozen=True)
+class _BallsOnly:
+    """Stand-in for SessionMeta while session.yaml has problems: its ball types only."""
+
+    balls: dict
 
 
 def file_sha256(path) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -136,8 +137,14 @@ def _raise_bad_line(data: list[str], columns: list[str], first_line: int, file: 
             raise TraceError(f"{file}: line {line}: empty line among the samples")
         cells = text.split(",")
         if len(cells) != len(columns):
+            hint = ""
+            if len(cells) > len(columns) and re.search(r"\d,\d", text):
+                hint = " (decimal commas? write numbers with a decimal point, e.g. 0.0021 not 0,0021)"
+            elif ";" in text or "\t" in text:
+                hint = " (the separator must be a comma, not ';' or a tab)"
             raise TraceError(
                 f"{file}: line {line}: expected {len(columns)} field(s) ({','.join(columns)}), got {len(cells)}"
+                + hint
             )
         for cell in cells:
             try:
