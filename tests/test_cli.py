@@ -55,3 +55,52 @@ def test_validate_session_fault_is_one_line_no_traceback(tmp_path):
     assert r.returncode == 2
     assert "Traceback" not in r.stderr
     assert "session.yaml" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+# ------------------------------------------------------------ simulate checks its inputs (issue 14)
+
+
+@pytest.mark.parametrize(("option", "bad", "message"), [
+    ("--mass-g", "0.0577", "the mass is in g and must be in (1, 1000) g, got '0.0577' (in kg? 0.0577 kg = 57.7 g)"),
+    ("--vin", "200", "the inbound speed must be in 1-80 m/s, got '200'"),
+    ("--vin", "0.5", "the inbound speed must be in 1-80 m/s, got '0.5'"),
+    ("--ak", "0", "expected a positive number, got '0'"),
+    ("--ac", "-3.5", "expected a positive number, got '-3.5'"),
+    ("--kb0", "0", "expected a positive number, got '0'"),
+])
+def test_simulate_validates_like_validate(option, bad, message, capsys):
+    args = {"--mass-g": "57.7", "--kb0": "21", "--ak": "16000", "--a": "1.65", "--ac": "3.5", "--vin": "20"}
+    args[option] = bad
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", *[x for kv in args.items() for x in kv]])
+    assert info.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_simulate_warns_about_an_unusual_mass(capsys):
+    assert main(["simulate", "--mass-g", "150", *BALL1[2:], "--vin", "20"]) == 0
+    assert "warning: --mass-g 150 g is outside the usual 40-70 g" in capsys.readouterr().err
+
+
+def test_every_synth_option_has_help(capsys):
+    with pytest.raises(SystemExit):
+        main(["synth", "--help"])
+    out = capsys.readouterr().out
+    for option in ("--seed", "--balls", "--params", "--impacts-per-ball", "--faults-per-kind", "--polarity",
+                   "--format", "--sample-rate-hz", "--no-kb0"):
+        block = out.split(option, 1)[1].split("\n  -", 1)[0]
+        assert len(block.split()) > 3, (option, block)
+
+
+def test_validate_prints_every_session_problem(tmp_path):
+    folder = tmp_path / "s"
+    folder.mkdir()
+    (folder / "session.yaml").write_text("session_id: s\ndate: x\nplate: {polarity: 3}\n")
+    (folder / "impacts.csv").write_text("impact_id;ball;trace\n")
+    r = subprocess.run([*BALLIMPACT, "validate", str(folder)], capture_output=True, text=True)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert all(line.startswith("error: ") for line in lines) and len(lines) >= 5, lines
+    for fragment in ("key 'date'", "plate.polarity", "missing required key 'daq'", "missing required key 'gates'",
+                     "missing required key 'balls'", "impacts.csv: line 1: missing required column"):
+        assert any(fragment in line for line in lines), (fragment, lines)

@@ -18,7 +18,7 @@ GATES = "0.0,0.004,0.010,0.0145"
 META = {
     "session_id": "s1",
     "date": "2026-11-21",
-    "plate": {"polarity": -1},
+    "plate": {"polarity": 1},
     "daq": {"sample_rate_hz": RATE_HZ, "adc_range_v": [-10.0, 10.0]},
     "gates": {"spacing_m": 0.1, "resolution_s": 1.0e-6},
     "balls": {"pressurised": {"mass_g": 57.7}, "pressureless": {"mass_g": 57.0}},
@@ -199,3 +199,64 @@ def test_validation_does_not_modify_folder(tmp_path):
     validate_session(folder)
     validate_session(tmp_path / "clean" / "s1")
     assert snapshot(tmp_path) == before
+
+
+# ------------------------------------------------------------ plausibility checks (issue 14)
+
+
+def test_gate_times_in_ms_give_speed_problems_and_a_units_hint(tmp_path):
+    ms = "0.0,4.0,10.0,14.5"  # the GATES times written in ms: 0.025 m/s instead of 25 m/s
+    folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{ms},,", f"b,pressurised,traces/a.csv,{ms},,"])
+    write_csv_trace(folder / "traces" / "a.csv")
+    report = validate_session(folder)
+    # 0.1 m / 4 s = 0.025 m/s and 0.1 m / 4.5 s = 0.0222 m/s: by hand, not by the code under test
+    assert [m for i, m in report.problems if i == "a"] == [
+        "inbound speed 0.025 m/s from the gate times is outside 1-80 m/s",
+        "rebound speed 0.02222 m/s from the gate times is outside 1-80 m/s",
+    ]
+    assert any("are the gate times in ms instead of s? in s the speeds would be 25 m/s" in w
+               for w in report.warnings), report.warnings
+
+
+@pytest.mark.parametrize(("rate", "expected"), [
+    (50000.0, "daq.sample_rate_hz = 50000 Hz disagrees with the rate every trace gives itself (mostly 66964.3 Hz"),
+    (66.9643, "daq.sample_rate_hz = 66.9643 Hz is outside the plausible 1000-1e+07 Hz (in kHz?"),
+])
+def test_sample_rate_is_compared_with_the_trace_headers(tmp_path, rate, expected):
+    meta = {**META, "daq": {"sample_rate_hz": rate, "adc_range_v": [-10.0, 10.0]}}
+    folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{GATES},,"], meta=meta)
+    write_csv_trace(folder / "traces" / "a.csv", header=f"# sample_rate_hz: {RATE_HZ}\n")
+    report = validate_session(folder)
+    assert any(expected in w for w in report.warnings), report.warnings
+
+
+def test_sample_rate_agreeing_with_a_header_is_not_warned_about(tmp_path):
+    folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{GATES},,"])
+    write_csv_trace(folder / "traces" / "a.csv", header=f"# sample_rate_hz: {RATE_HZ}\n")
+    assert validate_session(folder).warnings == []
+
+
+@pytest.mark.parametrize("polarity", [1, -1])
+def test_polarity_is_guessed_from_the_traces(tmp_path, polarity):
+    meta = {**META, "plate": {"polarity": polarity}}
+    folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{GATES},,"], meta=meta)
+    # a negative pulse: -1 V for 50 samples on a 0.01 V baseline
+    write_csv_trace(folder / "traces" / "a.csv", body="voltage_V\n" + "\n".join(repr(-x) for x in voltage().tolist()))
+    report = validate_session(folder)
+    mismatch = [w for w in report.warnings if "plate.polarity" in w]
+    if polarity == 1:
+        assert mismatch == ["1 of 1 traces show a negative pulse but plate.polarity is +1: is plate.polarity -1? "
+                            "(every such impact would be excluded)"]
+    else:
+        assert mismatch == []
+
+
+def test_validate_lists_every_session_level_problem(tmp_path):
+    meta = {**META, "date": "yesterday", "gates": {"spacing_m": -0.1, "resolution_s": 1e-6}}
+    folder = make_session(tmp_path, [f"a,tennis,traces/a.csv,{GATES},,"], meta=meta)
+    with pytest.raises(SessionError) as info:
+        validate_session(folder)
+    assert len(info.value.problems) == 3
+    assert [k for k in ("key 'date'", "key 'gates.spacing_m'", "ball 'tennis' is not defined")
+            if any(k in p for p in info.value.problems)] == ["key 'date'", "key 'gates.spacing_m'",
+                                                                "ball 'tennis' is not defined"]

@@ -24,17 +24,36 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def _nonnegative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not np.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
+def _mass_g(text: str) -> float:
+    """A ball mass [g], checked as session.yaml ``mass_g`` is (error outside 1-1000 g)."""
+    from .session import MASS_MAX_G, MASS_MIN_G
+
+    value = _positive_float(text)
+    if not MASS_MIN_G < value < MASS_MAX_G:
+        hint = f" (in kg? {value:g} kg = {value * 1e3:g} g)" if value < MASS_MIN_G else ""
+        raise argparse.ArgumentTypeError(
+            f"the mass is in g and must be in ({MASS_MIN_G:g}, {MASS_MAX_G:g}) g, got {text!r}{hint}"
+        )
+    return value
+
+
+def _speed_m_s(text: str) -> float:
+    """An inbound speed [m/s] in the plausible 1-80 m/s of validate (SPEED_RANGE_M_S)."""
+    from .validation import SPEED_RANGE_M_S
+
+    value = _positive_float(text)
+    lo, hi = SPEED_RANGE_M_S
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"the inbound speed must be in {lo:g}-{hi:g} m/s, got {text!r}")
     return value
 
 
 def _cmd_simulate(args) -> int:
+    from .session import MASS_TYPICAL_MAX_G, MASS_TYPICAL_MIN_G
+
+    if not MASS_TYPICAL_MIN_G <= args.mass_g <= MASS_TYPICAL_MAX_G:
+        print(f"warning: --mass-g {args.mass_g:g} g is outside the usual {MASS_TYPICAL_MIN_G:g}-"
+              f"{MASS_TYPICAL_MAX_G:g} g of a tennis ball", file=sys.stderr)
     from .balls import BallModelParameters
     from .model import simulate_impact
 
@@ -77,7 +96,8 @@ def _cmd_validate(args) -> int:
     try:
         report = validate_session(args.session)
     except SessionError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        for problem in exc.problems:  # every session-level problem, one line each
+            print(f"error: {problem}", file=sys.stderr)
         return 2
     print(format_validation(report))
     return 1 if (args.strict and report.problems) else 0
@@ -138,13 +158,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="simulate impacts with the ball model (parameters in Table 2 units)",
         description="Contact time, COR, peak force and largest displacement per inbound speed.",
     )
-    sim.add_argument("--mass-g", type=_positive_float, required=True, help="ball mass [g]")
-    sim.add_argument("--kb0", type=_nonnegative_float, required=True, help="kB(0) [kN/m]")
-    sim.add_argument("--ak", type=_nonnegative_float, required=True, help="AK [kN/m^(1+a)] (Table 2: kN/m2)")
-    sim.add_argument("--a", type=_positive_float, required=True, help="stiffness exponent a [-]")
-    sim.add_argument("--ac", type=_nonnegative_float, required=True, help="AC [kN s/m^3]")
-    sim.add_argument("--vin", type=_positive_float, action="append", required=True,
-                     help="inbound speed [m/s]; repeat for several")
+    sim.add_argument("--mass-g", type=_mass_g, required=True, help="ball mass [g], e.g. 57.7 (not kg)")
+    sim.add_argument("--kb0", type=_positive_float, required=True, help="kB(0) [kN/m], positive")
+    sim.add_argument("--ak", type=_positive_float, required=True,
+                     help="AK [kN/m^(1+a)] (Table 2: kN/m2), positive")
+    sim.add_argument("--a", type=_positive_float, required=True, help="stiffness exponent a [-], positive")
+    sim.add_argument("--ac", type=_positive_float, required=True, help="AC [kN s/m^3], positive")
+    sim.add_argument("--vin", type=_speed_m_s, action="append", required=True,
+                     help="inbound speed [m/s], 1-80; repeat for several")
     sim.add_argument("--json", action="store_true", help="print a JSON list of objects")
     sim.set_defaults(func=_cmd_simulate)
 
@@ -155,15 +176,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     syn = sub.add_parser("synth", help="write a synthetic session (seeded) and its ground truth")
     syn.add_argument("out_dir", type=Path, help="session folder to create; its name is the session id")
-    syn.add_argument("--seed", type=int, default=0)
+    syn.add_argument("--seed", type=int, default=0,
+                     help="seed of the random numbers; the same seed writes the same files (default 0)")
     syn.add_argument("--balls", nargs="+", choices=sorted(__import__("ballimpact.balls", fromlist=["BALLS"]).BALLS),
                      help="Table 2 ball types to include (default all four)")
     syn.add_argument("--params", type=Path, help="YAML of custom ball types: key: {mass_g, kb0_kN_m, ak_kN_m, a, ac_kN_s_m3}")
-    syn.add_argument("--impacts-per-ball", type=int, default=10)
-    syn.add_argument("--faults-per-kind", type=int, default=2)
-    syn.add_argument("--polarity", type=int, choices=(1, -1), default=1)
-    syn.add_argument("--format", choices=("csv", "tdms", "mixed"), default="csv")
-    syn.add_argument("--sample-rate-hz", type=_positive_float, default=None)
+    syn.add_argument("--impacts-per-ball", type=int, default=10,
+                     help="good impacts per ball type, at speeds between 14 and 30 m/s (default 10)")
+    syn.add_argument("--faults-per-kind", type=int, default=2,
+                     help="impacts planted with each kind of fault: clipped, missing gate time, "
+                          "missing trace file, double impact (default 2)")
+    syn.add_argument("--polarity", type=int, choices=(1, -1), default=1,
+                     help="plate.polarity: sign of the voltage for a compressive force (default 1)")
+    syn.add_argument("--format", choices=("csv", "tdms", "mixed"), default="csv",
+                     help="trace file format; mixed: CSV with and without time_s, and TDMS (default csv)")
+    syn.add_argument("--sample-rate-hz", type=_positive_float, default=None,
+                     help="DAQ sample rate [Hz] (default 66964.3, the paper's rig)")
     syn.add_argument("--no-kb0", action="store_true", help="leave kB(0) out of session.yaml (it is then extrapolated)")
     syn.set_defaults(func=_cmd_synth)
     return parser

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from .session import read_session
 from .traces import TraceError, read_trace
@@ -13,6 +16,75 @@ from .traces import TraceError, read_trace
 __all__ = ["ValidationReport", "validate_session", "format_validation"]
 
 RATE_SIGNIFICANT_DIGITS = 9  # sample rates are grouped after rounding to this many digits
+SPEED_RANGE_M_S = (1.0, 80.0)  # [m/s] plausible inbound and rebound gate speeds of a ball on the rig
+RATE_RTOL = 0.005  # daq.sample_rate_hz vs a trace's own rate: largest relative difference
+RATE_RANGE_HZ = (1.0e3, 1.0e7)  # [Hz] plausible daq.sample_rate_hz (the rigs: 20-200 kHz)
+
+
+def gate_speed_problems(spacing_m: float, gates_s) -> list[str]:
+    """
+    Inbound and rebound speed from one impact's gate times, and what is implausible about them.
+
+    Parameters
+    ----------
+    spacing_m : float
+        Gate spacing [m] (session.yaml ``gates.spacing_m``).
+    gates_s : sequence of 4 float
+        gate_in_1, gate_in_2, gate_out_2, gate_out_1 [s]; NaN when missing.
+
+    Returns
+    -------
+    list of str
+        Empty when both speeds are in :data:`SPEED_RANGE_M_S` [m/s] (or cannot be
+        computed: the reader reports missing or disordered gate times itself).
+    """
+    in_1, in_2, out_2, out_1 = (float(g) for g in gates_s)
+    lo, hi = SPEED_RANGE_M_S
+    found = []
+    for what, dt in (("inbound", in_2 - in_1), ("rebound", out_1 - out_2)):
+        if not math.isfinite(dt) or dt <= 0:
+            continue
+        speed = spacing_m / dt
+        if not lo <= speed <= hi:
+            found.append(f"{what} speed {speed:.4g} m/s from the gate times is outside {lo:g}-{hi:g} m/s")
+    return found
+
+
+def _units_hint(speeds: list[float]) -> str:
+    """Which unit mistake a set of implausible gate speeds [m/s] points to."""
+    median = float(np.median(speeds))
+    if 1e-4 <= median < 0.1:
+        return (f" (median {median:.3g} m/s: are the gate times in ms instead of s? "
+                f"in s the speeds would be {median * 1e3:.3g} m/s)")
+    if median > 1e3:
+        return (f" (median {median:.3g} m/s: are the gate times in us, or gates.spacing_m in mm? "
+                "gate times must be in s, the spacing in m)")
+    return f" (median {median:.3g} m/s: check the gate times [s] and gates.spacing_m [m])"
+
+
+def pulse_sign(voltage_V) -> int:
+    """
+    Sign of the largest excursion of a trace from its baseline (the impact pulse).
+
+    Parameters
+    ----------
+    voltage_V : array_like
+        The trace [V].
+
+    Returns
+    -------
+    int
+        +1 for a positive pulse, -1 for a negative one, 0 for a flat trace.
+    """
+    v = np.asarray(voltage_V, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return 0
+    dev = v - np.median(v)
+    top, bottom = float(dev.max()), float(-dev.min())
+    if top == bottom:
+        return 0
+    return 1 if top > bottom else -1
 
 
 @dataclass
@@ -71,8 +143,19 @@ def validate_session(path) -> ValidationReport:
         sources: Counter = Counter()
         formats: Counter = Counter()
         trace_users: dict[Path, str] = {}
+        meta = session.meta
+        bad_speeds: list[float] = []
+        own_rates: list[float] = []  # [Hz] rates the traces give themselves (header, time_s, TDMS)
+        n_default_rate = 0
+        signs: Counter = Counter()
         for row in session.impacts:
             problems.extend((row.impact_id, message) for message in row.problems)
+            gates = (row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
+            if not any(m.startswith("gate times out of order") for m in row.problems):
+                speed_problems = gate_speed_problems(meta.gate_spacing_m, gates)
+                problems.extend((row.impact_id, message) for message in speed_problems)
+                if speed_problems and math.isfinite(gates[1] - gates[0]) and gates[1] > gates[0]:
+                    bad_speeds.append(meta.gate_spacing_m / (gates[1] - gates[0]))
             if any(message.startswith(("missing trace path", "trace ")) for message in row.problems):
                 continue  # no readable trace file to look at
             trace_path = session.trace_path(row)
@@ -89,7 +172,19 @@ def validate_session(path) -> ValidationReport:
             rates[float(f"{trace.sample_rate_hz:.{RATE_SIGNIFICANT_DIGITS}g}")] += 1
             sources[trace.sample_rate_source] += 1
             formats[trace.format] += 1
+            if trace.sample_rate_source == "session":
+                n_default_rate += 1
+            else:
+                own_rates.append(trace.sample_rate_hz)
+            signs[pulse_sign(trace.voltage_V)] += 1
             del trace  # one trace in memory at a time
+        if len(bad_speeds) >= max(2, len(session.impacts) // 2):
+            warnings.warn(
+                f"{len(bad_speeds)} of {len(session.impacts)} impacts have gate speeds outside "
+                f"{SPEED_RANGE_M_S[0]:g}-{SPEED_RANGE_M_S[1]:g} m/s{_units_hint(bad_speeds)}"
+            )
+        _check_sample_rate(meta.sample_rate_hz, own_rates, n_default_rate)
+        _check_polarity(meta.polarity, signs)
     per_ball = Counter(row.ball for row in session.impacts)
     return ValidationReport(
         session_id=session.meta.session_id,
@@ -101,6 +196,38 @@ def validate_session(path) -> ValidationReport:
         sample_rate_sources=dict(sorted(sources.items())),
         warnings=[str(w.message) for w in caught],
     )
+
+
+def _check_sample_rate(rate_hz: float, own_rates: list[float], n_default: int) -> None:
+    """Warn when daq.sample_rate_hz [Hz] is implausible or agrees with none of the traces' own rates."""
+    lo, hi = RATE_RANGE_HZ
+    if not lo <= rate_hz <= hi:
+        hint = f" (in kHz? {rate_hz:g} kHz would be {rate_hz * 1e3:g} Hz)" if rate_hz < lo else ""
+        warnings.warn(f"daq.sample_rate_hz = {rate_hz:g} Hz is outside the plausible {lo:g}-{hi:g} Hz{hint}")
+        return
+    if not own_rates:
+        return
+    if any(abs(r - rate_hz) <= RATE_RTOL * r for r in own_rates):
+        return
+    common = Counter(float(f"{r:.6g}") for r in own_rates).most_common(1)[0][0]
+    use = (f"; the {n_default} trace(s) without a rate of their own are read at {rate_hz:g} Hz"
+           if n_default else "; each trace's own rate is used")
+    warnings.warn(
+        f"daq.sample_rate_hz = {rate_hz:g} Hz disagrees with the rate every trace gives itself "
+        f"(mostly {common:g} Hz, from trace headers / time_s / TDMS wf_increment){use}: correct session.yaml"
+    )
+
+
+def _check_polarity(polarity: int, signs: Counter) -> None:
+    """Warn when most traces pulse the other way than plate.polarity says."""
+    opposite = signs.get(-polarity, 0)
+    n = opposite + signs.get(polarity, 0)
+    if n and opposite > n / 2:
+        sign = "negative" if polarity == 1 else "positive"
+        warnings.warn(
+            f"{opposite} of {n} traces show a {sign} pulse but plate.polarity is {polarity:+d}: "
+            f"is plate.polarity {-polarity:+d}? (every such impact would be excluded)"
+        )
 
 
 def _counts(mapping: dict, unit: str = "") -> str:
