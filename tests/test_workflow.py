@@ -226,6 +226,14 @@ def test_results_dir_must_differ_from_raw_dir(tmp_path):
     assert "results_dir" in proc.stdout and "must differ from raw_dir" in proc.stdout
 
 
+@pytest.mark.parametrize(("raw", "results", "what"), [("raw", "raw/results", "inside"), ("data/raw", "data", "contains")])
+def test_results_dir_inside_raw_dir_is_refused(tmp_path, raw, results, what):
+    (tmp_path / raw).mkdir(parents=True)
+    proc = run_snakemake("-n", "--cores", "1", *config_args(tmp_path / raw, tmp_path / results), check=False)
+    assert f"results_dir ({tmp_path / results}) is {what} raw_dir ({tmp_path / raw})" in proc.stdout, proc.stdout
+    assert not (tmp_path / raw / "results").exists()
+
+
 # ----------------------------------------------------------- session schema (parse time)
 
 

@@ -84,6 +84,13 @@ if os.path.abspath(RAW_DIR) == os.path.abspath(RESULTS_DIR):
         f"invalid configuration: results_dir ({RESULTS_DIR}) must differ from raw_dir "
         "(the pipeline never writes into the raw data)"
     )
+for _inner, _outer, _what in ((RESULTS_DIR, RAW_DIR, "inside"), (RAW_DIR, RESULTS_DIR, "contains")):
+    if Path(os.path.abspath(_inner)).is_relative_to(os.path.abspath(_outer)):
+        raise WorkflowError(
+            f"invalid configuration: results_dir ({RESULTS_DIR}) is {_what} raw_dir ({RAW_DIR}); "
+            "put them side by side, e.g. raw_dir=/data/rig2/raw results_dir=/data/rig2/results "
+            "(the pipeline never writes into the raw data, and results must not be read as sessions)"
+        )
 
 
 def _list_sessions():
