@@ -150,3 +150,21 @@ def test_bad_kcal_range_is_a_session_fault(synth_session, tmp_path):
                                        encoding="utf-8")
     with pytest.raises(SessionError, match=r"session.yaml: key 'plate.kcal_range_N_per_V' must be two numbers"):
         read_session(copy)
+
+
+# ------------------------------------------------------------ wrong plate.polarity (issue 14)
+
+
+@pytest.mark.parametrize("fixture", ["synth_session", "synth_session_negative_tdms"])
+def test_wrong_polarity_is_named_as_the_reason(request, tmp_path, fixture):
+    import dataclasses
+
+    session_dir, truth = request.getfixturevalue(fixture)
+    session = read_session(session_dir)
+    true_polarity = session.meta.polarity
+    session.meta = dataclasses.replace(session.meta, polarity=-true_polarity)  # the user's mistake
+    good = [i for i in truth.index if not truth.loc[i, "fault"]][:3]
+    results = list(iter_process(session, impact_ids=good))
+    sign = "negative" if true_polarity == -1 else "positive"
+    expected = f"pulse is {sign}: plate.polarity is {-true_polarity:+d}"
+    assert [(r.status, r.reason) for r in results] == [("excluded", expected)] * len(good)

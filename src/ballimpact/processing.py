@@ -112,6 +112,26 @@ def _out_of_bounds(name, value):
     return not (lo <= value <= hi)
 
 
+def _opposite_pulse_reason(raw, sample_rate_hz: float, meta, t0_s: float) -> str | None:
+    """Why no contact was found when it is the polarity: the pulse has the other sign.
+
+    Conditions the trace [V] again with the opposite of ``plate.polarity`` (sample rate
+    [Hz], start time [s]); when a contact is found that way, returns the reason
+    "pulse is negative: plate.polarity is +1" (or the converse), else None.
+    """
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        try:
+            flipped = condition_voltage(raw, sample_rate_hz, polarity=-meta.polarity, mains_hz=meta.mains_hz,
+                                        t0_s=t0_s)
+        except ValueError:
+            return None
+    if not flipped.contact.found:
+        return None
+    sign = "negative" if meta.polarity == 1 else "positive"
+    return f"pulse is {sign}: plate.polarity is {meta.polarity:+d}"
+
+
 def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     """Process one impact: speeds, COR, kCAL, force, motion, TC and Kelvin-Voigt kB, cB.
 
@@ -189,7 +209,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     res.tau_s = cond.tau_s
     contact = cond.contact
     if not contact.found:
-        return res.exclude("no contact found")
+        return res.exclude(_opposite_pulse_reason(raw, fs, meta, trace.t0_s) or "no contact found")
     res.raw_time_s = t - contact.start_s
     if contact.n_impacts > 1:
         res.exclude(f"more than one impact in the trace ({contact.n_impacts} found)")
