@@ -38,7 +38,7 @@ SPEC_IMPACT_COLUMNS = [
 SPEC_PARAMETER_COLUMNS = [
     "ball", "n_impacts", "mass_kg", "kb0_kN_m", "kb0_source", "ak_kN_m", "a", "ac_kN_s_m3",
     "ak_lo", "ak_hi", "a_lo", "a_hi", "ac_lo", "ac_hi", "kb0_lo", "kb0_hi",
-    "contact_time_rmse_pct", "cor_rmse_pct",
+    "contact_time_rmse_pct", "cor_rmse_pct", "fit_warnings",
 ]
 
 

@@ -100,6 +100,7 @@ PARAMETER_COLUMNS = [
     "kb0_hi",
     "contact_time_rmse_pct",
     "cor_rmse_pct",
+    "fit_warnings",  # issue 14: empty when all is well (ballimpact.summary.parameter_fit_warnings)
 ]
 
 #: Citation of the paper the model comes from (ACDD ``references``).
@@ -733,10 +734,14 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
         Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
         a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
     """
+    from .summary import parameter_fit_warnings
+
     n = ds.sizes.get("ball", 0)
     data = {}
     for col in PARAMETER_COLUMNS:
-        if col in ("ball", "kb0_source"):
+        if col == "fit_warnings":
+            data["fit_message"] = _column(ds, "fit_message", n, text=True)
+        elif col in ("ball", "kb0_source"):
             data[col] = _column(ds, col, n, text=True)
         elif col == "n_impacts":
             values = np.asarray(_column(ds, col, n), dtype=float)
@@ -745,7 +750,8 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
             )
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)
-    return pd.DataFrame(data, columns=PARAMETER_COLUMNS)
+    table = pd.DataFrame(data, columns=[c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS])
+    return parameter_fit_warnings(table)[PARAMETER_COLUMNS]
 
 
 def _utc_now() -> str:

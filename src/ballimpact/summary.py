@@ -1,0 +1,314 @@
+"""Run summary: what a user must see at the end of a run (exclusions, fit warnings, session errors, stale results)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections import Counter
+from pathlib import Path
+
+__all__ = [
+    "NOT_DETERMINED",
+    "STALE_FILE",
+    "undetermined_parameters",
+    "fit_warnings",
+    "parameter_fit_warnings",
+    "mark_stale",
+    "clear_stale",
+    "session_summary",
+    "run_summary",
+]
+
+#: How a parameter that sits on its search bound is shown instead of an interval.
+NOT_DETERMINED = "not determined (at bound)"
+#: File written into results/<session_id>/ when a session-level error left an earlier run's results there.
+STALE_FILE = "STALE"
+#: Results an earlier run leaves in results/<session_id>/ (outputs.md).
+RESULT_FILES = ("impacts.csv", "parameters.csv", "report.pdf", "figures")
+
+_PARAM_NAMES = {"ak": "AK", "a": "a", "ac": "AC"}
+_BOUND_TOL = 1e-3  # fraction of the (log) search range within which a value counts as on the bound
+
+
+def _search_bounds_table_units() -> dict[str, tuple[float, float, bool]]:
+    """Search bounds of the fit in the units of parameters.csv, and whether to compare in log.
+
+    AK [kN/m^(1+a)] is searched as kR = AK xR^a (fitting.py), so its bounds follow from
+    those of kR [N/m] and a [-]; AC [kN s/m^3]; a [-].
+    """
+    from .fitting import PARAMETER_BOUNDS, REFERENCE_DISPLACEMENT_M
+
+    kr_lo, kr_hi = PARAMETER_BOUNDS["kr_N_m"]
+    a_lo, a_hi = PARAMETER_BOUNDS["a"]
+    ac_lo, ac_hi = PARAMETER_BOUNDS["ac"]
+    xr = REFERENCE_DISPLACEMENT_M
+    return {
+        "ak": (kr_lo / xr**a_lo / 1e3, kr_hi / xr**a_hi / 1e3, True),
+        "a": (a_lo, a_hi, False),
+        "ac": (ac_lo / 1e3, ac_hi / 1e3, True),
+    }
+
+
+def _on_bound(value: float, lo: float, hi: float, log: bool) -> bool:
+    if not math.isfinite(value) or (log and value <= 0):
+        return False
+    f = math.log if log else (lambda x: x)
+    span = f(hi) - f(lo)
+    return min(abs(f(value) - f(lo)), abs(f(value) - f(hi))) < _BOUND_TOL * span
+
+
+def undetermined_parameters(values, fit_message: str = "") -> dict[str, str]:
+    """
+    The fitted parameters whose value or 95 % interval end sits on the fit's search bound.
+
+    Such an "interval" is the search range, not a property of the data: it must be shown
+    as :data:`NOT_DETERMINED`, never as an interval.
+
+    Parameters
+    ----------
+    values : mapping
+        ``ak_kN_m``, ``ak_lo``, ``ak_hi`` [kN/m^(1+a)], ``a``, ``a_lo``, ``a_hi`` [-],
+        ``ac_kN_s_m3``, ``ac_lo``, ``ac_hi`` [kN s/m^3] (a parameters.csv row; missing = NaN).
+    fit_message : str
+        The fit's message (archive ``fit_message``); "<name> sits on its search bound"
+        there also counts.
+
+    Returns
+    -------
+    dict
+        ``{"ak" | "a" | "ac": NOT_DETERMINED}`` for each such parameter.
+    """
+    bounds = _search_bounds_table_units()
+    found = {}
+    for key, value_name in (("ak", "ak_kN_m"), ("a", "a"), ("ac", "ac_kN_s_m3")):
+        lo, hi, log = bounds[key]
+        numbers = []
+        for name in (value_name, f"{key}_lo", f"{key}_hi"):
+            try:
+                numbers.append(float(values.get(name, math.nan)))
+            except (TypeError, ValueError):
+                numbers.append(math.nan)
+        said = re.search(rf"(^|[;:] ?){re.escape(_PARAM_NAMES[key])}( \(via kR\))? sits on its search bound",
+                         fit_message or "")
+        if said or any(_on_bound(v, lo, hi, log) for v in numbers):
+            found[key] = NOT_DETERMINED
+    return found
+
+
+def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None) -> str:
+    """
+    One-line warnings of a ball's fit: empty when all is well.
+
+    Parameters
+    ----------
+    fit_message : str
+        The archive's ``fit_message``: "ok" followed by "; " and the fit's notes, or
+        "fit failed: ..." / "no fit".
+    undetermined : dict, optional
+        :func:`undetermined_parameters` of the ball.
+
+    Returns
+    -------
+    str
+        "AC not determined (at bound); ..." then the fit's own notes, "; "-separated.
+    """
+    text = "" if fit_message is None else str(fit_message).strip()
+    if text in ("nan", "None"):
+        text = ""
+    if text == "ok":
+        text = ""
+    elif text.startswith("ok; "):
+        text = text[4:]
+    notes = [f"{_PARAM_NAMES[k]} {v}" for k, v in (undetermined or {}).items()]
+    return "; ".join(notes + ([text] if text else []))
+
+
+def parameter_fit_warnings(table):
+    """
+    parameters.csv with a ``fit_warnings`` column, and no interval for an undetermined parameter.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`ballimpact.archive.parameters_table` rows; a ``fit_message`` column (the
+        archive's) is read and dropped.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The same rows: ``<param>_lo`` / ``_hi`` emptied (NaN) for each parameter on its
+        search bound, ``fit_warnings`` (text, empty when all is well) appended.
+    """
+    table = table.copy()
+    messages = table.pop("fit_message") if "fit_message" in table else [""] * len(table)
+    column = []
+    for i, message in zip(table.index, messages):
+        row = table.loc[i]
+        undetermined = undetermined_parameters(row, "" if message is None else str(message))
+        for key in undetermined:
+            table.loc[i, [f"{key}_lo", f"{key}_hi"]] = math.nan
+        column.append(fit_warnings(message, undetermined))
+    table["fit_warnings"] = column
+    return table
+
+
+# ---------------------------------------------------------------------- stale results
+
+
+def mark_stale(results_session_dir, reason: str) -> Path | None:
+    """
+    Mark an earlier run's results of a session as stale after a session-level error.
+
+    Parameters
+    ----------
+    results_session_dir : str or Path
+        ``results/<session_id>``.
+    reason : str
+        The session-level error (one line per problem).
+
+    Returns
+    -------
+    Path or None
+        The ``STALE`` file written, None when there were no earlier results.
+    """
+    folder = Path(results_session_dir)
+    present = [name for name in RESULT_FILES if (folder / name).exists()]
+    present += [p.name for p in sorted(folder.glob("*.nc"))]
+    if not present:
+        return None
+    path = folder / STALE_FILE
+    path.write_text(
+        "STALE: these results come from an earlier run. The raw session now has a session-level error,\n"
+        "so it was not processed again and these files do not reflect the current raw data:\n  "
+        + "\n  ".join(present)
+        + "\n\nThe error:\n  " + "\n  ".join(str(reason).splitlines())
+        + "\n\nFix the raw session and run again; this file is removed when the session is processed.\n",
+        encoding="utf-8",
+    )
+    return path
+
+
+def clear_stale(results_session_dir) -> None:
+    """Remove the ``STALE`` mark of a session (it is being processed again)."""
+    path = Path(results_session_dir) / STALE_FILE
+    if path.is_file():
+        path.unlink()
+
+
+# ---------------------------------------------------------------------- the summary
+
+
+def _reason_kind(reason: str) -> str:
+    """The kind of an exclusion reason: its first reason, file names and numbers left out."""
+    first = str(reason).split("; ")[0].strip()
+    if first.startswith("pulse is"):
+        return first  # "pulse is negative: plate.polarity is +1" says it all
+    first = first.split(": ")[0]
+    first = re.sub(r"\S*/\S*", "...", first)
+    return re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first).strip()
+
+
+def _read_csv_rows(path: Path) -> list[dict]:
+    import csv
+
+    with open(path, encoding="utf-8", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _session_fault(folder: Path) -> str:
+    """The session-level error logged by the failed validate_session job, if any."""
+    log = folder / "logs" / "validate_session.log"
+    if not log.is_file():
+        return ""
+    text = log.read_text(encoding="utf-8", errors="replace")
+    marker = "session-level fault: "
+    if marker not in text:
+        return ""
+    fault = text.rsplit(marker, 1)[1]
+    lines = []
+    for line in fault.splitlines():
+        if re.match(r"\d{4}-\d{2}-\d{2} \d{2}:\d{2}:\d{2}", line):
+            break  # the next log record
+        lines.append(line.strip())
+    return "\n".join(line for line in lines if line)
+
+
+def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
+    """
+    Summary lines of one session's results: impacts ok / excluded by reason, fit
+    warnings, validate warnings, session-level errors and stale results.
+
+    Parameters
+    ----------
+    results_session_dir : str or Path
+        ``results/<session_id>``.
+    fault : str, optional
+        A session-level error found before the run (parse time); else the log of the
+        session's validate_session job is read.
+
+    Returns
+    -------
+    list of str
+        The first line names the session; the others are indented by 4 spaces.
+    """
+    folder = Path(results_session_dir)
+    name = folder.name
+    fault = fault or _session_fault(folder)
+    snapshot_path = folder / "work" / "session.json"
+    if fault or not snapshot_path.is_file():
+        lines = [f"  {name}: SESSION-LEVEL ERROR, not processed:"]
+        problems = fault.splitlines() or ["(no snapshot; see the logs in " + str(folder / "logs") + ")"]
+        lines += [f"    error: {p}" for p in problems]
+        if (folder / STALE_FILE).is_file():
+            lines.append(f"    STALE: the results in {folder} are from an earlier run (see {folder / STALE_FILE})")
+        return lines
+    snapshot = json.loads(snapshot_path.read_text(encoding="utf-8"))
+    impacts_csv = folder / "impacts.csv"
+    if not impacts_csv.is_file():
+        return [f"  {name}: incomplete: impacts.csv was not written (see the logs in {folder / 'logs'})"]
+    rows = _read_csv_rows(impacts_csv)
+    n_ok = sum(r["status"] == "ok" for r in rows)
+    kinds = Counter(_reason_kind(r["reason"]) for r in rows if r["status"] != "ok")
+    lines = [f"  {name}: {len(rows)} impacts, {n_ok} ok, {len(rows) - n_ok} excluded"]
+    for kind, count in kinds.most_common():
+        lines.append(f"    excluded {count:3d} x {kind}")
+    params = folder / "parameters.csv"
+    if params.is_file():
+        for row in _read_csv_rows(params):
+            text = row.get("fit_warnings", "")
+            lines.append(f"    fit {row['ball']}: " + (f"WARNING: {text}" if text else "ok"))
+    else:
+        lines.append(f"    fit: parameters.csv was not written (see the logs in {folder / 'logs'})")
+    for warning in snapshot.get("warnings", []):
+        lines.append(f"    validate warning: {warning}")
+    missing = [n for n in ("report.pdf", f"{name}.nc") if not (folder / n).is_file()]
+    if missing:
+        lines.append(f"    incomplete: {', '.join(missing)} not written (see the logs in {folder / 'logs'})")
+    return lines
+
+
+def run_summary(results_dir, sessions, faults: dict[str, str] | None = None) -> str:
+    """
+    The terminal summary of a workflow run: :func:`session_summary` of every session.
+
+    Parameters
+    ----------
+    results_dir : str or Path
+        The run's results folder.
+    sessions : sequence of str
+        Session ids of the run.
+    faults : dict, optional
+        Session id -> session-level error found when the workflow was parsed.
+
+    Returns
+    -------
+    str
+        Several lines, no trailing newline.
+    """
+    faults = faults or {}
+    lines = ["", "=" * 78, f"ballimpact run summary ({len(sessions)} session(s), results in {results_dir})"]
+    for session in sessions:
+        lines += session_summary(Path(results_dir) / session, fault=faults.get(session, ""))
+    lines.append("=" * 78)
+    return "\n".join(lines)

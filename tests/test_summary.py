@@ -1,0 +1,138 @@
+"""The run summary: fit warnings, parameters on a search bound, exclusions by reason, stale results."""
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+from ballimpact.archive import parameters_table
+from ballimpact.fitting import PARAMETER_BOUNDS, REFERENCE_DISPLACEMENT_M
+from ballimpact.summary import (
+    NOT_DETERMINED,
+    STALE_FILE,
+    clear_stale,
+    fit_warnings,
+    mark_stale,
+    run_summary,
+    session_summary,
+    undetermined_parameters,
+)
+
+GOOD = {"ak_kN_m": 16000.0, "ak_lo": 12000.0, "ak_hi": 21000.0, "a": 1.65, "a_lo": 1.55, "a_hi": 1.75,
+        "ac_kN_s_m3": 3.5, "ac_lo": 3.1, "ac_hi": 3.9}
+
+
+def _ball_ds(rows):
+    """An archive's per-ball part as rule archive writes it (only what parameters.csv reads)."""
+    names = [r.pop("ball") for r in rows]
+    data = {k: ("ball", np.array([r.get(k, math.nan) for r in rows], dtype=float))
+            for k in ("n_impacts", "mass_kg", "kb0_kN_m", "kb0_lo", "kb0_hi", *GOOD, "contact_time_rmse_pct",
+                      "cor_rmse_pct")}
+    data["kb0_source"] = ("ball", np.array(["config"] * len(rows), dtype=object))
+    data["fit_message"] = ("ball", np.array([r["fit_message"] for r in rows], dtype=object))
+    return xr.Dataset(data, coords={"ball": np.array(names, dtype=object)})
+
+
+def test_good_fit_has_empty_fit_warnings_and_its_intervals():
+    table = parameters_table(_ball_ds([{"ball": "b1", **GOOD, "fit_message": "ok"}]))
+    assert table.loc[0, "fit_warnings"] == ""
+    assert table.loc[0, ["a_lo", "a_hi"]].tolist() == [1.55, 1.75]
+
+
+def test_failed_fit_on_the_search_bounds_is_not_shown_as_intervals():
+    # The issue's case (a mistyped mass): the "95 % intervals" of a and AC were the search
+    # bounds, a in [0.300, 3.149] and AC in [0.01, 100.00] kN s/m^3 (fitting.PARAMETER_BOUNDS:
+    # a 0.3-4, AC 10-1e5 N s/m^3).
+    a_lo, _ = PARAMETER_BOUNDS["a"]
+    ac_lo, ac_hi = (b / 1e3 for b in PARAMETER_BOUNDS["ac"])
+    row = {**GOOD, "ball": "b1", "a_lo": a_lo, "a_hi": 3.149, "ac_kN_s_m3": 5.0, "ac_lo": ac_lo, "ac_hi": ac_hi,
+           "fit_message": "ok; AK (via kR) sits on its search bound; the data do not constrain it, treat it with "
+                          "care; only 41 of 200 bootstrap refits converged; bands unreliable"}
+    table = parameters_table(_ball_ds([row]))
+    warnings = table.loc[0, "fit_warnings"]
+    assert warnings.startswith("AK not determined (at bound); a not determined (at bound); "
+                               "AC not determined (at bound); AK (via kR) sits on its search bound")
+    assert "only 41 of 200 bootstrap refits converged" in warnings
+    for key in ("ak", "a", "ac"):
+        assert table.loc[0, [f"{key}_lo", f"{key}_hi"]].isna().all(), key
+    assert table.loc[0, "a"] == GOOD["a"]  # the estimate itself stays
+
+
+def test_ak_bound_follows_from_the_kr_and_a_bounds():
+    kr_lo, _ = PARAMETER_BOUNDS["kr_N_m"]
+    a = 2.0
+    ak_on_bound = kr_lo / REFERENCE_DISPLACEMENT_M**a / 1e3  # kR = AK xR^a, in kN
+    values = {**GOOD, "a": a, "ak_kN_m": ak_on_bound}
+    # the value on the kR bound is only caught by the fit's message; its interval end by the global AK bound
+    assert undetermined_parameters(values, "ok; AK (via kR) sits on its search bound; ...") == {"ak": NOT_DETERMINED}
+    assert undetermined_parameters(GOOD, "ok") == {}
+
+
+def test_fit_warnings_text():
+    assert fit_warnings("ok") == ""
+    assert fit_warnings("ok; only 3 impacts: the intervals are rough") == "only 3 impacts: the intervals are rough"
+    assert fit_warnings("fit failed: needs at least 3 good impacts, got 2") == (
+        "fit failed: needs at least 3 good impacts, got 2")
+    assert fit_warnings("ok", {"ac": NOT_DETERMINED}) == "AC not determined (at bound)"
+
+
+def _results(tmp_path, name="s1"):
+    folder = tmp_path / name
+    (folder / "work").mkdir(parents=True)
+    (folder / "work" / "session.json").write_text(json.dumps({"warnings": [
+        "session.yaml: unknown key(s) 'balls.b1.kb0_kn_m' (kept in raw, not used; known: ...)"]}))
+    pd.DataFrame({"impact_id": ["i1", "i2", "i3", "i4"], "ball": ["b1"] * 4,
+                  "status": ["ok", "excluded", "excluded", "excluded"],
+                  "reason": ["", "pulse is negative: plate.polarity is +1", "pulse is negative: plate.polarity is +1",
+                             "trace file not found: traces/i4.csv"]}).to_csv(folder / "impacts.csv", index=False)
+    pd.DataFrame({"ball": ["b1"], "fit_warnings": ["AC not determined (at bound)"]}).to_csv(
+        folder / "parameters.csv", index=False)
+    (folder / "report.pdf").write_bytes(b"%PDF")
+    (folder / f"{name}.nc").write_bytes(b"")
+    return folder
+
+
+def test_session_summary_counts_exclusions_by_reason_and_shows_warnings(tmp_path):
+    lines = session_summary(_results(tmp_path))
+    assert lines[0] == "  s1: 4 impacts, 1 ok, 3 excluded"
+    assert "    excluded   2 x pulse is negative: plate.polarity is +1" in lines
+    assert "    excluded   1 x trace file not found" in lines
+    assert "    fit b1: WARNING: AC not determined (at bound)" in lines
+    assert any(line.startswith("    validate warning: session.yaml: unknown key(s) 'balls.b1.kb0_kn_m'")
+               for line in lines)
+
+
+def test_session_level_error_and_stale_results(tmp_path):
+    folder = _results(tmp_path)
+    (folder / "work" / "session.json").unlink()  # Snakemake removes the output of the failed job
+    error = "s1/session.yaml: key 'date' must be an ISO date\ns1/impacts.csv: line 3: ball 'x' is not defined"
+    stale = mark_stale(folder, error)
+    assert stale == folder / STALE_FILE
+    text = stale.read_text()
+    assert text.startswith("STALE:") and "impacts.csv" in text and "ball 'x' is not defined" in text
+    lines = session_summary(folder, fault=error)
+    assert lines[0] == "  s1: SESSION-LEVEL ERROR, not processed:"
+    assert lines[1:3] == ["    error: s1/session.yaml: key 'date' must be an ISO date",
+                          "    error: s1/impacts.csv: line 3: ball 'x' is not defined"]
+    assert lines[3].startswith("    STALE: the results in") and lines[3].endswith(f"(see {folder / STALE_FILE})")
+    clear_stale(folder)
+    assert not (folder / STALE_FILE).exists()
+
+
+def test_no_stale_mark_without_earlier_results(tmp_path):
+    (tmp_path / "s2").mkdir()
+    assert mark_stale(tmp_path / "s2", "error") is None
+    assert not (tmp_path / "s2" / STALE_FILE).exists()
+
+
+def test_session_fault_is_read_from_the_validate_log(tmp_path):
+    folder = tmp_path / "s3" / "logs"
+    folder.mkdir(parents=True)
+    (folder / "validate_session.log").write_text(
+        "2026-11-22 05:00:00,001 INFO x: start\n"
+        "2026-11-22 05:00:00,002 ERROR ballimpact: session-level fault: first problem\nsecond problem\n")
+    text = run_summary(tmp_path, ["s3"])
+    assert "  s3: SESSION-LEVEL ERROR, not processed:\n    error: first problem\n    error: second problem" in text
