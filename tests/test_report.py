@@ -151,3 +151,30 @@ def test_force_curve_validation_lines_per_ball():
     balls = {str(b) for b in ds["ball"].values}
     assert len(lines) == len(balls)
     assert all("within 10 % of the peak for" in line and "RMS difference" in line for line in lines)
+
+
+def test_fit_warnings_and_undetermined_parameters_are_visible(ds):
+    """Issue 14: a parameter whose interval is the search range shows no interval, and the
+    fit's warnings stand beside the ball's row (not only in the netCDF's fit_message)."""
+    bad = ds.copy()
+    ball = str(bad["ball"].values[0])
+    a_lo = bad["a_lo"].values.copy()
+    a_lo[0] = 0.3  # fitting.PARAMETER_BOUNDS["a"][0]
+    bad["a_lo"] = ("ball", a_lo, bad["a_lo"].attrs)
+    message = np.array(["ok"] * bad.sizes["ball"], dtype=object)
+    message[0] = "ok; only 41 of 200 bootstrap refits converged; bands unreliable"
+    bad["fit_message"] = ("ball", message, bad["fit_message"].attrs)
+    fig = report._summary_page(bad, report._session_info(bad))
+    fig.canvas.draw()
+    from matplotlib.table import Table
+    from matplotlib.text import Text
+
+    texts = [t.get_text() for t in fig.findobj(match=Text) if t.get_visible() and t.get_text()]
+    texts += [cell.get_text().get_text() for table in fig.findobj(match=Table) for cell in table.get_celld().values()]
+    assert any(t.endswith("\nnot determined\n(at bound)") for t in texts), texts
+    assert not any("[0.300," in t for t in texts)
+    label = figures._label(bad, ball)
+    assert any(t.startswith(f"Fit warning 1, {label}: a not determined (at bound); only 41 of 200 bootstrap")
+               for t in texts), texts
+    assert any(t.endswith("(see fit warning 1)") for t in texts)
+    assert _text_inside_page(fig) == []

@@ -12,6 +12,7 @@ from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 
 from . import figures as _fig
+from . import summary as _summary
 from .atomic import atomic_path
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "write_report", "report_page_count"]
@@ -296,11 +297,18 @@ def _summary_page(ds, info) -> Figure:
     cells = [head]
     shade = []
     no_fit_notes = []
+    fit_notes = []
     for ball in _fig._balls(ds):
         get = _ball_values(ds, ball)
         src = _text(get("kb0_source")) if "kb0_source" in ds else ""
         src = "" if src == "nan" else src
         kb0_cell = _interval(get("kb0_kN_m"), get("kb0_lo"), get("kb0_hi"), ".1f")
+        # issue 14: a parameter on its search bound gets no interval; the fit's warnings are shown
+        fit_message = _text(get("fit_message")) if "fit_message" in ds else ""
+        undetermined = _summary.undetermined_parameters(
+            {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
+            fit_message)
+        warn_text = _summary.fit_warnings(fit_message, undetermined)
         fitted = [
             "\n".join(textwrap.wrap(_fig._label(ds, ball), 22)[:2]),
             "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
@@ -312,6 +320,12 @@ def _summary_page(ds, info) -> Figure:
             _fmt(get("contact_time_rmse_pct"), ".2f"),
             _fmt(get("cor_rmse_pct"), ".2f"),
         ]
+        for col, (key, fmt) in zip((4, 5, 6), (("ak_kN_m", ",.0f"), ("a", ".3f"), ("ac_kN_s_m3", ".2f"))):
+            if key.split("_")[0] in undetermined and fitted[col] != "-":
+                fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined\n(at bound)"
+        if warn_text and not all(c == "-" for c in fitted[3:7]):
+            fitted[0] += f"\n(see fit warning {len(fit_notes) + 1})"
+            fit_notes.append(f"Fit warning {len(fit_notes) + 1}, {_fig._label(ds, ball)}: {warn_text}")
         if all(c == "-" for c in fitted[3:7]):
             message = _text(get("fit_message")) if "fit_message" in ds else ""
             fitted[1] = "this session\nno fit"
@@ -352,6 +366,9 @@ def _summary_page(ds, info) -> Figure:
     for note in no_fit_notes:
         if cur.y < h - _MARGIN_IN - 0.9:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
+    for note in fit_notes:
+        if cur.y < h - _MARGIN_IN - 0.9:
+            cur.text(x0, "\n".join(textwrap.wrap(note, 110)[:3]), size=8.5, color="#8a4b00", weight="bold")
     cur.skip(0.1)
     if cur.y < h - _MARGIN_IN - 0.7:
         ref = _text(ds.attrs.get("references", "")) or (
