@@ -16,6 +16,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/process.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/summary.smk"
 
 
 rule all:

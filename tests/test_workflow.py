@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from ballimpact import pipeline
 
@@ -549,3 +550,53 @@ def test_process_chunk_rejects_bad_arguments(synth_raw, tmp_path, kwargs, match)
     with pytest.raises(ValueError, match=match):
         pipeline.process_chunk(synth_raw / "s1", out_nc=tmp_path / "chunk.nc", **kwargs)
     assert not (tmp_path / "chunk.nc").exists()
+
+
+# ------------------------------------------------------------ run summary, stale results (issue 14)
+
+
+@pytest.mark.slow
+def test_run_summary_shows_warnings_errors_and_stale_results(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    lab = copy_session(synth_raw / "s1", raw, "lab")
+    yaml_path = lab / "session.yaml"
+    original = yaml_path.read_text(encoding="utf-8")
+    # the lab's typo: kb0_kn_m instead of kb0_kN_m under the first ball type
+    first_ball = next(iter(yaml.safe_load(original)["balls"]))
+    typo = re.sub(r"(?m)^(\s+)kb0_kN_m: (.*)$", r"\1kb0_kn_m: \2", original, count=1)
+    yaml_path.write_text(typo, encoding="utf-8")
+    results = tmp_path / "results"
+    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=True)
+    summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
+    assert "steps (100%) done" not in summary  # printed at the end of the run
+    n_rows = len(raw_rows(lab))
+    assert re.search(rf"\n  lab: {n_rows} impacts, \d+ ok, \d+ excluded\n", summary), summary
+    assert "    excluded   1 x clipping at the ADC rails" in summary, summary
+    assert f"validate warning: {lab / 'session.yaml'}: unknown key(s) 'balls.{first_ball}.kb0_kn_m'" in summary
+    assert re.search(r"    fit \w+: (ok|WARNING: .+)\n", summary)
+
+    # three session-level mistakes at once: all reported, earlier results marked stale
+    yaml_path.write_text(typo.replace("date: ", "date: yesterday #", 1).replace("  polarity: 1", "  polarity: 2"),
+                         encoding="utf-8")
+    rows = (lab / "impacts.csv").read_text(encoding="utf-8").splitlines()
+    rows[1] = rows[1].replace(f",{raw_rows(lab)[0]['ball']},", ",nosuchball,", 1)
+    (lab / "impacts.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+    assert proc.returncode != 0
+    summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
+    assert "  lab: SESSION-LEVEL ERROR, not processed:" in summary, summary
+    for fragment in ("key 'date'", "key 'plate.polarity'", "ball 'nosuchball' is not defined"):
+        assert re.search(rf"    error: .*{re.escape(fragment)}", summary), (fragment, summary)
+    assert f"    STALE: the results in {results / 'lab'} are from an earlier run" in summary
+    stale = (results / "lab" / "STALE").read_text(encoding="utf-8")
+    assert "report.pdf" in stale and "nosuchball" in stale
+
+
+def test_snapshot_of_a_good_session_clears_the_stale_mark(synth_raw, tmp_path):
+    out = tmp_path / "results" / "s1"
+    (out / "work").mkdir(parents=True)
+    (out / "STALE").write_text("STALE: ...")
+    snapshot = pipeline.snapshot_session(synth_raw / "s1", out / "work" / "session.json")
+    assert not (out / "STALE").exists()
+    assert snapshot["warnings"] == []

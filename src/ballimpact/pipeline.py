@@ -141,7 +141,14 @@ def snapshot_session(session_dir, out_json) -> dict:
         A session-level fault, with a one-line message naming the file.
     """
     from .session import IMPACTS_FILE, SESSION_FILE, file_sha256, read_session
+    from .summary import clear_stale
+    from .validation import validate_session
 
+    # issue 14: the checks of `ballimpact validate` (trace headers only), so that its
+    # warnings reach the run's output and summary; every session-level problem at once
+    quick = validate_session(session_dir, read_traces=False)
+    for message in quick.warnings:
+        logger.warning("validate: %s", message)
     session = read_session(session_dir)
     root = session.path.resolve()
     files = {SESSION_FILE: session.path / SESSION_FILE, IMPACTS_FILE: session.path / IMPACTS_FILE}
@@ -162,7 +169,10 @@ def snapshot_session(session_dir, out_json) -> dict:
         "impacts_per_ball": {key: per_ball[key] for key in session.meta.balls if per_ball[key]},
         "impact_problems": {r.impact_id: list(r.problems) for r in session.impacts if r.problems},
         "raw_sha256": raw_sha256,
+        "warnings": list(quick.warnings),
     }
+    if Path(out_json).parent.name == "work":
+        clear_stale(Path(out_json).parent.parent)  # results/<session>/ is processed again
     _write_text_atomic(out_json, json.dumps(snapshot, indent=2, sort_keys=True) + "\n")
     logger.info(
         "session %s: %d impacts (%s), %d with problems found while reading, %d raw files hashed",

@@ -206,7 +206,8 @@ def _reason_kind(reason: str) -> str:
         return first  # "pulse is negative: plate.polarity is +1" says it all
     first = first.split(": ")[0]
     first = re.sub(r"\S*/\S*", "...", first)
-    return re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first).strip()
+    first = re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first)
+    return re.sub(r"\s*\([^)]*#[^)]*\)", "", first).strip()  # "(2 found)" and the like
 
 
 def _read_csv_rows(path: Path) -> list[dict]:
@@ -254,7 +255,7 @@ def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
     """
     folder = Path(results_session_dir)
     name = folder.name
-    fault = fault or _session_fault(folder)
+    fault = _session_fault(folder) or fault  # the job's log lists every problem
     snapshot_path = folder / "work" / "session.json"
     if fault or not snapshot_path.is_file():
         lines = [f"  {name}: SESSION-LEVEL ERROR, not processed:"]
