@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
+
 import pandas as pd
 import pytest
 
@@ -27,3 +30,29 @@ def synth_session_negative_tdms(tmp_path_factory):
     """Polarity -1, a 50 kHz DAQ and TDMS traces only."""
     return _make(tmp_path_factory, "syn-neg", seed=12, impacts_per_ball=4, faults_per_kind=1,
                  polarity=-1, trace_format="tdms", chain=SensorChain(sample_rate_hz=50_000.0))
+
+
+@pytest.fixture(scope="session")
+def demo_run_output(tmp_path_factory):
+    """The workflow run on raw/demo-2004 (once per test run; used by test_run.py and test_readme.py).
+
+    A dict: ``workdir`` (the run's working folder, holding ``results/``), ``results``
+    (its results folder), ``raw_before`` (path -> (sha256, mtime) of raw/demo-2004 before
+    the run) and ``stdout`` (what Snakemake printed, stderr merged).
+    """
+    from workflow_helpers import REPO, run_snakemake
+
+    demo = REPO / "raw" / "demo-2004"
+
+    def hashes(folder: Path):
+        return {p.relative_to(folder).as_posix(): (hashlib.sha256(p.read_bytes()).hexdigest(), p.stat().st_mtime_ns)
+                for p in sorted(folder.rglob("*")) if p.is_file()}
+
+    tmp = tmp_path_factory.mktemp("demo")
+    before = hashes(demo)
+    results = tmp / "results"
+    proc = run_snakemake("--snakefile", REPO / "Snakefile", "--directory", tmp, "--cores", "2",
+                         "--config", f"raw_dir={REPO / 'raw'}", f"results_dir={results}", "sessions=[demo-2004]",
+                         cwd=tmp)
+    assert proc.returncode == 0, proc.stdout[-5000:]
+    return {"workdir": tmp, "results": results, "raw_before": before, "stdout": proc.stdout}

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import os
 import shutil
 import signal
@@ -43,13 +44,9 @@ def _args(workdir, raw_dir, results, *extra):
 
 
 @pytest.fixture(scope="module")
-def demo_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("demo")
-    before = _hashes(DEMO)
-    results = tmp / "results"
-    proc = run_snakemake(*_args(tmp, REPO / "raw", results, "sessions=[demo-2004]"), cwd=tmp)
-    assert proc.returncode == 0, proc.stdout[-5000:]
-    return tmp, results / "demo-2004", before
+def demo_run(demo_run_output):
+    """(work folder, results/demo-2004, hashes of raw/demo-2004 before): conftest.demo_run_output."""
+    return demo_run_output["workdir"], demo_run_output["results"] / "demo-2004", demo_run_output["raw_before"]
 
 
 def test_raw_folder_untouched(demo_run):
@@ -182,3 +179,17 @@ def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_pat
                          encoding="utf-8")
     plan = run_snakemake(*_args(tmp_path, raw, results), "-n", cwd=tmp_path, check=True).stdout
     assert "wildcards: session=new" in plan and "session=cut" not in plan, plan[-3000:]
+
+
+def test_demo_run_ends_with_the_run_summary(demo_run_output):
+    """Issue 14: the run ends with a summary: impacts ok / excluded by reason, fit warnings."""
+    out = demo_run_output["stdout"]
+    summary = out[out.rindex("ballimpact run summary"):]
+    truth = pd.read_csv(REPO / "raw" / "demo-2004.truth.csv", keep_default_na=False)
+    n, n_faults = len(truth), int((truth.fault != "").sum())
+    assert f"\n  demo-2004: {n} impacts, {n - n_faults} ok, {n_faults} excluded\n" in summary, summary
+    for ball in BALLS:
+        assert re.search(rf"\n    fit {ball}: (ok|WARNING: .+)\n", summary), summary
+    # after the closing rule only Snakemake's pointer to its log and the run time
+    after = summary.split("=" * 78)[-1].strip().splitlines()
+    assert all(line.startswith(("Complete log", "Elapsed time")) for line in after), after
