@@ -150,3 +150,61 @@ def test_save_figure_is_atomic(archives, tmp_path, monkeypatch):
         figures.save_figure(fig, target)
     assert target.read_bytes() == b"old"
     assert [p.name for p in tmp_path.iterdir()] == ["x.png"]
+
+
+# --------------------------------------------------------- titles fit, synthetic mark (issue 14)
+
+
+def _layout_problems(fig):
+    """Titles wider than their panel, and overlaps between titles, the figure title and legends."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    problems = []
+    titles = []
+    for ax in fig.axes:
+        box = ax.get_window_extent(renderer)
+        for title in (ax.title, ax._left_title, ax._right_title):
+            if title.get_visible() and title.get_text():
+                extent = title.get_window_extent(renderer)
+                titles.append((title.get_text(), extent))
+                if extent.x0 < box.x0 - 1 or extent.x1 > box.x1 + 1:
+                    problems.append(f"title wider than its panel: {title.get_text()!r}")
+    if fig._suptitle is not None and fig._suptitle.get_text():
+        titles.append((fig._suptitle.get_text(), fig._suptitle.get_window_extent(renderer)))
+    boxes = titles + [("legend", legend.get_window_extent(renderer)) for legend in fig.legends]
+    for i, (text_a, a) in enumerate(boxes):
+        for text_b, b in boxes[i + 1:]:
+            if a.overlaps(b):
+                problems.append(f"overlap: {text_a[:40]!r} / {text_b[:40]!r}")
+    return problems
+
+
+def _long_labels(ds):
+    """The archive with ball labels as long as a lab writes them."""
+    long = ds.copy()
+    long["ball_label"] = ("ball", np.array([f"Ball {k + 1}: {b} (club stock, batch 2026-11, re-pressurised)"
+                                            for k, b in enumerate(ds["ball"].values)], dtype=object))
+    return long
+
+
+@pytest.mark.parametrize("func", FIGURE_FUNCTIONS, ids=lambda f: f.__name__)
+@pytest.mark.parametrize("which", ["complete", "degenerate", "long labels"])
+def test_titles_fit_and_do_not_overlap(archives, func, which):
+    ds = _long_labels(archives["complete"]) if which == "long labels" else archives[which]
+    assert _layout_problems(func(ds)) == []
+
+
+def test_qc_page_titles_fit(archives):
+    ds = archives["complete"]
+    for impact_id, _, _ in figures.excluded_impacts(ds):
+        assert _layout_problems(figures.fig_qc_impact(ds, impact_id)) == []
+
+
+@pytest.mark.parametrize("synthetic", [True, False])
+def test_every_figure_of_a_synthetic_session_is_marked(synthetic):
+    ds = make_archive(balls=("pressurised",), speeds_m_s=(20.0, 25.0), synthetic=synthetic)
+    figs = [func(ds) for func in FIGURE_FUNCTIONS]
+    figs += [figures.fig_qc_impact(ds, impact_id) for impact_id, _, _ in figures.excluded_impacts(ds)]
+    for fig in figs:
+        marked = figures.SYNTHETIC_MARK in fig._suptitle.get_text()
+        assert marked == synthetic

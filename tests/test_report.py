@@ -178,3 +178,23 @@ def test_fit_warnings_and_undetermined_parameters_are_visible(ds):
                for t in texts), texts
     assert any(t.endswith("(see fit warning 1)") for t in texts)
     assert _text_inside_page(fig) == []
+
+
+@pytest.mark.parametrize(("name", "label"), [("fig7_contact_time_cor.png", "Fig. 7"), ("fig2b_kelvin_voigt.png",
+                                                                                        "Fig. 2b"),
+                                             ("fig10_components.png", "Fig. 10"), ("kcal.png", "kCAL figure")])
+def test_figure_labels_follow_the_file_names(name, label):
+    assert report.figure_label(name) == label
+
+
+def test_figure_pages_are_numbered_as_their_files(ds):
+    """Issue 14: the report called the figures 1-6 while the files are fig7/8/9/10/2b."""
+    from matplotlib.text import Text
+
+    for name in report.FIGURE_CAPTIONS:
+        page = report._figure_page(ds, report._session_info(ds), name, 1, None)
+        texts = [t.get_text() for t in page.findobj(match=Text)]
+        number = re.match(r"fig(\w+?)_", name)
+        if number:
+            assert any(t.startswith(f"Fig. {number.group(1)} ({name}): ") for t in texts), (name, texts)
+        assert not any(t.startswith("Figure 1") for t in texts)

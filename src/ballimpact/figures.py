@@ -84,6 +84,58 @@ def _new_figure(width_in: float, height_in: float) -> Figure:
     return fig
 
 
+#: Mark drawn on every figure of a synthetic session (archive attribute ``synthetic``).
+SYNTHETIC_MARK = "SYNTHETIC DATA (ballimpact synth), not measured"
+
+
+def is_synthetic(ds) -> bool:
+    """True when the archive says the session is synthetic (attribute ``synthetic``, 1 or true)."""
+    value = ds.attrs.get("synthetic", 0)
+    if isinstance(value, str):
+        return value.strip().lower() in ("1", "true", "yes")
+    try:
+        return bool(int(np.asarray(value).ravel()[0])) if np.asarray(value).size else False
+    except (TypeError, ValueError):
+        return False
+
+
+def _fit_titles(fig) -> None:
+    """Wrap every axes title that is wider than its axes onto more lines (no title runs into
+    the next panel); the constrained layout then makes room for the extra lines."""
+    fig.canvas.draw()  # lay out: axes at their final positions
+    renderer = fig.canvas.get_renderer()
+    changed = False
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        width = ax.get_window_extent(renderer).width
+        for title in (ax.title, ax._left_title, ax._right_title):
+            text = title.get_text()
+            if not text or not title.get_visible():
+                continue
+            measured = title.get_window_extent(renderer).width
+            if measured <= width:
+                continue
+            longest = max(len(line) for line in text.splitlines())
+            chars = max(10, int(longest * width / measured * 0.95))
+            title.set_text("\n".join(
+                wrapped for line in text.splitlines() for wrapped in textwrap.wrap(line, chars) or [""]))
+            changed = True
+    if changed:
+        fig.canvas.draw()
+
+
+def _finish(fig, ds) -> None:
+    """Last touches of every figure: titles that fit their panels, and the synthetic mark."""
+    if is_synthetic(ds):
+        # first line of the figure title: the constrained layout keeps it clear of everything else
+        title = fig._suptitle.get_text() if fig._suptitle is not None else ""
+        if SYNTHETIC_MARK not in title:
+            size = fig._suptitle.get_fontsize() if fig._suptitle is not None else None
+            fig.suptitle(f"[{SYNTHETIC_MARK}]" + (f"\n{title}" if title else ""), fontsize=size)
+    _fit_titles(fig)
+
+
 # ----------------------------------------------------------------------------- archive access
 
 
@@ -291,6 +343,7 @@ def fig_contact_time_cor(ds) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.3))
         _draw_contact_time_cor(fig, ds)
+        _finish(fig, ds)
     return fig
 
 
@@ -358,6 +411,7 @@ def fig_stiffness(ds) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, 5.2)
         _draw_stiffness(fig, ds)
+        _finish(fig, ds)
     return fig
 
 
@@ -435,6 +489,7 @@ def fig_force_curves(ds) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.4))
         _draw_force_curves(fig, ds)
+        _finish(fig, ds)
     return fig
 
 
@@ -508,6 +563,7 @@ def _two_column_figure(ds, draw) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
         draw(fig, ds)
+        _finish(fig, ds)
     return fig
 
 
@@ -715,6 +771,7 @@ def fig_kcal(ds) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, 4.6)
         _draw_kcal(fig, ds)
+        _finish(fig, ds)
     return fig
 
 
@@ -802,6 +859,7 @@ def fig_qc_impact(ds, impact_id) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, 5.0)
         _draw_qc(fig, ds, impact_id)
+        _finish(fig, ds)
     return fig
 
 

@@ -445,6 +445,29 @@ _DRAW = {
 }
 
 
+def figure_label(name: str) -> str:
+    """
+    The report's name of a figure, taken from its PNG file name (which follows the paper's numbering).
+
+    Parameters
+    ----------
+    name : str
+        PNG file name of :data:`FIGURE_CAPTIONS`, e.g. ``fig7_contact_time_cor.png``.
+
+    Returns
+    -------
+    str
+        "Fig. 7" for fig7_*.png, "Fig. 2b" for fig2b_*.png; "kCAL figure" for kcal.png
+        (the paper has no such figure).
+    """
+    import re
+
+    match = re.match(r"fig(\d+[a-z]?)_", name)
+    if match:
+        return f"Fig. {match.group(1)}"
+    return f"{Path(name).stem.replace('kcal', 'kCAL')} figure"
+
+
 def _figure_page(ds, info, name, number, figures_dir) -> Figure:
     title, caption = FIGURE_CAPTIONS[name]
     if name.startswith("fig9"):
@@ -468,8 +491,10 @@ def _figure_page(ds, info, name, number, figures_dir) -> Figure:
         FigureCanvasAgg(fig)
         fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04)
         _draw_into_page(fig, _DRAW[name](ds), top, fig_h)
-    _caption_block(fig, top + fig_h + 0.2, f"Figure {number}: {title}", caption)
-    _footer(fig, info, f"figure {number}")
+    # issue 14: numbered as the PNG files and the paper (fig7_*.png is Fig. 7), not 1-6
+    label = figure_label(name)
+    _caption_block(fig, top + fig_h + 0.2, f"{label} ({name}): {title}", caption)
+    _footer(fig, info, label)
     return fig
 
 
