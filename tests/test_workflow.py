@@ -600,3 +600,16 @@ def test_snapshot_of_a_good_session_clears_the_stale_mark(synth_raw, tmp_path):
     snapshot = pipeline.snapshot_session(synth_raw / "s1", out / "work" / "session.json")
     assert not (out / "STALE").exists()
     assert snapshot["warnings"] == []
+
+
+@pytest.mark.slow
+def test_misnamed_session_yaml_is_not_skipped_silently(synth_raw, tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    lab = copy_session(synth_raw / "s1", raw, "lab")
+    (lab / "session.yaml").rename(lab / "session.yml")
+    proc = run_snakemake("--cores", "1", *config_args(raw, tmp_path / "results"), check=False)
+    assert proc.returncode != 0
+    summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
+    assert "  lab: SESSION-LEVEL ERROR, not processed:" in summary
+    assert "session.yaml: file not found, but 'session.yml' is there: rename it to 'session.yaml'" in summary

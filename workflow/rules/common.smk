@@ -100,8 +100,13 @@ def _list_sessions():
     if selected is None:
         if not raw.is_dir():
             raise WorkflowError(f"raw_dir {RAW_DIR!r} is not a folder (set raw_dir in config.yaml or --config)")
+        from ballimpact.session import near_miss_name
+
+        # a folder whose session.yaml is misnamed (session.yml, ...) is a session too: its
+        # validate_session job fails naming the file to rename, instead of a silent skip
         return sorted(
-            p.name for p in raw.iterdir() if p.is_dir() and not p.name.startswith(".") and (p / SESSION_FILE).is_file()
+            p.name for p in raw.iterdir() if p.is_dir() and not p.name.startswith(".")
+            and ((p / SESSION_FILE).is_file() or near_miss_name(p, SESSION_FILE) is not None)
         )
     if isinstance(selected, str):
         selected = [selected]
