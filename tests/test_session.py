@@ -558,3 +558,14 @@ def test_decimal_commas_in_impacts_csv_get_a_hint(tmp_path):
     folder = make_session(tmp_path, rows=rows)
     with pytest.raises(SessionError, match=r"line 2: expected 9 fields, got 13 \(decimal commas\?"):
         read_session(folder)
+
+
+def test_key_typo_names_the_key_it_misses(tmp_path):
+    meta = copy.deepcopy(BASE_META)
+    meta["balls"]["pressureless"]["kb0_kn_m"] = 21  # the lab's typo: kB(0) silently extrapolated
+    folder = make_session(tmp_path, meta=meta)
+    with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'balls.pressureless.kb0_kn_m'.*did you mean "
+                                            r"'balls.pressureless.kb0_kN_m'\? 'balls.pressureless.kb0_kn_m' has no "
+                                            r"effect"):
+        session = read_session(folder)
+    assert session.meta.balls["pressureless"].kb0_N_m is None

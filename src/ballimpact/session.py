@@ -26,6 +26,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "OPTIONAL_COLUMNS",
     "GATE_COLUMNS",
+    "near_miss_name",
 ]
 
 SESSION_FILE = "session.yaml"
@@ -349,9 +350,18 @@ def _text(value, dotted: str, file: str) -> str:
 def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> None:
     unknown = [str(k) for k in mapping if k not in known]
     if unknown:
+        import difflib
+
+        lowered = {k.lower(): k for k in known}
+        hints = []
+        for k in unknown:  # a near miss, e.g. kb0_kn_m for kb0_kN_m: say what it silently changes
+            close = lowered.get(k.lower()) or next(iter(difflib.get_close_matches(k, sorted(known), 1, 0.8)), None)
+            if close is not None:
+                hints.append(f"did you mean '{prefix}.{close}'? '{prefix}.{k}' has no effect")
         warnings.warn(
             f"{file}: unknown key(s) {', '.join(repr(f'{prefix}.{k}') for k in unknown)} "
-            f"(kept in raw, not used; known: {', '.join(sorted(known))})",
+            f"(kept in raw, not used; known: {', '.join(sorted(known))})"
+            + "".join(f"; {h}" for h in hints),
             SessionWarning,
             stacklevel=4,
         )
