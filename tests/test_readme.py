@@ -102,3 +102,13 @@ def test_no_developer_wording():
         assert phrase not in text, phrase
     # one wording for the intervals: nominal 95 %, measured about 90 %
     assert "nominal 95 %" in text and "about 90 %" in text
+
+
+@pytest.mark.slow
+def test_run_summary_in_readme_is_the_demo_run_s(demo_run_output):
+    """The summary shown under "What a run prints" is what the demo run prints."""
+    text = README.read_text(encoding="utf-8").split("## What a run prints", 1)[1]
+    shown = BLOCK.search(text).group(2).strip().splitlines()
+    out = demo_run_output["stdout"]
+    printed = out[out.rindex("ballimpact run summary"):].split("=" * 78)[0].strip().splitlines()
+    assert shown[2:-1] == printed[1:]  # session lines; the header names the results folder
