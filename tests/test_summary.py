@@ -136,3 +136,11 @@ def test_session_fault_is_read_from_the_validate_log(tmp_path):
         "2026-11-22 05:00:00,002 ERROR ballimpact: session-level fault: first problem\nsecond problem\n")
     text = run_summary(tmp_path, ["s3"])
     assert "  s3: SESSION-LEVEL ERROR, not processed:\n    error: first problem\n    error: second problem" in text
+
+
+def test_large_residual_is_a_fit_warning():
+    # the mistyped mass left a TC residual of 78 % RMS; the paper's model agrees within ~5 %
+    row = {**GOOD, "ball": "b1", "fit_message": "ok", "contact_time_rmse_pct": 78.0, "cor_rmse_pct": 0.5}
+    text = parameters_table(_ball_ds([row])).loc[0, "fit_warnings"]
+    assert text.startswith("TC residual 78.0 % RMS (> 5 %): the model does not describe these impacts")
+    assert "COR residual" not in text

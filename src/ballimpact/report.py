@@ -308,7 +308,8 @@ def _summary_page(ds, info) -> Figure:
         undetermined = _summary.undetermined_parameters(
             {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
             fit_message)
-        warn_text = _summary.fit_warnings(fit_message, undetermined)
+        warn_text = _summary.fit_warnings(fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"),
+                                          cor_rmse_pct=get("cor_rmse_pct"))
         fitted = [
             "\n".join(textwrap.wrap(_fig._label(ds, ball), 22)[:2]),
             "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),

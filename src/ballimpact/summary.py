@@ -28,6 +28,9 @@ STALE_FILE = "STALE"
 RESULT_FILES = ("impacts.csv", "parameters.csv", "report.pdf", "figures")
 
 _PARAM_NAMES = {"ak": "AK", "a": "a", "ac": "AC"}
+#: Relative RMS residual of TC or COR above which the fit is suspect [%] (the paper's model
+#: agrees with its measurements within about 5 %).
+RESIDUAL_WARNING_PCT = 5.0
 _BOUND_TOL = 1e-3  # fraction of the (log) search range within which a value counts as on the bound
 
 
@@ -96,7 +99,8 @@ def undetermined_parameters(values, fit_message: str = "") -> dict[str, str]:
     return found
 
 
-def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None) -> str:
+def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None, *,
+                 contact_time_rmse_pct: float = math.nan, cor_rmse_pct: float = math.nan) -> str:
     """
     One-line warnings of a ball's fit: empty when all is well.
 
@@ -107,6 +111,9 @@ def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None) -
         "fit failed: ..." / "no fit".
     undetermined : dict, optional
         :func:`undetermined_parameters` of the ball.
+    contact_time_rmse_pct, cor_rmse_pct : float, optional
+        Relative RMS residuals of TC and COR [%]; above :data:`RESIDUAL_WARNING_PCT`
+        the model does not describe the impacts (e.g. a mistyped ball mass).
 
     Returns
     -------
@@ -121,6 +128,14 @@ def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None) -
     elif text.startswith("ok; "):
         text = text[4:]
     notes = [f"{_PARAM_NAMES[k]} {v}" for k, v in (undetermined or {}).items()]
+    for what, value in (("TC", contact_time_rmse_pct), ("COR", cor_rmse_pct)):
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(value) and value > RESIDUAL_WARNING_PCT:
+            notes.append(f"{what} residual {value:.1f} % RMS (> {RESIDUAL_WARNING_PCT:g} %): the model does not "
+                         "describe these impacts; check the ball mass and the gate times")
     return "; ".join(notes + ([text] if text else []))
 
 
@@ -148,7 +163,8 @@ def parameter_fit_warnings(table):
         undetermined = undetermined_parameters(row, "" if message is None else str(message))
         for key in undetermined:
             table.loc[i, [f"{key}_lo", f"{key}_hi"]] = math.nan
-        column.append(fit_warnings(message, undetermined))
+        column.append(fit_warnings(message, undetermined, contact_time_rmse_pct=row.get("contact_time_rmse_pct"),
+                                   cor_rmse_pct=row.get("cor_rmse_pct")))
     table["fit_warnings"] = column
     return table
 
