@@ -153,9 +153,13 @@ def test_force_curve_validation_lines_per_ball():
     assert all("within 10 % of the peak for" in line and "RMS difference" in line for line in lines)
 
 
-def test_fit_warnings_and_undetermined_parameters_are_visible(ds):
+@pytest.mark.parametrize("n_balls", [2, 4])
+def test_fit_warnings_and_undetermined_parameters_are_visible(ds, n_balls):
     """Issue 14: a parameter whose interval is the search range shows no interval, and the
     fit's warnings stand beside the ball's row (not only in the netCDF's fit_message)."""
+    if n_balls != 2:  # four ball types and a long description: a full page
+        ds = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
+        ds.attrs["session_description"] = "A long description of the session. " * 20
     bad = ds.copy()
     ball = str(bad["ball"].values[0])
     a_lo = bad["a_lo"].values.copy()

@@ -340,7 +340,9 @@ def _summary_page(ds, info) -> Figure:
             shade.append(len(cells))
             cells.append(["", "paper Table 2", "", _fmt(paper[0], ".1f"), _fmt(paper[1], ",.0f"),
                           _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), "", ""])
-    available = h - _MARGIN_IN - 0.9 - cur.y
+    # room for the fit warnings under the table (issue 14): they must stay visible
+    notes_h = sum(0.19 * min(3, len(textwrap.wrap(note, 110))) for note in fit_notes)
+    available = h - _MARGIN_IN - 0.9 - cur.y - notes_h
     line_h = 0.17
     heights = [max(c.count("\n") + 1 for c in row) for row in cells]
     total_h = sum(heights) * line_h + 0.06 * len(cells)
@@ -368,7 +370,7 @@ def _summary_page(ds, info) -> Figure:
         if cur.y < h - _MARGIN_IN - 0.9:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
     for note in fit_notes:
-        if cur.y < h - _MARGIN_IN - 0.9:
+        if cur.y < h - _MARGIN_IN - 0.9 + notes_h:
             cur.text(x0, "\n".join(textwrap.wrap(note, 110)[:3]), size=8.5, color="#8a4b00", weight="bold")
     cur.skip(0.1)
     if cur.y < h - _MARGIN_IN - 0.7:

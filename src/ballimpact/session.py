@@ -818,8 +818,9 @@ def read_session(path) -> Session:
     Raises
     ------
     SessionError
-        A session-level fault, with a one-line message naming the file, the key or
-        line, and what is wrong.
+        Session-level faults: every one found (session.yaml and impacts.csv are both
+        checked), one line each naming the file, the key or line, and what is wrong;
+        the lines are also in ``SessionError.problems``.
 
     Warns
     -----
