@@ -571,3 +571,11 @@ def test_process_chunk_rejects_bad_arguments(synth_raw, tmp_path, kwargs, match)
     with pytest.raises(ValueError, match=match):
         pipeline.process_chunk(synth_raw / "s1", out_nc=tmp_path / "chunk.nc", **kwargs)
     assert not (tmp_path / "chunk.nc").exists()
+
+
+def test_snakemake_lint_is_clean():
+    """`snakemake --lint` finds nothing: every rule has a log and a conda environment, no
+    rule file mixes rules with functions."""
+    proc = run_snakemake("--lint", check=True)
+    assert "Lints for" not in proc.stdout, proc.stdout
+    assert (REPO / "workflow" / "envs" / "ballimpact.yaml").is_file()

@@ -145,11 +145,6 @@ if not SESSIONS:
     logger.warning(f"ballimpact: no session folder with a {SESSION_FILE} in raw_dir {RAW_DIR!r}; nothing to do")
 
 
-wildcard_constraints:
-    session=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
-    chunk=r"[0-9]+",
-    ball=r"[A-Za-z0-9_-]+",
-
 
 # ------------------------------------------------------------------------ paths
 
@@ -172,7 +167,7 @@ def benchmark_path(name):
     return f"{RESULTS_DIR}/{{session}}/benchmarks/{name}.tsv"
 
 
-# PNG file stems written by rule figures (captions: workflow/report/<stem>.rst)
+# PNG file stems the figures job writes (captions: workflow/report/<stem>.rst)
 FIGURES = (
     "fig7_contact_time_cor",
     "fig8_stiffness",
