@@ -29,7 +29,7 @@ from types import SimpleNamespace
 
 from archive_fixture import impact_result, make_archive, make_results
 
-# shared/spec/outputs.md, copied by hand (independent of the module's constants)
+# docs/outputs.md, copied by hand (independent of the module's constants)
 SPEC_IMPACT_COLUMNS = [
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
@@ -305,7 +305,7 @@ def _table2_fit(ball="pressurised"):
 
 
 def test_fit_dataset_reproduces_the_spec_sanity_figures():
-    # shared/spec/model.md: ball 1 at 20 m/s gives TC about 3.7 ms, COR about 0.63, peak about
+    # docs/model.md: ball 1 at 20 m/s gives TC about 3.7 ms, COR about 0.63, peak about
     # 840 N, and the momentum-flux force is the largest component early in the contact
     fit = archive.fit_dataset("pressurised", _table2_fit(), label="Ball 1: pressurised")
     assert fit.sizes["ball"] == 1

@@ -58,7 +58,7 @@ __all__ = [
     "open_dataset",
 ]
 
-#: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
+#: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
     "impact_id",
     "ball",
@@ -747,7 +747,7 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        SI columns as named in shared/spec/outputs.md; ``reason`` is empty for ok impacts.
+        SI columns as named in docs/outputs.md; ``reason`` is empty for ok impacts.
     """
     n = ds.sizes.get("impact", 0)
     data = {}
