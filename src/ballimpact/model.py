@@ -5,11 +5,11 @@ towards the surface [m], positive in compression, t = 0 at first contact. The
 force on the ball is F = kB x + (cB + cM) x' (Eq. (14)).
 
 Readings of the paper (its text lost every minus sign and subscript; see
-``shared/spec/model.md`` and the README):
+``docs/model.md`` and the README):
 
 * Eq. (5) is read with alternating signs, SI units:
   dCONT = -2.776e5 x^4 + 1.746e4 x^3 - 453 x^2 + 7.66 x. It gives 46.0 mm at
-  x = 10 mm (the spec quotes 46.6 mm; the geometric chord of a 33 mm ball is 47 mm).
+  x = 10 mm (the geometric chord of a 33 mm ball is 47 mm).
 * The momentum flux damper cM (Eq. (13)) acts in compression only (x' > 0).
 * Cloth (section 3.2.4): the force is zero while x < 2 mm in compression. An
   optional small cloth stiffness replaces that zero (used by the synthetic
@@ -234,7 +234,10 @@ def simulate_impact(
     while x < 2 mm in compression (section 3.2.4).
 
     All array arguments broadcast against each other: one call simulates many
-    impacts (speeds and/or parameter sets) at once.
+    impacts (speeds and/or parameter sets) at once. The steps: :func:`_step_force`
+    (the force, Eqs. (4), (5), (7), (13), (14)), :func:`_apply_cloth`,
+    :meth:`_Active.retire` (end of contact, interpolated) and :meth:`_Active.advance`
+    (Eq. (16)).
 
     Parameters
     ----------
@@ -272,176 +275,226 @@ def simulate_impact(
     -------
     ImpactSimulation
     """
-    vin = _check_positive("vin_m_s", vin_m_s)
-    mass = _check_positive("mass_kg", mass_kg)
-    kb0 = _check_nonnegative("kb0_N_m", kb0_N_m)
-    ak_ = _check_nonnegative("ak", ak)
-    a_ = _check_positive("a", a)
-    ac_ = _check_nonnegative("ac", ac)
     if not dt_s > 0:
         raise ValueError(f"dt_s must be positive, got {dt_s!r}")
     if not max_contact_time_s > 0:
         raise ValueError(f"max_contact_time_s must be positive, got {max_contact_time_s!r}")
-
-    shape = np.broadcast_shapes(vin.shape, mass.shape, kb0.shape, ak_.shape, a_.shape, ac_.shape)
-    vin, mass, kb0, ak_, a_, ac_ = (
-        np.ascontiguousarray(np.broadcast_to(p, shape), dtype=float).ravel()
-        for p in (vin, mass, kb0, ak_, a_, ac_)
-    )
-    n = vin.size
+    shape, (vin, mass, kb0, ak_, a_, ac_) = _broadcast_parameters(vin_m_s, mass_kg, kb0_N_m, ak, a, ac)
     n_steps = int(np.ceil(max_contact_time_s / dt_s)) + 2
-    n_buckle = int(round(buckling_time_s / dt_s))
-    inv_dt = 1.0 / dt_s
-    dt2_over_m = dt_s * dt_s / mass
-    flux_coef = mass * rho_area_kg_m2 * np.pi / (4.0 * dt_s)  # divided by M1 each step
-    quarter_rho_pi = rho_area_kg_m2 * np.pi / 4.0
-    c4, c3, c2, c1, _ = _DCONT_COEFFS
-
-    # State; x_prev = x(t - dt), x = x(t). Step 0 is t = 0, step 1 is t = dt.
-    x_prev = np.zeros(n)
-    x = vin * dt_s
-    d2_prev = np.zeros(n)
-    f_prev = np.zeros(n)  # force at the previous step
-    v_prev = vin.copy()
-    t_end = np.full(n, np.nan)
-    v_end = np.full(n, np.nan)
-    peak = np.zeros(n)
-    t_peak = np.zeros(n)
-    x_max = np.zeros(n)
-
-    if record:
-        rec = {k: np.full((n_steps, n), np.nan) for k in ("x", "v", "f", "fs", "fd", "fm")}
-        for k in rec:
-            rec[k][0] = 0.0
-        rec["x"][0] = 0.0
-        rec["v"][0] = vin
-
-    idx = np.arange(n)  # indices of the simulations still being stepped
-    # work arrays on the compacted active set
-    xa, xpa, d2pa, fpa, vpa = x, x_prev, d2_prev, f_prev, v_prev
-    ma, kb0a, aka, aa, aca = mass, kb0, ak_, a_, ac_
-    dt2m, fluxc = dt2_over_m, flux_coef
-    peak_a, tpeak_a, xmax_a = peak.copy(), t_peak.copy(), x_max.copy()
+    c = _StepConstants(dt_s, int(round(buckling_time_s / dt_s)), k_const_N_m, rho_area_kg_m2 * np.pi / 4.0,
+                       cloth_displacement_m, cloth_stiffness_N_m)
+    out = _Outcome(vin.size)
+    s = _Active(vin, mass, kb0, ak_, a_, ac_, dt_s, rho_area_kg_m2)
+    rec = _Recorder(n_steps, vin) if record else None
     cloth_phase = cloth_displacement_m > 0  # until every impact has passed the cloth
-
     step = 1
-    while idx.size and step < n_steps:
+    while s.idx.size and step < n_steps:
         t = step * dt_s
-        v = (xa - xpa) * inv_dt
-        xc = np.maximum(xa, 0.0)
-        # Eq. (5), Horner form, in place
-        d = c4 * xc
-        d += c3
-        d *= xc
-        d += c2
-        d *= xc
-        d += c1
-        d *= xc
-        d2 = d * d
-        if step < n_buckle:  # section 3.2.4: pre-buckling stiffness
-            fs = k_const_N_m * xa
-        else:  # Eq. (4)
-            fs = np.power(xc, aa)
-            fs *= aka
-            fs += kb0a
-            fs *= xa
-        compress = v > 0.0
-        # Eq. (13) in compression only, Eq. (7)
-        cm = d2 - d2pa
-        cm *= fluxc
-        cm /= ma - quarter_rho_pi * d2
-        cm *= compress
-        cb = aca * d2
-        if record:
-            fd = cb * v
-            fm = cm * v
-            f = fs + fd + fm
-        else:
-            cb += cm
-            cb *= v
-            f = cb
-            f += fs
+        v, d2, compress, f, parts = _step_force(s, step, c, record)
         if cloth_phase:
-            cloth = compress & (xa < cloth_displacement_m)
-            if cloth.any():
-                fc = cloth_stiffness_N_m * xa
-                f = np.where(cloth, fc, f)
-                if record:
-                    fs = np.where(cloth, fc, fs)
-                    fd = np.where(cloth, 0.0, fd)
-                    fm = np.where(cloth, 0.0, fm)
-            elif np.all(xa >= cloth_displacement_m):
-                cloth_phase = False  # x < 2 mm again only in restitution, where it does not apply
-
-        if record:
-            cols = idx
-            rec["x"][step, cols] = xa
-            rec["v"][step, cols] = v
-            rec["f"][step, cols] = f
-            rec["fs"][step, cols] = fs
-            rec["fd"][step, cols] = fd
-            rec["fm"][step, cols] = fm
-        upd = f > peak_a
-        np.copyto(tpeak_a, t, where=upd)
-        np.maximum(peak_a, f, out=peak_a)
-        np.maximum(xmax_a, xa, out=xmax_a)
-
+            f, parts, cloth_phase = _apply_cloth(s.x, compress, f, parts, c)
+        if rec is not None:
+            rec.store(step, s.idx, s.x, v, f, parts)
+        s.track_extremes(f, t)
         ended = f <= 0.0
         ended &= ~compress
         if ended.any():
-            # Interpolate the zero crossing of F between the previous step and this one.
-            fp = fpa[ended]
-            fc_ = f[ended]
-            denom = fp - fc_
-            frac = np.where(denom > 0, fp / np.where(denom > 0, denom, 1.0), 1.0)
-            frac = np.clip(frac, 0.0, 1.0)
-            sel = idx[ended]
-            t_end[sel] = t - dt_s + frac * dt_s
-            v_end[sel] = vpa[ended] + frac * (v[ended] - vpa[ended])
-            peak[sel], t_peak[sel], x_max[sel] = peak_a[ended], tpeak_a[ended], xmax_a[ended]
-            keep = ~ended
-            idx = idx[keep]
-            xa, xpa, d2, f, v = xa[keep], xpa[keep], d2[keep], f[keep], v[keep]
-            ma, kb0a, aka, aa, aca = ma[keep], kb0a[keep], aka[keep], aa[keep], aca[keep]
-            dt2m, fluxc = dt2m[keep], fluxc[keep]
-            peak_a, tpeak_a, xmax_a = peak_a[keep], tpeak_a[keep], xmax_a[keep]
-            if not idx.size:
+            d2, f, v = s.retire(ended, t, dt_s, d2, f, v, out)
+            if not s.idx.size:
                 break
-        # Eq. (16): x(t + dt) = 2 x(t) - x(t - dt) - dt^2 / m * F(t)
-        x_next = 2.0 * xa
-        x_next -= xpa
-        x_next -= dt2m * f
-        xpa, xa = xa, x_next
-        d2pa, fpa, vpa = d2, f, v
+        s.advance(d2, f, v)
         step += 1
+    return _finish(s, out, vin, shape, max_contact_time_s, rec, min(step + 1, n_steps), dt_s)
 
-    if idx.size:
-        peak[idx], t_peak[idx], x_max[idx] = peak_a, tpeak_a, xmax_a
-    if idx.size:
+
+def _broadcast_parameters(vin_m_s, mass_kg, kb0_N_m, ak, a, ac):
+    """Validated parameters broadcast to one shape and flattened: (shape, six 1-D float arrays)."""
+    params = (
+        _check_positive("vin_m_s", vin_m_s),
+        _check_positive("mass_kg", mass_kg),
+        _check_nonnegative("kb0_N_m", kb0_N_m),
+        _check_nonnegative("ak", ak),
+        _check_positive("a", a),
+        _check_nonnegative("ac", ac),
+    )
+    shape = np.broadcast_shapes(*(p.shape for p in params))
+    return shape, tuple(np.ascontiguousarray(np.broadcast_to(p, shape), dtype=float).ravel() for p in params)
+
+
+@dataclass(frozen=True)
+class _StepConstants:
+    """Scalars of the time stepping: dt [s], buckling steps [-], kCONST [N/m], rho pi / 4
+    [kg/m^2], cloth displacement [m] and stiffness [N/m]."""
+
+    dt_s: float
+    n_buckle: int
+    k_const_N_m: float
+    quarter_rho_pi: float
+    cloth_displacement_m: float
+    cloth_stiffness_N_m: float
+
+
+class _Outcome:
+    """Per impact results, filled as each impact ends: end time [s], velocity at the end
+    [m/s], peak force [N], its time [s], largest displacement [m]."""
+
+    def __init__(self, n: int):
+        self.t_end = np.full(n, np.nan)
+        self.v_end = np.full(n, np.nan)
+        self.peak = np.zeros(n)
+        self.t_peak = np.zeros(n)
+        self.x_max = np.zeros(n)
+
+
+class _Active:
+    """The simulations still being stepped, compacted: state at t and t - dt, parameters and
+    running extremes. ``idx`` maps each back to its place in the flattened input."""
+
+    # compacted when impacts end (d2_prev, f_prev, v_prev are replaced by advance())
+    _FIELDS = ("idx", "x", "x_prev", "mass", "kb0", "ak", "a", "ac", "dt2m", "fluxc", "peak", "t_peak", "x_max")
+
+    def __init__(self, vin, mass, kb0, ak, a, ac, dt_s, rho_area_kg_m2):
+        n = vin.size
+        self.idx = np.arange(n)
+        self.x_prev, self.x = np.zeros(n), vin * dt_s  # x(0) = 0, x(dt) = VB dt
+        self.d2_prev, self.f_prev, self.v_prev = np.zeros(n), np.zeros(n), vin.copy()
+        self.mass, self.kb0, self.ak, self.a, self.ac = mass, kb0, ak, a, ac
+        self.dt2m = dt_s * dt_s / mass
+        self.fluxc = mass * rho_area_kg_m2 * np.pi / (4.0 * dt_s)  # Eq. (13), divided by M1 each step
+        self.peak, self.t_peak, self.x_max = np.zeros(n), np.zeros(n), np.zeros(n)
+
+    def track_extremes(self, f, t):
+        """Running peak force [N], its time [s] and the largest displacement [m]."""
+        np.copyto(self.t_peak, t, where=f > self.peak)
+        np.maximum(self.peak, f, out=self.peak)
+        np.maximum(self.x_max, self.x, out=self.x_max)
+
+    def retire(self, ended, t, dt_s, d2, f, v, out: _Outcome):
+        """Record the impacts whose force crossed zero in restitution and drop them.
+
+        The crossing is interpolated linearly between the previous step and this one
+        (end of impact, section 3.3). Returns this step's d2, f, v of those kept.
+        """
+        fp, fc = self.f_prev[ended], f[ended]
+        denom = fp - fc
+        frac = np.clip(np.where(denom > 0, fp / np.where(denom > 0, denom, 1.0), 1.0), 0.0, 1.0)
+        sel = self.idx[ended]
+        out.t_end[sel] = t - dt_s + frac * dt_s
+        out.v_end[sel] = self.v_prev[ended] + frac * (v[ended] - self.v_prev[ended])
+        out.peak[sel], out.t_peak[sel], out.x_max[sel] = self.peak[ended], self.t_peak[ended], self.x_max[ended]
+        keep = ~ended
+        for name in self._FIELDS:
+            setattr(self, name, getattr(self, name)[keep])
+        return d2[keep], f[keep], v[keep]
+
+    def advance(self, d2, f, v):
+        """Eq. (16): x(t + dt) = 2 x(t) - x(t - dt) - dt^2 / m * F(t)."""
+        x_next = 2.0 * self.x
+        x_next -= self.x_prev
+        x_next -= self.dt2m * f
+        self.x_prev, self.x = self.x, x_next
+        self.d2_prev, self.f_prev, self.v_prev = d2, f, v
+
+
+def _step_force(s: _Active, step: int, c: _StepConstants, record: bool):
+    """Force on the ball at one step, Eq. (14), with kB from Eq. (4) (kCONST before buckling),
+    dCONT from Eq. (5), cB from Eq. (7) and cM from Eq. (13) in compression only.
+
+    Returns velocity [m/s], dCONT^2 [m^2], compression flags, force [N] and, when
+    recording, the components (kB x, cB x', cM x') [N], else None.
+    """
+    v = (s.x - s.x_prev) * (1.0 / c.dt_s)
+    xc = np.maximum(s.x, 0.0)
+    c4, c3, c2, c1, _ = _DCONT_COEFFS
+    d = c4 * xc  # Eq. (5), Horner form, in place
+    d += c3
+    d *= xc
+    d += c2
+    d *= xc
+    d += c1
+    d *= xc
+    d2 = d * d
+    if step < c.n_buckle:  # section 3.2.4: pre-buckling stiffness
+        fs = c.k_const_N_m * s.x
+    else:  # Eq. (4)
+        fs = np.power(xc, s.a)
+        fs *= s.ak
+        fs += s.kb0
+        fs *= s.x
+    compress = v > 0.0
+    cm = d2 - s.d2_prev  # Eq. (13)
+    cm *= s.fluxc
+    cm /= s.mass - c.quarter_rho_pi * d2
+    cm *= compress
+    cb = s.ac * d2  # Eq. (7)
+    if record:
+        fd, fm = cb * v, cm * v
+        return v, d2, compress, fs + fd + fm, (fs, fd, fm)
+    cb += cm
+    cb *= v
+    cb += fs
+    return v, d2, compress, cb, None
+
+
+def _apply_cloth(x, compress, f, parts, c: _StepConstants):
+    """Section 3.2.4: force cloth_stiffness x (zero in the paper) while x < 2 mm in compression.
+
+    Returns the force [N], its components (or None) and whether the cloth can still
+    apply to any impact (False once every one is past 2 mm).
+    """
+    cloth = compress & (x < c.cloth_displacement_m)
+    if cloth.any():
+        fc = c.cloth_stiffness_N_m * x
+        f = np.where(cloth, fc, f)
+        if parts is not None:
+            fs, fd, fm = parts
+            parts = (np.where(cloth, fc, fs), np.where(cloth, 0.0, fd), np.where(cloth, 0.0, fm))
+        return f, parts, True
+    # x < 2 mm again only in restitution, where it does not apply
+    return f, parts, not np.all(x >= c.cloth_displacement_m)
+
+
+class _Recorder:
+    """Time series of every impact (rows: steps), NaN after its end."""
+
+    _KEYS = ("x", "v", "f", "fs", "fd", "fm")
+
+    def __init__(self, n_steps: int, vin):
+        self.rec = {k: np.full((n_steps, vin.size), np.nan) for k in self._KEYS}
+        for k in self._KEYS:
+            self.rec[k][0] = 0.0
+        self.rec["v"][0] = vin
+
+    def store(self, step, idx, x, v, f, parts):
+        for key, values in zip(self._KEYS, (x, v, f, *parts)):
+            self.rec[key][step, idx] = values
+
+
+def _finish(s: _Active, out: _Outcome, vin, shape, max_contact_time_s, rec, last, dt_s) -> ImpactSimulation:
+    """The ImpactSimulation: impacts still active keep their extremes, NaN end and a warning."""
+    if s.idx.size:
+        out.peak[s.idx], out.t_peak[s.idx], out.x_max[s.idx] = s.peak, s.t_peak, s.x_max
         warnings.warn(
-            f"{idx.size} simulated impact(s) did not end within {max_contact_time_s * 1e3:.1f} ms; "
+            f"{s.idx.size} simulated impact(s) did not end within {max_contact_time_s * 1e3:.1f} ms; "
             "their contact time and COR are NaN (parameters far outside the physical range?)",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
-    rebound = -v_end
+    rebound = -out.v_end
     result = ImpactSimulation(
-        contact_time_s=t_end.reshape(shape),
+        contact_time_s=out.t_end.reshape(shape),
         rebound_speed_m_s=rebound.reshape(shape),
         cor=(rebound / vin).reshape(shape),
-        peak_force_N=peak.reshape(shape),
-        time_to_peak_s=t_peak.reshape(shape),
-        max_displacement_m=x_max.reshape(shape),
+        peak_force_N=out.peak.reshape(shape),
+        time_to_peak_s=out.t_peak.reshape(shape),
+        max_displacement_m=out.x_max.reshape(shape),
     )
-    if record:
-        last = min(step + 1, n_steps)
+    if rec is not None:
+        series = {k: rec.rec[k][:last].reshape((last,) + shape) for k in rec._KEYS}
         result.time_s = np.arange(last) * dt_s
-        result.displacement_m = rec["x"][:last].reshape((last,) + shape)
-        result.velocity_m_s = rec["v"][:last].reshape((last,) + shape)
-        result.force_N = rec["f"][:last].reshape((last,) + shape)
-        result.stiffness_force_N = rec["fs"][:last].reshape((last,) + shape)
-        result.damping_force_N = rec["fd"][:last].reshape((last,) + shape)
-        result.momentum_flux_force_N = rec["fm"][:last].reshape((last,) + shape)
+        result.displacement_m, result.velocity_m_s, result.force_N = series["x"], series["v"], series["f"]
+        result.stiffness_force_N = series["fs"]
+        result.damping_force_N, result.momentum_flux_force_N = series["fd"], series["fm"]
     return result
 
 

@@ -56,6 +56,8 @@ rule figures:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace of an excluded impact"},
         ),
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("figures"),
     benchmark:
@@ -79,6 +81,8 @@ rule report:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "report.pdf", "shows": "the whole session report"},
         ),
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("report"),
     benchmark:
