@@ -43,10 +43,15 @@ def test_python_block_runs_on_the_demo_results(demo_run_output, index, monkeypat
     exec(compile(code, f"README.md python block {index + 1}", "exec"), {"__name__": "readme"})  # noqa: S102
 
 
-@pytest.mark.parametrize("index", range(len(_blocks("yaml"))))
+EXAMPLES = _blocks("yaml") + ([(REPO / "docs" / "example-session.yaml").read_text(encoding="utf-8")]
+                              if (REPO / "docs" / "example-session.yaml").is_file() else [])
+
+
+@pytest.mark.parametrize("index", range(len(EXAMPLES)))
 def test_yaml_block_is_a_valid_session_yaml(tmp_path, index):
-    text = _blocks("yaml")[index]
-    session_id = re.search(r"^session_id: *(\S+)", text, re.M).group(1)
+    """The README's session.yaml example (and docs/example-session.yaml, which it links)."""
+    text = EXAMPLES[index]
+    session_id = re.search(r"^session_id: *(\S+)", text, re.M).group(1).strip('"')
     folder = tmp_path / session_id
     (folder / "traces").mkdir(parents=True)
     (folder / "session.yaml").write_text(text, encoding="utf-8")
