@@ -49,9 +49,15 @@ MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: w
 _KNOWN_SECTION_KEYS = {
     "plate": {"polarity", "kcal_range_N_per_V"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
-    "gates": {"spacing_m", "resolution_s"},
+    "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
+    "rig": {"orientation", "air_density_kg_m3"},
 }
-_KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m"}
+_KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m", "itf_rebound_cm"}
+RIG_ORIENTATIONS = ("horizontal", "vertical")  # `rig.orientation` (v1.1); horizontal is the default
+DEFAULT_AIR_DENSITY_KG_M3 = 1.2  # [kg/m^3] default `rig.air_density_kg_m3`
+AIR_DENSITY_RANGE_KG_M3 = (0.5, 1.5)  # [kg/m^3] plausible air (sea level to ~5 km); outside = error
+DEFAULT_BALL_DIAMETER_M = 0.0654  # [m] ball diameter when `balls.<key>.diameter_mm` is not given
+ITF_REBOUND_MAX_CM = 254.0  # [cm] a rebound cannot exceed the 254 cm drop
 
 
 class SessionError(ValueError):
@@ -71,6 +77,7 @@ class BallType:
     mass_kg: float  # [kg]
     diameter_m: float | None  # [m], None when not given
     kb0_N_m: float | None  # [N/m] fixed kB(0) of the model, None = estimate it
+    itf_rebound_cm: float | None = None  # [cm] measured ITF 254 cm drop-test rebound (v1.1), None when not given
 
 
 @dataclass(frozen=True)
@@ -91,6 +98,9 @@ class SessionMeta:
     synthetic: bool  # optional top-level `synthetic`, default False
     raw: dict  # the parsed YAML, for the archive
     kcal_range_N_per_V: tuple[float, float] | None = None  # [N/V] optional `plate.kcal_range_N_per_V`
+    distance_to_plate_m: float | None = None  # [m] optional `gates.distance_to_plate_m` (v1.1): gate 2 to plate
+    rig_orientation: str = "horizontal"  # optional `rig.orientation` (v1.1): horizontal or vertical
+    air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
 
 
 @dataclass
@@ -299,9 +309,18 @@ def _parse_ball(key: str, spec, file: str) -> BallType:
     kb0_N_m = None
     if spec.get("kb0_kN_m") is not None:
         kb0_N_m = _number(spec["kb0_kN_m"], f"{prefix}.kb0_kN_m", file, positive=True) * 1000.0
+    itf_rebound_cm = None
+    if spec.get("itf_rebound_cm") is not None:
+        itf_rebound_cm = _number(spec["itf_rebound_cm"], f"{prefix}.itf_rebound_cm", file, positive=True)
+        if itf_rebound_cm >= ITF_REBOUND_MAX_CM:
+            raise SessionError(
+                f"{file}: key '{prefix}.itf_rebound_cm' must be below the {ITF_REBOUND_MAX_CM:g} cm drop height "
+                f"(a rebound in cm), got {spec['itf_rebound_cm']!r}"
+            )
     label = _text(spec.get("label"), f"{prefix}.label", file) or key
     _warn_unknown(spec, _KNOWN_BALL_KEYS, prefix, file)
-    return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m)
+    return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m,
+                    itf_rebound_cm=itf_rebound_cm)
 
 
 def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
@@ -387,7 +406,36 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
             SessionWarning,
             stacklevel=3,
         )
+    distance_to_plate_m = None
+    if gates.get("distance_to_plate_m") is not None:
+        distance_to_plate_m = _number(gates["distance_to_plate_m"], "gates.distance_to_plate_m", file, positive=True)
+        if distance_to_plate_m > MAX_GATE_SPACING_M:
+            warnings.warn(
+                f"{file}: key 'gates.distance_to_plate_m' = {distance_to_plate_m:g} m is larger than "
+                f"{MAX_GATE_SPACING_M:g} m (is it given in mm?)",
+                SessionWarning,
+                stacklevel=3,
+            )
     _warn_unknown(gates, _KNOWN_SECTION_KEYS["gates"], "gates", file)
+
+    rig = data.get("rig") or {}
+    if not isinstance(rig, dict):
+        raise SessionError(f"{file}: key 'rig' must be a mapping (orientation, air_density_kg_m3), got {rig!r}")
+    orientation = rig.get("orientation") or "horizontal"
+    if orientation not in RIG_ORIENTATIONS:
+        raise SessionError(
+            f"{file}: key 'rig.orientation' must be one of {', '.join(RIG_ORIENTATIONS)}, got {rig['orientation']!r}"
+        )
+    air_density = DEFAULT_AIR_DENSITY_KG_M3
+    if rig.get("air_density_kg_m3") is not None:
+        air_density = _number(rig["air_density_kg_m3"], "rig.air_density_kg_m3", file, positive=True)
+        lo, hi = AIR_DENSITY_RANGE_KG_M3
+        if not lo <= air_density <= hi:
+            raise SessionError(
+                f"{file}: key 'rig.air_density_kg_m3' must be in [{lo:g}, {hi:g}] kg/m^3 (air), "
+                f"got {rig['air_density_kg_m3']!r}"
+            )
+    _warn_unknown(rig, _KNOWN_SECTION_KEYS["rig"], "rig", file)
 
     balls_value = _require(data, "balls", "balls", file)
     if not isinstance(balls_value, dict) or not balls_value:
@@ -402,6 +450,14 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
         if key in balls:
             raise SessionError(f"{file}: ball key {key!r} is given twice under 'balls'")
         balls[key] = _parse_ball(key, spec, file)
+    if distance_to_plate_m is not None:
+        for ball in balls.values():
+            diameter_m = ball.diameter_m if ball.diameter_m is not None else DEFAULT_BALL_DIAMETER_M
+            if distance_to_plate_m <= diameter_m:
+                raise SessionError(
+                    f"{file}: key 'gates.distance_to_plate_m' ({distance_to_plate_m:g} m) must exceed the diameter "
+                    f"of ball '{ball.key}' ({diameter_m * 1000:g} mm): gate 2 would be blocked during the contact"
+                )
 
     synthetic = data.get("synthetic", False)
     if synthetic is None:
@@ -424,6 +480,9 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
         synthetic=synthetic,
         raw=data,
         kcal_range_N_per_V=kcal_range,
+        distance_to_plate_m=distance_to_plate_m,
+        rig_orientation=orientation,
+        air_density_kg_m3=air_density,
     )
 
 
