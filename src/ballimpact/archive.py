@@ -75,6 +75,8 @@ IMPACT_COLUMNS = [
     "max_displacement_mm",
     "kv_stiffness_kN_m",
     "kv_damping_N_s_m",
+    "vin_gate_m_s",
+    "vout_gate_m_s",
 ]
 
 #: Columns of results/<session>/parameters.csv, in order: identification (ball,
@@ -139,6 +141,8 @@ _PER_IMPACT_SCALARS = [
     ("kv_damping_N_s_m", "kv_damping_N_s_m"),
     ("impact_mass_kg", "mass_kg"),
     ("sample_rate_hz", "sample_rate_hz"),
+    ("vin_gate_m_s", "vin_gate_m_s"),
+    ("vout_gate_m_s", "vout_gate_m_s"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
@@ -156,8 +160,10 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "reason": ("1", "why the impact was excluded (empty when ok)"),
     "trace_file": ("1", "trace file path relative to the session folder"),
     "trace_sha256": ("1", "SHA-256 digest of the trace file"),
-    "vin_m_s": ("m s-1", "inbound ball speed VB from the light gates"),
-    "vout_m_s": ("m s-1", "rebound ball speed VB' from the light gates"),
+    "vin_m_s": ("m s-1", "inbound ball speed VB at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
+    "vout_m_s": ("m s-1", "rebound ball speed VB' at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
+    "vin_gate_m_s": ("m s-1", "inbound ball speed from the light gates, spacing / interval"),
+    "vout_gate_m_s": ("m s-1", "rebound ball speed from the light gates, spacing / interval"),
     "cor": ("1", "coefficient of restitution VB'/VB"),
     "contact_time_ms": ("ms", "contact time TC"),
     "kcal_N_per_V": ("N V-1", "force-plate calibration factor kCAL of this impact"),
