@@ -143,6 +143,8 @@ def _cmd_synth(args) -> int:
     chain_kw = {}
     if args.sample_rate_hz is not None:
         chain_kw["sample_rate_hz"] = args.sample_rate_hz
+    if args.gate_to_plate_m is not None:
+        chain_kw["gate_to_plate_m"] = args.gate_to_plate_m
     chain = SensorChain(**chain_kw)
     balls = {k: BALLS[k].params for k in (args.balls or list(BALLS))}
     labels = {k: BALLS[k].label for k in balls}
@@ -156,18 +158,31 @@ def _cmd_synth(args) -> int:
                 p["mass_g"], p["kb0_kN_m"], p["ak_kN_m"], p["a"], p["ac_kN_s_m3"]
             )
             labels[key] = p.get("label", key)
-    config = SynthConfig(
-        session_id=out.name,
-        seed=args.seed,
-        balls=balls,
-        labels=labels,
-        impacts_per_ball=args.impacts_per_ball,
-        faults_per_kind=args.faults_per_kind,
-        polarity=args.polarity,
-        trace_format=args.format,
-        kb0_in_config=not args.no_kb0,
-        chain=chain,
-    )
+        # custom balls: a measured ITF rebound only when the YAML gives one (not Table 1's)
+        chain_kw_itf = {"itf_rebound_cm": {k: float(p["itf_rebound_cm"]) for k, p in doc.items()
+                                           if p.get("itf_rebound_cm") is not None}}
+    else:
+        chain_kw_itf = {}
+    try:
+        config = SynthConfig(
+            session_id=out.name,
+            seed=args.seed,
+            balls=balls,
+            labels=labels,
+            impacts_per_ball=args.impacts_per_ball,
+            faults_per_kind=args.faults_per_kind,
+            polarity=args.polarity,
+            trace_format=args.format,
+            kb0_in_config=not args.no_kb0,
+            chain=chain,
+            **({"vin_range_m_s": tuple(args.vin_range)} if args.vin_range else {}),
+            flight_drag=args.drag or args.vertical,
+            rig_orientation="vertical" if args.vertical else "horizontal",
+            **chain_kw_itf,
+        )
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     try:
         session_dir, truth = write_session(out, config)
     except (FileExistsError, ValueError) as exc:
@@ -231,13 +246,20 @@ def build_parser() -> argparse.ArgumentParser:
     syn.add_argument("--seed", type=int, default=0)
     syn.add_argument("--balls", nargs="+", choices=sorted(__import__("ballimpact.balls", fromlist=["BALLS"]).BALLS),
                      help="Table 2 ball types to include (default all four)")
-    syn.add_argument("--params", type=Path, help="YAML of custom ball types: key: {mass_g, kb0_kN_m, ak_kN_m, a, ac_kN_s_m3}")
+    syn.add_argument("--params", type=Path, help="YAML of custom ball types: key: {mass_g, kb0_kN_m, ak_kN_m, a, ac_kN_s_m3[, itf_rebound_cm]}")
     syn.add_argument("--impacts-per-ball", type=int, default=10)
     syn.add_argument("--faults-per-kind", type=int, default=2)
     syn.add_argument("--polarity", type=int, choices=(1, -1), default=1)
     syn.add_argument("--format", choices=("csv", "tdms", "mixed"), default="csv")
     syn.add_argument("--sample-rate-hz", type=_positive_float, default=None)
     syn.add_argument("--no-kb0", action="store_true", help="leave kB(0) out of session.yaml (it is then extrapolated)")
+    syn.add_argument("--vin-range", type=_positive_float, nargs=2, metavar=("LO", "HI"),
+                     help="inbound speeds of the good impacts [m/s] (default 14 30)")
+    syn.add_argument("--drag", action="store_true",
+                     help="air drag between the gates and the plate; session.yaml gives gates.distance_to_plate_m")
+    syn.add_argument("--vertical", action="store_true", help="vertical rig (ball fired down): drag and gravity")
+    syn.add_argument("--gate-to-plate-m", type=_positive_float, default=None,
+                     help="distance from gate 2 to the plate [m] (default 0.08; use > 0.0654 with --drag)")
     syn.set_defaults(func=_cmd_synth)
     return parser
 
