@@ -346,3 +346,24 @@ def test_fit_dataset_without_fit_and_assembly(tmp_path):
     assert np.isnan(ds["model_force_N"].values[oversize]).all()
     write_dataset(ds, tmp_path / "a.nc")
     xr.testing.assert_identical(open_dataset(tmp_path / "a.nc"), ds)
+
+
+def test_fit_dataset_itf_prediction_fitted_range_and_curves_3_to_40():
+    # v1.1 (issue 13): curves cover 3-40 m/s, the fitted range is kept, the ITF drop test
+    # predicted (tests/test_itf.py checks the physics) beside the measured rebound
+    fit = archive.fit_dataset("pressurised", _table2_fit(), fit_vin_range_m_s=(14.2, 29.8), itf_rebound_cm=138.9)
+    v = fit["speed_m_s"].values
+    assert v[0] == 3.0 and v[-1] == 40.0
+    assert np.isfinite(fit["model_cor"].values).all()
+    assert fit["fit_vin_min_m_s"].values[0] == 14.2 and fit["fit_vin_max_m_s"].values[0] == 29.8
+    assert_allclose(fit["itf_rebound_pred_cm"].values, 169.5, atol=0.1)  # `ballimpact itf`, Table 2 ball 1
+    assert np.isnan(fit["itf_rebound_pred_lo"].values).all()  # no bootstrap, no interval
+    assert fit["itf_rebound_cm"].values[0] == 138.9
+    assert_allclose(fit["itf_drop_test_cor"].values, 0.768, atol=0.001)
+    assert_allclose(fit["itf_model_cor"].values, 0.851, atol=0.001)
+    table = parameters_table(fit)
+    assert list(table.columns[-4:]) == ["itf_rebound_pred_cm", "itf_rebound_pred_lo", "itf_rebound_pred_hi",
+                                        "itf_rebound_cm"]
+    # without a fit: no prediction, the measurement still kept
+    none = archive.fit_dataset("pressurised", None, mass_kg=0.0577, itf_rebound_cm=138.9)
+    assert np.isnan(none["itf_rebound_pred_cm"].values).all() and none["itf_rebound_cm"].values[0] == 138.9
