@@ -11,7 +11,7 @@ from ballimpact import figures, report
 
 from archive_fixture import make_archive
 
-N_FIGURES = 6  # Figs 7, 8, 9, 10, 2b and kCAL
+N_FIGURES = 7  # Figs 7, COR 3-40 m/s with the ITF drop test, 8, 9, 10, 2b and kCAL
 A4_POINTS = (595.44, 841.68)  # 8.27 x 11.69 in at 72 pt/in
 
 

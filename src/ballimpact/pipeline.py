@@ -35,6 +35,7 @@ __all__ = [
 #: workflow's rule ``figures`` lists the same names in workflow/rules/common.smk).
 FIGURE_STEMS = (
     "fig7_contact_time_cor",
+    "cor_speed_itf",
     "fig8_stiffness",
     "fig9_force_curves",
     "fig10_components",

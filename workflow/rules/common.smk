@@ -265,6 +265,7 @@ def benchmark_path(name):
 # PNG file stems written by rule figures (captions: workflow/report/<stem>.rst)
 FIGURES = (
     "fig7_contact_time_cor",
+    "cor_speed_itf",
     "fig8_stiffness",
     "fig9_force_curves",
     "fig10_components",
