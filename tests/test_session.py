@@ -155,7 +155,8 @@ def test_optional_keys_and_unknown_keys_kept(tmp_path):
     meta["daq"]["mains_hz"] = 60
     meta["synthetic"] = True
     meta["rig"] = {"plate": "Kistler 9281", "notes": [1, 2]}
-    session = read_session(make_session(tmp_path, meta=meta))
+    with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'rig\.plate', 'rig\.notes'"):  # rig: v1.1 section
+        session = read_session(make_session(tmp_path, meta=meta))
     assert session.meta.mains_hz == 60.0
     assert session.meta.synthetic is True
     assert session.meta.raw["rig"] == {"plate": "Kistler 9281", "notes": [1, 2]}
