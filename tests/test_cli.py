@@ -76,3 +76,19 @@ def test_itf_custom_ball_and_table_output(capsys):
     assert "custom" in out and "138.9" in out and "pred [cm]" in out
     assert main(["itf", "--mass-g", "57.7"]) == 2
     assert "need all of" in capsys.readouterr().err
+
+
+def test_synth_with_drag_writes_v1_1_flight_keys(tmp_path, capsys):
+    import yaml
+
+    out = tmp_path / "raw" / "drag"
+    assert main(["synth", str(out), "--balls", "pressurised", "--impacts-per-ball", "2", "--faults-per-kind", "0",
+                 "--drag", "--vertical", "--gate-to-plate-m", "0.3", "--vin-range", "5", "12"]) == 0
+    doc = yaml.safe_load((out / "session.yaml").read_text())
+    assert doc["gates"]["distance_to_plate_m"] == 0.3
+    assert doc["rig"] == {"orientation": "vertical", "air_density_kg_m3": 1.2}
+    assert doc["balls"]["pressurised"]["itf_rebound_cm"] == 138.9  # Table 1
+    assert main(["synth", str(tmp_path / "raw" / "bad"), "--vin-range", "12", "5"]) == 2
+    assert "vin_range_m_s must satisfy" in capsys.readouterr().err
+    assert main(["synth", str(tmp_path / "raw" / "near"), "--drag", "--gate-to-plate-m", "0.05"]) == 2
+    assert "flight_drag needs chain.gate_to_plate_m" in capsys.readouterr().err
