@@ -1,15 +1,22 @@
 # Two commands: `make run` processes raw/ with Snakemake, `make test` runs the suite.
 # Both first build .venv from pyproject.toml (re-done only when pyproject.toml changes).
-PYTHON ?= python3.11
+# The interpreter is the first of python3.13, python3.12, python3.11, python3 that is
+# Python >= 3.11; override with `make PYTHON=/path/to/python3 run`.
+PYTHON ?= $(shell for p in python3.13 python3.12 python3.11 python3; do \
+	command -v $$p >/dev/null 2>&1 && $$p -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null \
+	&& { echo $$p; break; }; done)
 VENV := .venv
 BIN := $(VENV)/bin
 CORES ?= 2
 
-.PHONY: run test bench clean-results setup
+.PHONY: run test bench clean-results setup check-python
 
 setup: $(VENV)/.installed
 
-$(VENV)/.installed: pyproject.toml
+check-python:
+	@test -n "$(PYTHON)" || { echo "ballimpact needs Python >= 3.11: none of python3.13, python3.12, python3.11, python3 on PATH is new enough (install one, or give PYTHON=/path/to/python3)"; exit 1; }
+
+$(VENV)/.installed: pyproject.toml | check-python
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'

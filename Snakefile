@@ -13,6 +13,12 @@ report: "workflow/report/workflow.rst"
 
 
 include: "workflow/rules/common.smk"
+wildcard_constraints:
+    session=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
+    chunk=r"[0-9]+",
+    ball=r"[A-Za-z0-9_-]+",
+
+
 include: "workflow/rules/process.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/report.smk"

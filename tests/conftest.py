@@ -2,10 +2,20 @@
 
 from __future__ import annotations
 
+import os
+
 import pandas as pd
 import pytest
+from hypothesis import settings
 
 from ballimpact.synth import SensorChain, SynthConfig, write_session
+
+# Property tests run on a fixed, derandomised set of examples, so that a run of `make test`
+# passes or fails the same way every time. HYPOTHESIS_PROFILE=hunt turns them back into a
+# random search, for a developer hunting for a breaking case.
+settings.register_profile("fixed", derandomize=True, deadline=None)
+settings.register_profile("hunt", derandomize=False, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
 
 
 def _make(tmp_path_factory, name, **kw):

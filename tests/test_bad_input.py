@@ -1,4 +1,4 @@
-"""Bad-input suite: every way the raw format (shared/spec/raw-format.md) can be broken, and a few more.
+"""Bad-input suite: every way the raw format (docs/raw-format.md) can be broken, and a few more.
 
 One small valid synthetic session is made per module; every case copies it,
 breaks one thing and checks the contract of the spec's "Errors" section:

@@ -18,7 +18,7 @@ def test_simulate_json_keys_and_sanity_figures(capsys):
     assert main(["simulate", *BALL1, "--vin", "20", "--vin", "28", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [set(r) for r in rows] == [{"vin_m_s", "contact_time_ms", "cor", "peak_force_N", "max_displacement_mm"}] * 2
-    # shared/spec/model.md sanity figures for ball 1 at 20 m/s
+    # docs/model.md sanity figures for ball 1 at 20 m/s
     assert_allclose([rows[0][k] for k in ("contact_time_ms", "cor", "peak_force_N", "max_displacement_mm")],
                     [3.7, 0.63, 840, 18.6], rtol=0.03)
     assert rows[1]["contact_time_ms"] < rows[0]["contact_time_ms"]

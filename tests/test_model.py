@@ -36,7 +36,7 @@ def test_material_damping_is_area_law():
 
 
 def test_spec_sanity_figures_ball1_20ms():
-    # shared/spec/model.md: an independent implementation gives TC 3.7 ms, COR 0.63,
+    # docs/model.md: an independent implementation gives TC 3.7 ms, COR 0.63,
     # peak 840 N, largest displacement 18.6 mm for ball 1 at 20 m/s.
     r = _sim("pressurised", 20.0)
     assert_allclose(r.contact_time_s, 3.7e-3, rtol=0.03)

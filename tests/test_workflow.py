@@ -232,13 +232,13 @@ def test_results_dir_must_differ_from_raw_dir(tmp_path):
 @pytest.mark.parametrize(
     ("edit", "expected"),
     [
-        (("sample_rate_hz: 66964.3", "sample_rate_hz: -5"), "key 'daq.sample_rate_hz': -5 is less than or equal"),
+        (("sample_rate_hz: 66964.3", "sample_rate_hz: -5"), "key 'daq.sample_rate_hz' must be a positive number, got -5"),
         (("session_id: bad", "session_id: other"), "key 'session_id' is 'other' but the session folder is named 'bad'"),
         pytest.param(
-            ("  polarity: 1", "  polarity: 2"), "key 'plate.polarity': 2 is not one of [1, -1]", marks=pytest.mark.slow
+            ("  polarity: 1", "  polarity: 2"), "key 'plate.polarity' must be 1 or -1, got 2", marks=pytest.mark.slow
         ),
         pytest.param(
-            ("mass_g: 57.7", "mass_g: 0.0577"), "key 'balls.pressurised.mass_g': 0.0577", marks=pytest.mark.slow
+            ("mass_g: 57.7", "mass_g: 0.0577"), "key 'balls.pressurised.mass_g' must be in (1, 1000) g, got 0.0577", marks=pytest.mark.slow
         ),
         pytest.param(("gates:", "gate:"), "missing required key 'gates'", marks=pytest.mark.slow),
         pytest.param(("balls:", "balls: [\n"), "invalid YAML", marks=pytest.mark.slow),
@@ -279,6 +279,36 @@ def test_bad_session_stops_only_itself(synth_raw, tmp_path):
 
 
 @pytest.mark.slow
+def test_hostile_trace_cells_stop_only_their_impacts(synth_raw, tmp_path):
+    """A NUL byte, a control character and a 10 000-character path in the trace cells of one
+    session: the workflow plans and runs both sessions; those impacts are excluded with a reason."""
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    copy_session(synth_raw / "s1", raw, "good")
+    bad = copy_session(synth_raw / "s1", raw, "hostile")
+    csv_path = bad / "impacts.csv"
+    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = lines[0].rstrip("\r\n").split(",")
+    col = header.index("trace")
+    cells = ["traces/a\x00b.csv", "traces/\x07bell.csv", "traces/" + "x" * 10_000 + ".csv"]
+    hostile_ids = []
+    for k, cell in enumerate(cells, start=1):
+        fields = lines[k].rstrip("\r\n").split(",")
+        fields[col] = cell
+        hostile_ids.append(fields[header.index("impact_id")])
+        lines[k] = ",".join(fields) + "\n"
+    csv_path.write_text("".join(lines), encoding="utf-8")
+    results = tmp_path / "results"
+    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=True)
+    for session in ("good", "hostile"):
+        assert (results / session / "report.pdf").is_file(), proc.stdout[-3000:]
+    rows = {r["impact_id"]: r for r in raw_rows(results / "hostile")}
+    for impact_id in hostile_ids:
+        assert rows[impact_id]["status"] == "excluded"
+        assert "trace" in rows[impact_id]["reason"]
+
+
+@pytest.mark.slow
 def test_session_yaml_exponent_without_dot_is_a_number(synth_raw, tmp_path):
     """`resolution_s: 1e-6` (YAML 1.1 reads it as text) is accepted, as the library accepts it."""
     raw = tmp_path / "raw"
@@ -300,7 +330,7 @@ def test_impacts_csv_missing_column_fails_naming_the_file(synth_raw, tmp_path):
     lines[0] = lines[0].replace("trace,", "trace_file,", 1)
     csv_path.write_text("".join(lines), encoding="utf-8")
     proc = run_snakemake("-n", "--cores", "1", *config_args(raw, tmp_path / "results"))
-    assert f"{csv_path}: missing required column(s) in the header: trace" in proc.stdout
+    assert f"{csv_path}: line 1: missing required column(s): trace" in proc.stdout
 
 
 # ------------------------------------------------------------------ ballimpact.pipeline
@@ -541,3 +571,11 @@ def test_process_chunk_rejects_bad_arguments(synth_raw, tmp_path, kwargs, match)
     with pytest.raises(ValueError, match=match):
         pipeline.process_chunk(synth_raw / "s1", out_nc=tmp_path / "chunk.nc", **kwargs)
     assert not (tmp_path / "chunk.nc").exists()
+
+
+def test_snakemake_lint_is_clean():
+    """`snakemake --lint` finds nothing: every rule has a log and a conda environment, no
+    rule file mixes rules with functions."""
+    proc = run_snakemake("--lint", check=True)
+    assert "Lints for" not in proc.stdout, proc.stdout
+    assert (REPO / "workflow" / "envs" / "ballimpact.yaml").is_file()

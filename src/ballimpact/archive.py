@@ -58,7 +58,7 @@ __all__ = [
     "open_dataset",
 ]
 
-#: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
+#: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
     "impact_id",
     "ball",
@@ -132,6 +132,24 @@ COMPONENT_SPEED_M_S = 20.0
 STIFFNESS_X_M = np.linspace(0.0, 0.03, 61)
 
 _AK_UNITS = "kN m-(1+a)"
+#: ACDD-1.3 ``keywords`` of every archive.
+ACDD_KEYWORDS = ("tennis ball, impact, coefficient of restitution, contact time, force platform, "
+                 "viscoelastic model, Goodwill and Haake 2004, sports engineering")
+_AK_COMMENT = (
+    "AK in kN m-(1+a) with x in metres, where a is the stiffness exponent of the same ball "
+    "(variable a): the unit differs from ball to ball, so it has no UDUNITS form and the "
+    "variable carries no units attribute. kB(x) = kB(0) + AK x^a is in kN m-1."
+)
+#: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
+_CONTENT_TYPES = (
+    (("status", "reason", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
+      "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
+    (("paper_",), "referenceInformation"),
+    (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
+     "modelResult"),
+    (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit"),
+     "auxiliaryInformation"),
+)
 _PER_IMPACT_SCALARS = [
     # (archive name, ImpactResult attribute)
     ("vin_m_s", "vin_m_s"),
@@ -278,6 +296,28 @@ def _pad(rows: list[np.ndarray], length: int, dtype) -> np.ndarray:
     return out
 
 
+def coverage_content_type(name: str) -> str:
+    """ACDD-1.3 ``coverage_content_type`` of an archive data variable.
+
+    Parameters
+    ----------
+    name : str
+        Variable name.
+
+    Returns
+    -------
+    str
+        ``qualityInformation`` (status, reasons, fit diagnostics),
+        ``referenceInformation`` (the paper's Table 2), ``modelResult`` (fitted
+        parameters and model curves), ``auxiliaryInformation`` (labels, masses,
+        file names) or ``physicalMeasurement`` (everything measured).
+    """
+    for prefixes, kind in _CONTENT_TYPES:
+        if any(name == p or (p.endswith("_") and name.startswith(p)) or name.startswith(p + "_") for p in prefixes):
+            return kind
+    return "physicalMeasurement"
+
+
 def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset:
     """Fill ``units`` and ``long_name`` of every known variable from :data:`VARIABLE_ATTRS`.
 
@@ -298,10 +338,17 @@ def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset
         attrs = ds[name].attrs
         if name in VARIABLE_ATTRS:
             units, long_name = VARIABLE_ATTRS[name]
-            if overwrite or "units" not in attrs:
+            if units == _AK_UNITS:
+                # kN m-(1+a) changes with each ball's a: no UDUNITS unit exists for it
+                attrs.pop("units", None)
+                attrs["units_metadata"] = f"non-UDUNITS: {_AK_UNITS}"
+                attrs["comment"] = _AK_COMMENT
+            elif overwrite or "units" not in attrs:
                 attrs["units"] = units
             if overwrite or "long_name" not in attrs:
                 attrs["long_name"] = long_name
+        if name not in ds.coords and (overwrite or "coverage_content_type" not in attrs):
+            attrs["coverage_content_type"] = coverage_content_type(name)
         elif "units" not in attrs or "long_name" not in attrs:
             warnings.warn(
                 f"archive variable {name!r} has no units/long_name and is not in VARIABLE_ATTRS",
@@ -765,7 +812,7 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        SI columns as named in shared/spec/outputs.md; ``reason`` is empty for ok impacts.
+        SI columns as named in docs/outputs.md; ``reason`` is empty for ok impacts.
     """
     n = ds.sizes.get("impact", 0)
     data = {}
@@ -883,6 +930,8 @@ def add_metadata(
     out.attrs.update(
         {
             "title": f"Tennis ball impacts on a rigid surface, session {session_id}",
+            "keywords": ACDD_KEYWORDS,
+            "keywords_vocabulary": "free text",
             "summary": summary,
             "history": f"{created} {history} (ballimpact {__version__})",
             "source": (

@@ -5,11 +5,11 @@ towards the surface [m], positive in compression, t = 0 at first contact. The
 force on the ball is F = kB x + (cB + cM) x' (Eq. (14)).
 
 Readings of the paper (its text lost every minus sign and subscript; see
-``shared/spec/model.md`` and the README):
+``docs/model.md`` and the README):
 
 * Eq. (5) is read with alternating signs, SI units:
   dCONT = -2.776e5 x^4 + 1.746e4 x^3 - 453 x^2 + 7.66 x. It gives 46.0 mm at
-  x = 10 mm (the spec quotes 46.6 mm; the geometric chord of a 33 mm ball is 47 mm).
+  x = 10 mm (the geometric chord of a 33 mm ball is 47 mm).
 * The momentum flux damper cM (Eq. (13)) acts in compression only (x' > 0).
 * Cloth (section 3.2.4): the force is zero while x < 2 mm in compression. An
   optional small cloth stiffness replaces that zero (used by the synthetic

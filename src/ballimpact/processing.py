@@ -38,7 +38,7 @@ __all__ = [
     "apply_calibration_check",
 ]
 
-#: Columns of results/<session>/impacts.csv, in order (shared/spec/outputs.md).
+#: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",

@@ -86,12 +86,21 @@ FIGURE_CAPTIONS = {
 }
 
 
+MAX_SHOWN_CHARS = 400  # longest text taken from the data onto a page (file names, reasons) [characters]
+
+
 def _text(value) -> str:
+    """Text from the archive as it can be printed: control characters escaped, at most
+    MAX_SHOWN_CHARS (a 10 000-character trace path must not push a page's figure off it)."""
     if value is None:
         return ""
     if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    return str(value)
+        value = value.decode("utf-8", "replace")
+    text = "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in str(value))
+    if len(text) > MAX_SHOWN_CHARS:
+        half = MAX_SHOWN_CHARS // 2 - 2
+        text = f"{text[:half]} ... {text[-half:]}"
+    return text
 
 
 def _session_info(ds) -> dict:
@@ -585,7 +594,7 @@ def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
     facts = [
         ("Ball type", _fig._label(ds, ball)),
         ("Reason", "\n".join(textwrap.wrap(reason, 85))),
-        ("Trace file", trace or "-"),
+        ("Trace file", "\n".join(textwrap.wrap(trace, 85)) or "-"),
         ("Gate speeds", f"VB = {value('vin_m_s', '.2f', ' m/s')}, VB' = {value('vout_m_s', '.2f', ' m/s')}, "
                         f"COR = {value('cor', '.3f')}"),
         ("Contact", f"TC = {value('contact_time_ms', '.3f', ' ms')}, "

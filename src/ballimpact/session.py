@@ -22,6 +22,8 @@ __all__ = [
     "ImpactRow",
     "Session",
     "read_session",
+    "SessionPlan",
+    "plan_session",
     "file_sha256",
     "REQUIRED_COLUMNS",
     "OPTIONAL_COLUMNS",
@@ -743,3 +745,92 @@ def file_sha256(path) -> str:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             digest.update(chunk)
     return digest.hexdigest()
+
+
+@dataclass(frozen=True)
+class SessionPlan:
+    """What a workflow needs to plan one session's jobs, read without ever raising.
+
+    Attributes
+    ----------
+    path : Path
+        The session folder.
+    fault : str or None
+        The session-level fault (one line naming file, key or line), None when
+        the session can be processed.
+    metadata : dict
+        session.yaml as parsed ({} when it could not be read).
+    balls : tuple of str
+        Ball types that have impacts, in session.yaml order.
+    n_impacts : int
+        Rows of impacts.csv [-].
+    trace_files : tuple of (Path or None)
+        Per row, the existing trace file inside the session folder, None when
+        the row's trace is missing, unreadable or escapes the folder (an
+        impact-level fault that processing reports).
+    present_files : tuple of Path
+        session.yaml and impacts.csv where they exist (what a faulty session's
+        validation depends on).
+    warnings : tuple of str
+        Messages of the SessionWarnings the reader gave.
+    """
+
+    path: Path
+    fault: str | None
+    metadata: dict
+    balls: tuple[str, ...]
+    n_impacts: int
+    trace_files: tuple[Path | None, ...]
+    present_files: tuple[Path, ...]
+    warnings: tuple[str, ...] = ()
+
+
+def plan_session(path) -> SessionPlan:
+    """
+    Read a session folder for planning: the reader's own checks, never an exception.
+
+    A workflow calls this once per session when it builds its job graph, so
+    one bad session (or one bad cell of it) can never stop another: a
+    session-level fault comes back as ``fault``, an impact-level one as a
+    ``None`` trace file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The session folder ``raw/<session_id>``.
+
+    Returns
+    -------
+    SessionPlan
+        Ball types, impact count and trace files, or the fault.
+    """
+    session_dir = Path(path)
+    present = tuple(p for p in (session_dir / SESSION_FILE, session_dir / IMPACTS_FILE) if _is_file(p))
+    metadata: dict = {}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SessionWarning)
+        try:
+            metadata = _load_yaml(session_dir / SESSION_FILE, str(session_dir / SESSION_FILE))
+            session = read_session(session_dir)
+        except SessionError as exc:
+            return SessionPlan(session_dir, _one_line(exc), metadata, (), 0, (), present,
+                               tuple(_one_line(w.message) for w in caught))
+    messages = tuple(_one_line(w.message) for w in caught if issubclass(w.category, SessionWarning))
+    used = {row.ball for row in session.impacts}
+    balls = tuple(key for key in session.meta.balls if key in used)
+    traces = tuple(_existing_trace(session, row) for row in session.impacts)
+    return SessionPlan(session_dir, None, metadata, balls, len(session.impacts), traces, present, messages)
+
+
+def _existing_trace(session: Session, row: ImpactRow) -> Path | None:
+    """The row's trace file when it exists inside the session folder, else None."""
+    problems: list[str] = []
+    _check_trace(row.trace, session.path, problems)
+    return None if problems else session.trace_path(row)
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False

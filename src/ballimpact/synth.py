@@ -1,6 +1,6 @@
 """Synthetic test sessions: the ball model passed through a realistic force-plate sensor chain.
 
-The generator writes a session folder in the raw format (``shared/spec/raw-format.md``)
+The generator writes a session folder in the raw format (``docs/raw-format.md``)
 and, beside it (never inside), the ground truth of every impact. It is seeded and
 deterministic: the same arguments give byte-identical files.
 

@@ -1,21 +1,18 @@
 # Configuration, session discovery and input functions shared by every rule.
 
-import csv
 import math
 import os
-import re
-from pathlib import Path, PurePosixPath, PureWindowsPath
+from pathlib import Path
 
-import yaml
 from snakemake.exceptions import WorkflowError
+from snakemake.logging import logger
 from snakemake.utils import validate
+
+from ballimpact.session import IMPACTS_FILE, SESSION_FILE, plan_session
 
 
 CONFIG_SCHEMA = "../schemas/config.schema.yaml"  # relative to this file
 SESSION_SCHEMA = "../schemas/session.schema.yaml"
-SESSION_FILE = "session.yaml"
-IMPACTS_FILE = "impacts.csv"
-IMPACTS_REQUIRED_COLUMNS = ("impact_id", "ball", "trace")
 
 
 def _schema_error_message(exc):
@@ -111,134 +108,42 @@ def _list_sessions():
 # ------------------------------------------------------------- session files at parse time
 
 
-class _SessionYamlLoader(yaml.SafeLoader):
-    """Safe loader as the library reads session.yaml: dates stay text, 1e-6 is a number."""
-
-
-_SessionYamlLoader.yaml_implicit_resolvers = {
-    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:timestamp"]
-    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
-}
-_SessionYamlLoader.add_implicit_resolver(  # YAML 1.2 floats without a dot, e.g. 1e-6
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
-
-
-def _read_session_yaml(path):
-    """session.yaml as a dict, validated against the session schema; WorkflowError naming the file."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WorkflowError(f"{path}: cannot read: {exc}") from None
-    try:
-        data = yaml.load(text, Loader=_SessionYamlLoader)  # noqa: S506 - a SafeLoader subclass
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}: " if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise WorkflowError(f"{path}: {where}invalid YAML: {' '.join(str(problem).split())}") from None
-    if not isinstance(data, dict):
-        raise WorkflowError(f"{path}: top level must be a mapping of keys (session_id, date, plate, daq, gates, balls)")
-    try:
-        validate(data, SESSION_SCHEMA, set_default=False)
-    except WorkflowError as exc:
-        raise WorkflowError(
-            f"{path}: {_schema_error_message(exc)} (see workflow/schemas/session.schema.yaml)"
-        ) from None
-    if str(data["session_id"]) != path.parent.name:
-        raise WorkflowError(
-            f"{path}: key 'session_id' is {data['session_id']!r} but the session folder is named "
-            f"{path.parent.name!r}; they must be equal"
-        )
-    return data
-
-
-def _trace_file(session_dir, trace):
-    """Existing trace file of a row inside the session folder, else None (processing reports it)."""
-    text = trace.strip().replace("\\", "/")
-    if not text or PurePosixPath(text).is_absolute() or PureWindowsPath(trace.strip()).drive:
-        return None
-    path = session_dir / text
-    try:
-        inside = path.resolve().is_relative_to(session_dir.resolve())
-    except (OSError, RuntimeError):
-        return None
-    return path.as_posix() if inside and path.is_file() else None
-
-
-def _read_impact_rows(path):
-    """Rows of impacts.csv as dicts, counted as ballimpact.session does; WorkflowError naming the file."""
-    try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
-            records = list(csv.reader(fh, strict=True))
-    except FileNotFoundError:
-        raise WorkflowError(f"{path}: file not found (every session folder needs an {IMPACTS_FILE})") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise WorkflowError(f"{path}: cannot read: {' '.join(str(exc).split())}") from None
-    # blank lines are skipped exactly as the library's reader skips them
-    records = [r for r in records if r and not (len(r) <= 1 and all(not c.strip() for c in r))]
-    if not records:
-        raise WorkflowError(f"{path}: file is empty (expected a header row and one row per impact)")
-    header = [c.strip() for c in records[0]]
-    missing = [c for c in IMPACTS_REQUIRED_COLUMNS if c not in header]
-    if missing:
-        raise WorkflowError(
-            f"{path}: missing required column(s) in the header: {', '.join(missing)}"
-        )
-    rows = [dict(zip(header, record)) for record in records[1:]]
-    if not rows:
-        raise WorkflowError(f"{path}: no impact rows (only the header)")
-    return rows
-
-
 def _session_info(session):
-    """What the DAG needs of one session, read once at parse time."""
-    session_dir = Path(RAW_DIR) / session
-    data = _read_session_yaml(session_dir / SESSION_FILE)
-    rows = _read_impact_rows(session_dir / IMPACTS_FILE)
-    used = {row.get("ball", "").strip() for row in rows}
-    # ball types with impacts, in session.yaml order; an undefined key is a session-level
-    # fault that rule validate_session reports for this session
-    balls = [str(key) for key in data["balls"] if str(key) in used]
-    n_impacts = len(rows)
-    n_chunks = min(n_impacts, max(MIN_CHUNKS, math.ceil(n_impacts / CHUNK_SIZE)))
-    traces = [_trace_file(session_dir, row.get("trace", "")) for row in rows]
+    """What the DAG needs of one session, read once at parse time by the library's own
+    reader (ballimpact.session.plan_session, which never raises). A session-level fault,
+    or session.yaml off the schema, reduces the session to rule validate_session, which
+    fails with the reader's one-line message, while the other sessions go on
+    (keep-going, profiles/default)."""
+    plan = plan_session(Path(RAW_DIR) / session)
+    fault = plan.fault
+    if fault is None:
+        try:
+            validate(plan.metadata, SESSION_SCHEMA, set_default=False)
+        except WorkflowError as exc:
+            fault = (f"{plan.path / SESSION_FILE}: {_schema_error_message(exc)} "
+                     "(see workflow/schemas/session.schema.yaml)")
+    if fault is not None:
+        logger.warning(f"ballimpact: session {session!r} cannot be processed: {fault}")
+        return {"dir": plan.path.as_posix(), "fault": fault, "balls": [], "n_impacts": 0,
+                "n_chunks": 0, "traces": [], "present": [p.as_posix() for p in plan.present_files]}
+    for message in plan.warnings:
+        logger.warning(f"ballimpact: session {session!r}: {message}")
+    n_chunks = min(plan.n_impacts, max(MIN_CHUNKS, math.ceil(plan.n_impacts / CHUNK_SIZE)))
     return {
-        "dir": session_dir.as_posix(),
-        "balls": balls,
-        "n_impacts": n_impacts,
+        "dir": plan.path.as_posix(),
+        "balls": list(plan.balls),
+        "n_impacts": plan.n_impacts,
         "n_chunks": n_chunks,
-        "traces": traces,  # per row, None when missing or outside the session folder
+        # per row, None when missing or outside the session folder
+        "traces": [None if t is None else t.as_posix() for t in plan.trace_files],
     }
 
 
-def _session_info_or_fault(session):
-    """_session_info, or the session-level fault: such a session is reduced to rule
-    validate_session, which fails with the reader's one-line message, while the other
-    sessions go on (keep-going, profiles/default)."""
-    try:
-        return _session_info(session)
-    except WorkflowError as exc:
-        message = " ".join(str(exc).split())
-        logger.warning(f"ballimpact: session {session!r} cannot be processed: {message}")
-        session_dir = Path(RAW_DIR) / session
-        present = [session_dir / name for name in (SESSION_FILE, IMPACTS_FILE) if (session_dir / name).is_file()]
-        return {"dir": session_dir.as_posix(), "fault": message, "balls": [], "n_impacts": 0,
-                "n_chunks": 0, "traces": [], "present": [p.as_posix() for p in present]}
-
-
 SESSIONS = _list_sessions()
-SESSION_INFO = {session: _session_info_or_fault(session) for session in SESSIONS}
+SESSION_INFO = {session: _session_info(session) for session in SESSIONS}
 if not SESSIONS:
     logger.warning(f"ballimpact: no session folder with a {SESSION_FILE} in raw_dir {RAW_DIR!r}; nothing to do")
 
-
-wildcard_constraints:
-    session=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
-    chunk=r"[0-9]+",
-    ball=r"[A-Za-z0-9_-]+",
 
 
 # ------------------------------------------------------------------------ paths
@@ -262,7 +167,7 @@ def benchmark_path(name):
     return f"{RESULTS_DIR}/{{session}}/benchmarks/{name}.tsv"
 
 
-# PNG file stems written by rule figures (captions: workflow/report/<stem>.rst)
+# PNG file stems the figures job writes (captions: workflow/report/<stem>.rst)
 FIGURES = (
     "fig7_contact_time_cor",
     "cor_speed_itf",

@@ -12,6 +12,8 @@ rule fit_ball:
         session_dir=session_dir,
         n_bootstrap=config["bootstrap"],
         seed=config["seed"],
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("fit_ball_{ball}"),
     benchmark:
@@ -33,6 +35,8 @@ rule archive:
         parameters_csv=result_path("parameters.csv"),
     params:
         session_dir=session_dir,
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("archive"),
     threads: 1

@@ -10,6 +10,8 @@ rule validate_session:
         snapshot=result_path("work/session.json"),
     params:
         session_dir=session_dir,
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("validate_session"),
     threads: 1
@@ -32,6 +34,8 @@ rule process_chunk:
         session_dir=session_dir,
         n_chunks=n_chunks,
         mains_hz=config.get("mains_hz"),
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("process_chunk_{chunk}"),
     benchmark:
@@ -51,6 +55,8 @@ rule collect_impacts:
         impacts_nc=result_path("work/impacts.nc"),
     params:
         session_dir=session_dir,
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("collect_impacts"),
     threads: 1

@@ -63,6 +63,8 @@ rule figures:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace of an excluded impact"},
         ),
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("figures"),
     benchmark:
@@ -86,6 +88,8 @@ rule report:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "report.pdf", "shows": "the whole session report"},
         ),
+    conda:
+        "../envs/ballimpact.yaml"
     log:
         log_path("report"),
     benchmark:
