@@ -359,12 +359,12 @@ def test_fit_dataset_itf_prediction_fitted_range_and_curves_3_to_40():
     assert np.isfinite(fit["model_cor"].values).all()
     assert fit["fit_vin_min_m_s"].values[0] == 14.2 and fit["fit_vin_max_m_s"].values[0] == 29.8
     assert_allclose(fit["itf_rebound_pred_cm"].values, 169.5, atol=0.1)  # `ballimpact itf`, Table 2 ball 1
-    assert np.isnan(fit["itf_rebound_pred_lo"].values).all()  # no bootstrap, no interval
+    assert np.isnan(fit["itf_rebound_pred_cm_lo"].values).all()  # no bootstrap, no interval
     assert fit["itf_rebound_cm"].values[0] == 138.9
     assert_allclose(fit["itf_drop_test_cor"].values, 0.768, atol=0.001)
     assert_allclose(fit["itf_model_cor"].values, 0.851, atol=0.001)
     table = parameters_table(fit)
-    assert list(table.columns[-4:]) == ["itf_rebound_pred_cm", "itf_rebound_pred_lo", "itf_rebound_pred_hi",
+    assert list(table.columns[-4:]) == ["itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi",
                                         "itf_rebound_cm"]
     # without a fit: no prediction, the measurement still kept
     none = archive.fit_dataset("pressurised", None, mass_kg=0.0577, itf_rebound_cm=138.9)

@@ -103,8 +103,8 @@ PARAMETER_COLUMNS = [
     "contact_time_rmse_pct",
     "cor_rmse_pct",
     "itf_rebound_pred_cm",  # v1.1: the ITF 254 cm drop test predicted by the fitted model (ballimpact.itf)
-    "itf_rebound_pred_lo",
-    "itf_rebound_pred_hi",
+    "itf_rebound_pred_cm_lo",
+    "itf_rebound_pred_cm_hi",
     "itf_rebound_cm",  # v1.1: the measured rebound from session.yaml, when given
 ]
 
@@ -246,8 +246,8 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "itf_impact_speed_m_s": ("m s-1", "impact speed of the ITF 254 cm drop test, with air drag on the fall"),
     "itf_model_cor": ("1", "fitted model COR at the ITF drop-test impact speed"),
     "itf_rebound_pred_cm": ("cm", "ITF 254 cm drop-test rebound predicted by the fitted model, with air drag"),
-    "itf_rebound_pred_lo": ("cm", "lower end of the 95 % bootstrap interval of the predicted ITF rebound"),
-    "itf_rebound_pred_hi": ("cm", "upper end of the 95 % bootstrap interval of the predicted ITF rebound"),
+    "itf_rebound_pred_cm_lo": ("cm", "lower end of the 95 % bootstrap interval of the predicted ITF rebound"),
+    "itf_rebound_pred_cm_hi": ("cm", "upper end of the 95 % bootstrap interval of the predicted ITF rebound"),
     "itf_rebound_cm": ("cm", "measured ITF 254 cm drop-test rebound from session.yaml (NaN when not given)"),
     "itf_drop_test_cor": ("1", "COR of the measured ITF drop test (rebound and fall with air drag)"),
     # model curves (ball, speed)
@@ -773,8 +773,9 @@ def _itf_and_range(fit, mass_kg, fit_vin_range_m_s, itf_rebound_cm, diameter_m, 
     lo, hi = (float(v) for v in fit_vin_range_m_s)
     flight_kw = {"diameter_m": BALL_DIAMETER_M if diameter_m is None else float(diameter_m),
                  "air_density_kg_m3": AIR_DENSITY_KG_M3 if air_density_kg_m3 is None else float(air_density_kg_m3)}
-    out = {k: math.nan for k in ("itf_impact_speed_m_s", "itf_model_cor", "itf_rebound_pred_cm", "itf_rebound_pred_lo",
-                                 "itf_rebound_pred_hi", "itf_rebound_cm", "itf_drop_test_cor")}
+    out = {k: math.nan for k in ("itf_impact_speed_m_s", "itf_model_cor", "itf_rebound_pred_cm",
+                                 "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm",
+                                 "itf_drop_test_cor")}
     out.update(fit_vin_min_m_s=lo, fit_vin_max_m_s=hi)
     mass_ok = math.isfinite(mass_kg) and mass_kg > 0
     if mass_ok:
@@ -790,7 +791,8 @@ def _itf_and_range(fit, mass_kg, fit_vin_range_m_s, itf_rebound_cm, diameter_m, 
             best, p_lo, p_hi = predict_itf_rebound_interval(mass_kg, params, getattr(fit, "bootstrap", None),
                                                             **flight_kw)
             out["itf_model_cor"] = float(predict_itf_rebound(mass_kg, *params, **flight_kw).cor)
-        out.update(itf_rebound_pred_cm=best * 100.0, itf_rebound_pred_lo=p_lo * 100.0, itf_rebound_pred_hi=p_hi * 100.0)
+        out.update(itf_rebound_pred_cm=best * 100.0, itf_rebound_pred_cm_lo=p_lo * 100.0,
+                   itf_rebound_pred_cm_hi=p_hi * 100.0)
     return out
 
 

@@ -265,7 +265,8 @@ def itf_comparison(ds) -> list[str]:
     lines = []
     for ball in _fig._balls(ds):
         get = _ball_values(ds, ball)
-        pred, lo, hi = (float(get(n)) for n in ("itf_rebound_pred_cm", "itf_rebound_pred_lo", "itf_rebound_pred_hi"))
+        pred, lo, hi = (float(get(n)) for n in ("itf_rebound_pred_cm", "itf_rebound_pred_cm_lo",
+                                                 "itf_rebound_pred_cm_hi"))
         meas = float(get("itf_rebound_cm")) if "itf_rebound_cm" in ds else math.nan
         v = float(get("itf_impact_speed_m_s"))
         if not math.isfinite(pred):
