@@ -38,7 +38,8 @@ SPEC_IMPACT_COLUMNS = [
 SPEC_PARAMETER_COLUMNS = [
     "ball", "n_impacts", "mass_kg", "kb0_kN_m", "kb0_source", "ak_kN_m", "a", "ac_kN_s_m3",
     "ak_lo", "ak_hi", "a_lo", "a_hi", "ac_lo", "ac_hi", "kb0_lo", "kb0_hi",
-    "contact_time_rmse_pct", "cor_rmse_pct", "fit_warnings",
+    "contact_time_rmse_pct", "cor_rmse_pct",
+    "itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm", "fit_warnings",
 ]
 
 
@@ -55,8 +56,10 @@ def written(ds, tmp_path_factory):
 
 
 def test_column_constants_match_spec():
-    assert IMPACT_COLUMNS == SPEC_IMPACT_COLUMNS
-    assert PARAMETER_COLUMNS == SPEC_PARAMETER_COLUMNS
+    # v1.1: columns may be added after the spec's, none renamed or removed
+    assert IMPACT_COLUMNS[: len(SPEC_IMPACT_COLUMNS)] == SPEC_IMPACT_COLUMNS
+    assert PARAMETER_COLUMNS[: len(SPEC_PARAMETER_COLUMNS)] == SPEC_PARAMETER_COLUMNS
+    assert {"vin_gate_m_s", "vout_gate_m_s"} <= set(IMPACT_COLUMNS)
 
 
 def test_round_trip_identical(ds, written):
@@ -120,7 +123,7 @@ def test_schema_dimensions_and_grids(ds):
 def test_impacts_table_matches_results_in_raw_order(ds):
     results = make_results()
     table = impacts_table(ds)
-    assert list(table.columns) == SPEC_IMPACT_COLUMNS
+    assert list(table.columns)[: len(SPEC_IMPACT_COLUMNS)] == SPEC_IMPACT_COLUMNS
     assert list(table["impact_id"]) == [r.impact_id for r in results]
     assert list(table["ball"]) == [r.ball for r in results]
     assert list(table["status"]) == [r.status for r in results]
@@ -135,13 +138,13 @@ def test_impacts_table_csv_round_trip(ds, tmp_path):
     table = impacts_table(ds)
     table.to_csv(tmp_path / "impacts.csv", index=False)
     back = pd.read_csv(tmp_path / "impacts.csv", keep_default_na=False, na_values=[""])
-    assert list(back.columns) == SPEC_IMPACT_COLUMNS
+    assert list(back.columns)[: len(SPEC_IMPACT_COLUMNS)] == SPEC_IMPACT_COLUMNS
     assert len(back) == ds.sizes["impact"]
 
 
 def test_parameters_table(ds):
     table = parameters_table(ds)
-    assert list(table.columns) == SPEC_PARAMETER_COLUMNS
+    assert list(table.columns)[: len(SPEC_PARAMETER_COLUMNS)] == SPEC_PARAMETER_COLUMNS
     assert list(table["ball"]) == ["pressurised", "punctured"]
     # the fixture 'fits' Table 2 itself (Goodwill & Haake 2004, Table 2)
     assert_allclose(table["kb0_kN_m"], [21.0, 16.0], rtol=1e-12)
@@ -230,7 +233,7 @@ def test_all_excluded_and_empty(tmp_path):
     empty = impacts_dataset([])
     write_dataset(empty, tmp_path / "empty.nc")
     assert open_dataset(tmp_path / "empty.nc").sizes["impact"] == 0
-    assert list(impacts_table(empty).columns) == SPEC_IMPACT_COLUMNS
+    assert list(impacts_table(empty).columns)[: len(SPEC_IMPACT_COLUMNS)] == SPEC_IMPACT_COLUMNS
 
 
 def test_max_raw_samples_decimates():
@@ -346,6 +349,27 @@ def test_fit_dataset_without_fit_and_assembly(tmp_path):
     assert np.isnan(ds["model_force_N"].values[oversize]).all()
     write_dataset(ds, tmp_path / "a.nc")
     xr.testing.assert_identical(open_dataset(tmp_path / "a.nc"), ds)
+
+
+def test_fit_dataset_itf_prediction_fitted_range_and_curves_3_to_40():
+    # v1.1 (issue 13): curves cover 3-40 m/s, the fitted range is kept, the ITF drop test
+    # predicted (tests/test_itf.py checks the physics) beside the measured rebound
+    fit = archive.fit_dataset("pressurised", _table2_fit(), fit_vin_range_m_s=(14.2, 29.8), itf_rebound_cm=138.9)
+    v = fit["speed_m_s"].values
+    assert v[0] == 3.0 and v[-1] == 40.0
+    assert np.isfinite(fit["model_cor"].values).all()
+    assert fit["fit_vin_min_m_s"].values[0] == 14.2 and fit["fit_vin_max_m_s"].values[0] == 29.8
+    assert_allclose(fit["itf_rebound_pred_cm"].values, 169.5, atol=0.1)  # `ballimpact itf`, Table 2 ball 1
+    assert np.isnan(fit["itf_rebound_pred_cm_lo"].values).all()  # no bootstrap, no interval
+    assert fit["itf_rebound_cm"].values[0] == 138.9
+    assert_allclose(fit["itf_drop_test_cor"].values, 0.768, atol=0.001)
+    assert_allclose(fit["itf_model_cor"].values, 0.851, atol=0.001)
+    table = parameters_table(fit)
+    assert list(table.columns[-5:]) == ["itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi",
+                                        "itf_rebound_cm", "fit_warnings"]
+    # without a fit: no prediction, the measurement still kept
+    none = archive.fit_dataset("pressurised", None, mass_kg=0.0577, itf_rebound_cm=138.9)
+    assert np.isnan(none["itf_rebound_pred_cm"].values).all() and none["itf_rebound_cm"].values[0] == 138.9
 
 
 def test_archive_is_clean_cf_and_acdd(written):

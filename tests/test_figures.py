@@ -12,6 +12,7 @@ from archive_fixture import make_archive
 
 FIGURE_FUNCTIONS = [
     figures.fig_contact_time_cor,
+    figures.fig_cor_speed_itf,
     figures.fig_stiffness,
     figures.fig_force_curves,
     figures.fig_components,
@@ -20,6 +21,7 @@ FIGURE_FUNCTIONS = [
 ]
 EXPECTED_FILES = [
     "fig7_contact_time_cor.png",
+    "cor_speed_itf.png",
     "fig8_stiffness.png",
     "fig9_force_curves.png",
     "fig10_components.png",

@@ -11,7 +11,7 @@ from ballimpact import figures, report
 
 from archive_fixture import make_archive
 
-N_FIGURES = 6  # Figs 7, 8, 9, 10, 2b and kCAL
+N_FIGURES = 7  # Figs 7, COR 3-40 m/s with the ITF drop test, 8, 9, 10, 2b and kCAL
 A4_POINTS = (595.44, 841.68)  # 8.27 x 11.69 in at 72 pt/in
 
 
@@ -202,3 +202,33 @@ def test_figure_pages_are_numbered_as_their_files(ds):
         if number:
             assert any(t.startswith(f"Fig. {number.group(1)} ({name}): ") for t in texts), (name, texts)
         assert not any(t.startswith("Figure 1") for t in texts)
+
+
+def test_itf_comparison_states_prediction_measurement_and_cor_gap():
+    # Table 2 ball 1 with Table 1's 138.9 cm: tests/test_itf.py measures +30.6 cm and a COR
+    # 0.083 above the drop test's (both with drag), independently of this module
+    import xarray as xr
+    from types import SimpleNamespace
+
+    from ballimpact import archive
+    from ballimpact.balls import BALLS
+
+    p = BALLS["pressurised"].params
+    nan = float("nan")
+    fit = SimpleNamespace(
+        mass_kg=p.mass_kg, n_impacts=10, kb0_N_m=p.kb0_N_m, kb0_lo=nan, kb0_hi=nan, kb0_source="config",
+        ak=p.ak, ak_lo=nan, ak_hi=nan, a=p.a, a_lo=nan, a_hi=nan, ac=p.ac, ac_lo=nan, ac_hi=nan,
+        ak_a_correlation=nan, contact_time_rmse_pct=1.0, cor_rmse_pct=1.0, interval_method="test", messages=[],
+        bootstrap=None,
+    )
+    with_measured = archive.fit_dataset("pressurised", fit, label="Ball 1", fit_vin_range_m_s=(14.0, 30.0),
+                                        itf_rebound_cm=138.9)
+    without = archive.fit_dataset("punctured", None, mass_kg=0.0575, itf_rebound_cm=103.8)
+    lines = report.itf_comparison(xr.concat([with_measured, without], dim="ball", data_vars="minimal",
+                                            coords="minimal", compat="override", join="exact"))
+    assert len(lines) == 2
+    assert "169.5 cm" in lines[0] and "outside the 134.6-147.3 cm pass range" in lines[0]
+    assert "measured 138.9 cm, +30.6 cm" in lines[0]
+    assert re.search(r"model's COR 0\.851 is 0\.083 above the drop test's 0\.768", lines[0])
+    assert "extrapolation: the slowest impact fitted was 14.0 m/s" in lines[0]
+    assert "measured 103.8 cm, no model prediction (no fit)" in lines[1]

@@ -155,7 +155,8 @@ def test_optional_keys_and_unknown_keys_kept(tmp_path):
     meta["daq"]["mains_hz"] = 60
     meta["synthetic"] = True
     meta["rig"] = {"plate": "Kistler 9281", "notes": [1, 2]}
-    session = read_session(make_session(tmp_path, meta=meta))
+    with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'rig\.plate', 'rig\.notes'"):  # rig: v1.1 section
+        session = read_session(make_session(tmp_path, meta=meta))
     assert session.meta.mains_hz == 60.0
     assert session.meta.synthetic is True
     assert session.meta.raw["rig"] == {"plate": "Kistler 9281", "notes": [1, 2]}
@@ -569,3 +570,42 @@ def test_key_typo_names_the_key_it_misses(tmp_path):
                                             r"effect"):
         session = read_session(folder)
     assert session.meta.balls["pressureless"].kb0_N_m is None
+
+
+# --------------------------------------------------------- v1.1 flight and ITF keys
+
+
+def test_v1_1_flight_and_itf_keys(tmp_path):
+    meta = copy.deepcopy(BASE_META)
+    meta["gates"]["distance_to_plate_m"] = 0.25
+    meta["rig"] = {"orientation": "vertical", "air_density_kg_m3": 1.15}
+    meta["balls"]["pressurised"]["itf_rebound_cm"] = 138.9
+    session = read_session(make_session(tmp_path, meta=meta))
+    assert session.meta.distance_to_plate_m == 0.25
+    assert session.meta.rig_orientation == "vertical"
+    assert session.meta.air_density_kg_m3 == 1.15
+    assert session.meta.balls["pressurised"].itf_rebound_cm == 138.9
+    assert session.meta.balls["pressureless"].itf_rebound_cm is None
+
+
+def test_v1_1_keys_absent_mean_no_correction(tmp_path):
+    session = read_session(make_session(tmp_path))
+    assert session.meta.distance_to_plate_m is None
+    assert session.meta.rig_orientation == "horizontal"
+    assert session.meta.air_density_kg_m3 == 1.2
+
+
+@pytest.mark.parametrize(("key", "value", "message"), [
+    ("gates.distance_to_plate_m", -0.2, r"key 'gates\.distance_to_plate_m' must be a positive number, got -0\.2"),
+    ("gates.distance_to_plate_m", 0.05,
+     r"key 'gates\.distance_to_plate_m' \(0\.05 m\) must exceed the diameter of ball 'pressurised' \(65\.4 mm\)"),
+    ("rig", "vertical", r"key 'rig' must be a mapping"),
+    ("rig", {"orientation": "upwards"}, r"key 'rig\.orientation' must be one of horizontal, vertical, got 'upwards'"),
+    ("rig", {"air_density_kg_m3": 1200}, r"key 'rig\.air_density_kg_m3' must be in \[0\.5, 1\.5\] kg/m\^3"),
+    ("balls.pressurised.itf_rebound_cm", 1389, r"key 'balls\.pressurised\.itf_rebound_cm' must be below the 254 cm"),
+    ("balls.pressurised.itf_rebound_cm", "high", r"key 'balls\.pressurised\.itf_rebound_cm' must be a positive number"),
+])
+def test_v1_1_bad_values(tmp_path, key, value, message):
+    folder = make_session(tmp_path, meta=patched(key, value))
+    with pytest.raises(SessionError, match=r"s1/session\.yaml: " + message):
+        read_session(folder)

@@ -14,6 +14,7 @@ BALLIMPACT = BIN / "ballimpact"
 
 FINAL_FIGURES = (
     "fig7_contact_time_cor",
+    "cor_speed_itf",
     "fig8_stiffness",
     "fig9_force_curves",
     "fig10_components",

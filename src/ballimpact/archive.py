@@ -75,6 +75,8 @@ IMPACT_COLUMNS = [
     "max_displacement_mm",
     "kv_stiffness_kN_m",
     "kv_damping_N_s_m",
+    "vin_gate_m_s",
+    "vout_gate_m_s",
 ]
 
 #: Columns of results/<session>/parameters.csv, in order: identification (ball,
@@ -100,6 +102,10 @@ PARAMETER_COLUMNS = [
     "kb0_hi",
     "contact_time_rmse_pct",
     "cor_rmse_pct",
+    "itf_rebound_pred_cm",  # v1.1: the ITF 254 cm drop test predicted by the fitted model (ballimpact.itf)
+    "itf_rebound_pred_cm_lo",
+    "itf_rebound_pred_cm_hi",
+    "itf_rebound_cm",  # v1.1: the measured rebound from session.yaml, when given
     "fit_warnings",  # issue 14: empty when all is well (ballimpact.summary.parameter_fit_warnings)
 ]
 
@@ -115,8 +121,10 @@ AGREEMENT_START_S = 0.2e-3
 #: Model and measurement "agree" when within this fraction of the measured peak force [-].
 AGREEMENT_TOLERANCE = 0.10
 
-#: Inbound speeds of the model curves (Fig. 7) [m/s].
-SPEED_GRID_M_S = np.round(np.arange(10.0, 32.0 + 1e-9, 0.5), 10)
+#: Inbound speeds of the model curves (Fig. 7) [m/s]: 3-40 m/s, from below the ITF drop test
+#: (about 7 m/s) to above a serve; outside the fitted speeds (``fit_vin_min_m_s`` to
+#: ``fit_vin_max_m_s``) the curves are extrapolations.
+SPEED_GRID_M_S = np.round(np.arange(3.0, 40.0 + 1e-9, 0.5), 10)
 #: Number of 0.01 ms steps of the force components (10 ms, longer than any contact at 20 m/s).
 MODEL_TIME_STEPS = 1000
 #: Inbound speed of the force components (Fig. 10) [m/s].
@@ -138,7 +146,8 @@ _CONTENT_TYPES = (
     (("status", "reason", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
-    (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred"), "modelResult"),
+    (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
+     "modelResult"),
     (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit"),
      "auxiliaryInformation"),
 )
@@ -157,6 +166,8 @@ _PER_IMPACT_SCALARS = [
     ("kv_damping_N_s_m", "kv_damping_N_s_m"),
     ("impact_mass_kg", "mass_kg"),
     ("sample_rate_hz", "sample_rate_hz"),
+    ("vin_gate_m_s", "vin_gate_m_s"),
+    ("vout_gate_m_s", "vout_gate_m_s"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
@@ -174,8 +185,10 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "reason": ("1", "why the impact was excluded (empty when ok)"),
     "trace_file": ("1", "trace file path relative to the session folder"),
     "trace_sha256": ("1", "SHA-256 digest of the trace file"),
-    "vin_m_s": ("m s-1", "inbound ball speed VB from the light gates"),
-    "vout_m_s": ("m s-1", "rebound ball speed VB' from the light gates"),
+    "vin_m_s": ("m s-1", "inbound ball speed VB at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
+    "vout_m_s": ("m s-1", "rebound ball speed VB' at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
+    "vin_gate_m_s": ("m s-1", "inbound ball speed from the light gates, spacing / interval"),
+    "vout_gate_m_s": ("m s-1", "rebound ball speed from the light gates, spacing / interval"),
     "cor": ("1", "coefficient of restitution VB'/VB"),
     "contact_time_ms": ("ms", "contact time TC"),
     "kcal_N_per_V": ("N V-1", "force-plate calibration factor kCAL of this impact"),
@@ -229,6 +242,15 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "paper_ak_kN_m": (_AK_UNITS, "AK of Table 2 in Goodwill & Haake 2004"),
     "paper_a": ("1", "a of Table 2 in Goodwill & Haake 2004"),
     "paper_ac_kN_s_m3": ("kN s m-3", "AC of Table 2 in Goodwill & Haake 2004"),
+    "fit_vin_min_m_s": ("m s-1", "slowest inbound speed of the impacts used in the fit (model curves below: extrapolated)"),
+    "fit_vin_max_m_s": ("m s-1", "fastest inbound speed of the impacts used in the fit (model curves above: extrapolated)"),
+    "itf_impact_speed_m_s": ("m s-1", "impact speed of the ITF 254 cm drop test, with air drag on the fall"),
+    "itf_model_cor": ("1", "fitted model COR at the ITF drop-test impact speed"),
+    "itf_rebound_pred_cm": ("cm", "ITF 254 cm drop-test rebound predicted by the fitted model, with air drag"),
+    "itf_rebound_pred_cm_lo": ("cm", "lower end of the 95 % bootstrap interval of the predicted ITF rebound"),
+    "itf_rebound_pred_cm_hi": ("cm", "upper end of the 95 % bootstrap interval of the predicted ITF rebound"),
+    "itf_rebound_cm": ("cm", "measured ITF 254 cm drop-test rebound from session.yaml (NaN when not given)"),
+    "itf_drop_test_cor": ("1", "COR of the measured ITF drop test (rebound and fall with air drag)"),
     # model curves (ball, speed)
     "model_contact_time_ms": ("ms", "fitted model contact time"),
     "model_contact_time_ms_lo": ("ms", "lower end of the 95 % band of the model contact time"),
@@ -492,6 +514,10 @@ def fit_dataset(
     n_impacts: int = 0,
     kb0_source: str = "",
     message: str = "",
+    fit_vin_range_m_s: tuple[float, float] = (math.nan, math.nan),
+    itf_rebound_cm: float | None = None,
+    diameter_m: float | None = None,
+    air_density_kg_m3: float | None = None,
 ) -> xr.Dataset:
     """Per-ball part of the archive (``ball`` dimension of length 1) from a fit.
 
@@ -519,6 +545,14 @@ def fit_dataset(
         "config" or "extrapolated", used when ``fit`` is None.
     message : str
         Why there is no fit (``fit`` None), or extra text for ``fit_message``.
+    fit_vin_range_m_s : tuple of float
+        Slowest and fastest inbound speed of the impacts fitted [m/s]; the model
+        curves outside are extrapolations.
+    itf_rebound_cm : float, optional
+        Measured ITF drop-test rebound [cm] (session.yaml ``itf_rebound_cm``).
+    diameter_m, air_density_kg_m3 : float, optional
+        Ball diameter [m] and air density [kg/m^3] of the drop-test prediction
+        (:mod:`ballimpact.itf`); defaults 65.4 mm and 1.2 kg/m^3.
 
     Returns
     -------
@@ -590,6 +624,8 @@ def fit_dataset(
     data["ball_label"] = ("ball", _text_array([label or ball]))
     data["mass_kg"] = ("ball", np.array([mass], dtype=float))
     data["n_impacts"] = ("ball", np.array([n_used], dtype=np.int64))
+    data.update({k: ("ball", np.array([v], dtype=float)) for k, v in _itf_and_range(
+        fit, mass, fit_vin_range_m_s, itf_rebound_cm, diameter_m, air_density_kg_m3).items()})
     data.update({k: (("ball", "speed"), v[None, :]) for k, v in curves.items()})
     data.update({k: (("ball", "model_time"), v[None, :]) for k, v in comps.items()})
     data["model_stiffness_kN_m"] = (("ball", "stiffness_x"), np.asarray(stiffness, dtype=float)[None, :])
@@ -728,6 +764,37 @@ def assemble_archive(impacts: xr.Dataset, fits: Iterable[xr.Dataset]) -> xr.Data
         ds = ds.assign_coords(ball=_text_array(ds["ball"].values))
     ds = add_model_forces(ds) if "ball" in ds.coords else ds
     return set_variable_attrs(ds)
+
+
+def _itf_and_range(fit, mass_kg, fit_vin_range_m_s, itf_rebound_cm, diameter_m, air_density_kg_m3) -> dict:
+    """Per-ball fitted speed range and ITF drop test (predicted by ``fit``, and measured), archive units."""
+    from .flight import AIR_DENSITY_KG_M3, BALL_DIAMETER_M
+    from .itf import drop_impact_speed, drop_test_cor, predict_itf_rebound, predict_itf_rebound_interval
+
+    lo, hi = (float(v) for v in fit_vin_range_m_s)
+    flight_kw = {"diameter_m": BALL_DIAMETER_M if diameter_m is None else float(diameter_m),
+                 "air_density_kg_m3": AIR_DENSITY_KG_M3 if air_density_kg_m3 is None else float(air_density_kg_m3)}
+    out = {k: math.nan for k in ("itf_impact_speed_m_s", "itf_model_cor", "itf_rebound_pred_cm",
+                                 "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm",
+                                 "itf_drop_test_cor")}
+    out.update(fit_vin_min_m_s=lo, fit_vin_max_m_s=hi)
+    mass_ok = math.isfinite(mass_kg) and mass_kg > 0
+    if mass_ok:
+        out["itf_impact_speed_m_s"] = float(drop_impact_speed(mass_kg, **flight_kw))
+    if itf_rebound_cm is not None and math.isfinite(float(itf_rebound_cm)):
+        out["itf_rebound_cm"] = float(itf_rebound_cm)
+        if mass_ok:
+            out["itf_drop_test_cor"] = float(drop_test_cor(float(itf_rebound_cm) / 100.0, mass_kg, **flight_kw))
+    if fit is not None and mass_ok:
+        params = (fit.kb0_N_m, fit.ak, fit.a, fit.ac)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            best, p_lo, p_hi = predict_itf_rebound_interval(mass_kg, params, getattr(fit, "bootstrap", None),
+                                                            **flight_kw)
+            out["itf_model_cor"] = float(predict_itf_rebound(mass_kg, *params, **flight_kw).cor)
+        out.update(itf_rebound_pred_cm=best * 100.0, itf_rebound_pred_cm_lo=p_lo * 100.0,
+                   itf_rebound_pred_cm_hi=p_hi * 100.0)
+    return out
 
 
 def _column(ds: xr.Dataset, name: str, n: int, *, text: bool = False):

@@ -22,6 +22,7 @@ __all__ = [
     "KCAL_BAND_ROBUST_SD",
     "COMPONENT_SPEED_M_S",
     "fig_contact_time_cor",
+    "fig_cor_speed_itf",
     "fig_stiffness",
     "fig_force_curves",
     "fig_components",
@@ -39,6 +40,7 @@ DPI = 150
 #: File name of each report figure, in report order, with the function that draws it.
 FIGURE_FILES = {
     "fig7_contact_time_cor.png": "fig_contact_time_cor",
+    "cor_speed_itf.png": "fig_cor_speed_itf",
     "fig8_stiffness.png": "fig_stiffness",
     "fig9_force_curves.png": "fig_force_curves",
     "fig10_components.png": "fig_components",
@@ -305,7 +307,7 @@ def _draw_contact_time_cor(fig, ds):
             curve = _ball_array(ds, model, ball)
             lo, hi = _ball_array(ds, model + "_lo", ball), _ball_array(ds, model + "_hi", ball)
             if speed is not None and curve is not None and np.isfinite(curve).any():
-                ax.plot(speed, curve, "-", color="k", lw=1.2, label="fitted model")
+                _plot_model_curve(ax, ds, ball, speed, curve, color="k")
                 if lo is not None and hi is not None and np.isfinite(lo).any():
                     ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
             elif good.size:
@@ -322,6 +324,24 @@ def _draw_contact_time_cor(fig, ds):
     for ax in axes[-1]:
         ax.set_xlabel("Inbound speed VB [m/s]")
     fig.suptitle("Contact time and COR against inbound speed (cf. Fig. 7 of Goodwill & Haake 2004)")
+
+
+def _fitted_range(ds, ball) -> tuple[float, float]:
+    """Slowest and fastest inbound speed fitted [m/s] (NaN when the archive predates v1.1 or there is no fit)."""
+    return (float(_ball_value(ds, "fit_vin_min_m_s", ball)), float(_ball_value(ds, "fit_vin_max_m_s", ball)))
+
+
+def _plot_model_curve(ax, ds, ball, speed, curve, *, color, label="fitted model"):
+    """Model curve: solid over the fitted speeds (shaded), dashed where it extrapolates."""
+    lo, hi = _fitted_range(ds, ball)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        ax.plot(speed, curve, "-", color=color, lw=1.2, label=label)
+        return
+    inside = (speed >= lo - 1e-9) & (speed <= hi + 1e-9)
+    ax.axvspan(lo, hi, color="0.5", alpha=0.12, lw=0, zorder=0, label="fitted speeds")
+    ax.plot(speed, curve, "--", color=color, lw=1.0, label="extrapolated")
+    ax.plot(np.r_[lo, speed[inside], hi], np.interp(np.r_[lo, speed[inside], hi], speed, curve), "-",
+            color=color, lw=1.4, label=label)
 
 
 def fig_contact_time_cor(ds) -> Figure:
@@ -343,6 +363,82 @@ def fig_contact_time_cor(ds) -> Figure:
     with _style():
         fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.3))
         _draw_contact_time_cor(fig, ds)
+        _finish(fig, ds)
+    return fig
+
+
+# ----------------------------------------------------------------------------- COR from 3 to 40 m/s, ITF
+
+
+def _draw_cor_speed_itf(fig, ds):
+    from .itf import ITF_REBOUND_MAX_M, ITF_REBOUND_MIN_M, drop_test_cor
+
+    balls = _balls(ds)
+    colors = _colors(ds)
+    if not balls:
+        _empty(fig)
+        return
+    speed = np.asarray(ds["speed_m_s"].values, dtype=float) if "speed_m_s" in ds else None
+    axes = _grid(fig, len(balls), 2 if len(balls) > 1 else 1)
+    for ax, ball in zip(axes, balls):
+        c = colors[ball]
+        good = _impacts(ds, ball, "ok")
+        if good.size:
+            ax.plot(ds["vin_m_s"].values[good], ds["cor"].values[good], "o", color=c, ms=4, mfc="none", mew=1.1,
+                    label="impacts (good)")
+        curve = _ball_array(ds, "model_cor", ball)
+        has_model = speed is not None and curve is not None and np.isfinite(curve).any()
+        if has_model:
+            _plot_model_curve(ax, ds, ball, speed, curve, color="k")
+            lo, hi = _ball_array(ds, "model_cor_lo", ball), _ball_array(ds, "model_cor_hi", ball)
+            if lo is not None and hi is not None and np.isfinite(lo).any():
+                ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
+        v_itf = float(_ball_value(ds, "itf_impact_speed_m_s", ball))
+        pred = float(_ball_value(ds, "itf_model_cor", ball))
+        meas = float(_ball_value(ds, "itf_drop_test_cor", ball))
+        mass = float(_ball_value(ds, "mass_kg", ball))
+        if np.isfinite(v_itf) and np.isfinite(mass) and mass > 0:
+            band = drop_test_cor(np.array([ITF_REBOUND_MIN_M, ITF_REBOUND_MAX_M]), mass)
+            ax.plot([v_itf, v_itf], band, "-", color="tab:green", lw=5, alpha=0.45, solid_capstyle="butt",
+                    label="ITF pass range")
+        if np.isfinite(pred):
+            ax.plot(v_itf, pred, "D", color="k", ms=5, mfc="white", label="model at ITF drop")
+        if np.isfinite(meas):
+            ax.plot(v_itf, meas, "*", color="tab:red", ms=10, label="ITF drop test (measured)")
+        if not good.size and not has_model:
+            _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
+        ax.set_xlim(0, 42)
+        ax.set_xlabel("Inbound speed VB [m/s]")
+        ax.set_ylabel("COR [-]")
+        ax.set_title(_label(ds, ball), loc="left")
+        if ax.get_legend_handles_labels()[0]:
+            _legend_with_headroom(ax, ncols=2, headroom=0.55, loc="upper right")
+    fig.suptitle("COR from 3 to 40 m/s: the fitted model, its extrapolation and the ITF drop test")
+
+
+def fig_cor_speed_itf(ds) -> Figure:
+    """COR against inbound speed from 3 to 40 m/s with the fitted range, the impacts and the ITF drop test.
+
+    One panel per ball type: the fitted model COR (Eq. (14), Goodwill & Haake 2004)
+    solid over the fitted speeds (shaded) and dashed where it extrapolates, its 95 %
+    band, the good impacts (COR [-] against VB [m/s]), the model at the ITF drop-test
+    impact speed (about 6.9 m/s with drag), the measured drop test when session.yaml
+    gives ``itf_rebound_cm`` and the ITF pass range (134.6-147.3 cm) as a COR range
+    (:mod:`ballimpact.itf`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _style():
+        n = len(_balls(ds))
+        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
+        _draw_cor_speed_itf(fig, ds)
         _finish(fig, ds)
     return fig
 

@@ -35,6 +35,7 @@ __all__ = [
 #: workflow's rule ``figures`` lists the same names in workflow/rules/common.smk).
 FIGURE_STEMS = (
     "fig7_contact_time_cor",
+    "cor_speed_itf",
     "fig8_stiffness",
     "fig9_force_curves",
     "fig10_components",
@@ -429,6 +430,12 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     arrays = fit_arrays(archive.open_dataset(impacts_nc), ball, ball_type.mass_kg)
     n_used = arrays["vin_m_s"].size
     kb0_source = "config" if ball_type.kb0_N_m is not None else "extrapolated"
+    vin_used = arrays["vin_m_s"]
+    itf_kw = {  # v1.1: the fitted speed range (curves beyond it are extrapolated) and the ITF drop test
+        "fit_vin_range_m_s": (float(vin_used.min()), float(vin_used.max())) if vin_used.size else (math.nan, math.nan),
+        "itf_rebound_cm": ball_type.itf_rebound_cm, "diameter_m": ball_type.diameter_m,
+        "air_density_kg_m3": session.meta.air_density_kg_m3,
+    }
     try:
         fit = fitting.fit_ball_model(
             **arrays, kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed,
@@ -437,7 +444,7 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
         logger.warning("ball %s: fit failed with %d ok impacts: %s", ball, n_used, exc)
         fit_ds = archive.fit_dataset(
             ball, None, label=ball_type.label, mass_kg=ball_type.mass_kg, n_impacts=n_used,
-            kb0_source=kb0_source, message=f"fit failed: {exc}",
+            kb0_source=kb0_source, message=f"fit failed: {exc}", **itf_kw,
         )
     else:
         logger.info(
@@ -445,7 +452,7 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
             ball, fit.n_impacts, fit.kb0_N_m / 1e3, fit.kb0_source, fit.ak / 1e3, fit.a, fit.ac / 1e3,
             "; ".join(fit.messages) or "no warnings",
         )
-        fit_ds = archive.fit_dataset(ball, fit, label=ball_type.label)
+        fit_ds = archive.fit_dataset(ball, fit, label=ball_type.label, **itf_kw)
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(fit_ds, out_nc)
 

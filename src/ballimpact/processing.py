@@ -21,6 +21,7 @@ import numpy as np
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
 from .conditioning import condition_voltage
 from .contact import contact_samples, detect_clipping
+from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import kelvin_voigt_parameters
 from .session import ImpactRow, Session
@@ -42,6 +43,7 @@ IMPACT_COLUMNS = [
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
     "kv_stiffness_kN_m", "kv_damping_N_s_m",
+    "vin_gate_m_s", "vout_gate_m_s",  # v1.1: speeds at the gates (= vin/vout without gates.distance_to_plate_m)
 ]
 
 #: Plausible ranges for a tennis ball fired at a force plate; outside = excluded.
@@ -82,6 +84,8 @@ class ImpactResult:
     max_displacement_mm: float = math.nan
     kv_stiffness_kN_m: float = math.nan
     kv_damping_N_s_m: float = math.nan
+    vin_gate_m_s: float = math.nan  # speeds from the gates; vin_m_s/vout_m_s are at the plate
+    vout_gate_m_s: float = math.nan
     mass_kg: float = math.nan
     sample_rate_hz: float = math.nan
     trace_file: str = ""
@@ -132,6 +136,19 @@ def _opposite_pulse_reason(raw, sample_rate_hz: float, meta, t0_s: float) -> str
     return f"pulse is {sign}: plate.polarity is {meta.polarity:+d}"
 
 
+def _speeds_at_plate(vin_gate, vout_gate, row: ImpactRow, session: Session):
+    """Gate speeds corrected to the plate (:func:`ballimpact.flight.plate_speeds`) for this impact's ball."""
+    meta = session.meta
+    ball = meta.balls.get(row.ball)
+    mass = row.mass_kg if math.isfinite(row.mass_kg) and row.mass_kg > 0 else (ball.mass_kg if ball else math.nan)
+    diameter = ball.diameter_m if ball is not None and ball.diameter_m is not None else BALL_DIAMETER_M
+    if not math.isfinite(mass):
+        return math.nan, math.nan
+    k = drag_constant(mass, diameter, meta.air_density_kg_m3)
+    return plate_speeds(vin_gate, vout_gate, meta.gate_spacing_m, meta.distance_to_plate_m, k,
+                        orientation=meta.rig_orientation, diameter_m=diameter)
+
+
 def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     """Process one impact: speeds, COR, kCAL, force, motion, TC and Kelvin-Voigt kB, cB.
 
@@ -168,6 +185,9 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     if not gate_problems:
         vin, vout = gate_speeds(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s,
                                 meta.gate_spacing_m)
+        res.vin_gate_m_s, res.vout_gate_m_s = float(vin), float(vout)
+        if meta.distance_to_plate_m is not None:  # v1.1: from the gates to the plate (drag, gravity)
+            vin, vout = _speeds_at_plate(vin, vout, row, session)
         res.vin_m_s, res.vout_m_s = float(vin), float(vout)
         res.cor = float(coefficient_of_restitution(vin, vout))
         if _out_of_bounds("vin_m_s", res.vin_m_s):

@@ -53,6 +53,7 @@ _KNOWN_SECTION_KEYS = {
     "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
     "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
+    "rig": {"orientation", "air_density_kg_m3"},
 }
 _KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m", "itf_rebound_cm"}
 #: File names a lab may give session.yaml / impacts.csv by mistake (near misses).
@@ -62,6 +63,11 @@ _NEAR_MISS_NAMES = {
     IMPACTS_FILE: ("Impacts.csv", "IMPACTS.csv", "impacts.CSV", "impacts.csv.txt", "impacts.txt",
                    "impact.csv", "impacts.tsv", "impacts.xlsx"),
 }
+RIG_ORIENTATIONS = ("horizontal", "vertical")  # `rig.orientation` (v1.1); horizontal is the default
+DEFAULT_AIR_DENSITY_KG_M3 = 1.2  # [kg/m^3] default `rig.air_density_kg_m3`
+AIR_DENSITY_RANGE_KG_M3 = (0.5, 1.5)  # [kg/m^3] plausible air (sea level to ~5 km); outside = error
+DEFAULT_BALL_DIAMETER_M = 0.0654  # [m] ball diameter when `balls.<key>.diameter_mm` is not given
+ITF_REBOUND_MAX_CM = 254.0  # [cm] a rebound cannot exceed the 254 cm drop
 
 
 class SessionError(ValueError):
@@ -118,6 +124,7 @@ class BallType:
     mass_kg: float  # [kg]
     diameter_m: float | None  # [m], None when not given
     kb0_N_m: float | None  # [N/m] fixed kB(0) of the model, None = estimate it
+    itf_rebound_cm: float | None = None  # [cm] measured ITF 254 cm drop-test rebound (v1.1), None when not given
 
 
 @dataclass(frozen=True)
@@ -138,6 +145,9 @@ class SessionMeta:
     synthetic: bool  # optional top-level `synthetic`, default False
     raw: dict  # the parsed YAML, for the archive
     kcal_range_N_per_V: tuple[float, float] | None = None  # [N/V] optional `plate.kcal_range_N_per_V`
+    distance_to_plate_m: float | None = None  # [m] optional `gates.distance_to_plate_m` (v1.1): gate 2 to plate
+    rig_orientation: str = "horizontal"  # optional `rig.orientation` (v1.1): horizontal or vertical
+    air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
 
 
 @dataclass
@@ -391,9 +401,18 @@ def _parse_ball(key: str, spec, file: str) -> BallType:
     kb0_N_m = None
     if spec.get("kb0_kN_m") is not None:
         kb0_N_m = _number(spec["kb0_kN_m"], f"{prefix}.kb0_kN_m", file, positive=True) * 1000.0
+    itf_rebound_cm = None
+    if spec.get("itf_rebound_cm") is not None:
+        itf_rebound_cm = _number(spec["itf_rebound_cm"], f"{prefix}.itf_rebound_cm", file, positive=True)
+        if itf_rebound_cm >= ITF_REBOUND_MAX_CM:
+            raise SessionError(
+                f"{file}: key '{prefix}.itf_rebound_cm' must be below the {ITF_REBOUND_MAX_CM:g} cm drop height "
+                f"(a rebound in cm), got {spec['itf_rebound_cm']!r}"
+            )
     label = _text(spec.get("label"), f"{prefix}.label", file) or key
     _warn_unknown(spec, _KNOWN_BALL_KEYS, prefix, file)
-    return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m)
+    return BallType(key=key, label=label, mass_kg=mass_g / 1000.0, diameter_m=diameter_m, kb0_N_m=kb0_N_m,
+                    itf_rebound_cm=itf_rebound_cm)
 
 
 def _parse_session_id(data: dict, folder_name: str, file: str) -> str:
@@ -462,7 +481,7 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     return sample_rate_hz, (adc[0], adc[1]), mains_hz
 
 
-def _parse_gates(data: dict, file: str) -> tuple[float, float]:
+def _parse_gates(data: dict, file: str) -> tuple[float, float, float | None]:
     gates = _section(data, "gates", file)
     spacing_m = _number(_require(gates, "spacing_m", "gates.spacing_m", file), "gates.spacing_m", file, positive=True)
     if spacing_m > MAX_GATE_SPACING_M:
@@ -490,8 +509,41 @@ def _parse_gates(data: dict, file: str) -> tuple[float, float]:
             SessionWarning,
             stacklevel=3,
         )
+    distance_to_plate_m = None
+    if gates.get("distance_to_plate_m") is not None:
+        distance_to_plate_m = _number(gates["distance_to_plate_m"], "gates.distance_to_plate_m", file, positive=True)
+        if distance_to_plate_m > MAX_GATE_SPACING_M:
+            warnings.warn(
+                f"{file}: key 'gates.distance_to_plate_m' = {distance_to_plate_m:g} m is larger than "
+                f"{MAX_GATE_SPACING_M:g} m (is it given in mm?)",
+                SessionWarning,
+                stacklevel=3,
+            )
     _warn_unknown(gates, _KNOWN_SECTION_KEYS["gates"], "gates", file)
-    return spacing_m, resolution_s
+    return spacing_m, resolution_s, distance_to_plate_m
+
+
+def _parse_rig(data: dict, file: str) -> tuple[str, float]:
+    """Optional `rig` section (v1.1): orientation and air density [kg/m^3]."""
+    rig = data.get("rig") or {}
+    if not isinstance(rig, dict):
+        raise SessionError(f"{file}: key 'rig' must be a mapping (orientation, air_density_kg_m3), got {rig!r}")
+    orientation = rig.get("orientation") or "horizontal"
+    if orientation not in RIG_ORIENTATIONS:
+        raise SessionError(
+            f"{file}: key 'rig.orientation' must be one of {', '.join(RIG_ORIENTATIONS)}, got {rig['orientation']!r}"
+        )
+    air_density = DEFAULT_AIR_DENSITY_KG_M3
+    if rig.get("air_density_kg_m3") is not None:
+        air_density = _number(rig["air_density_kg_m3"], "rig.air_density_kg_m3", file, positive=True)
+        lo, hi = AIR_DENSITY_RANGE_KG_M3
+        if not lo <= air_density <= hi:
+            raise SessionError(
+                f"{file}: key 'rig.air_density_kg_m3' must be in [{lo:g}, {hi:g}] kg/m^3 (air), "
+                f"got {rig['air_density_kg_m3']!r}"
+            )
+    _warn_unknown(rig, _KNOWN_SECTION_KEYS["rig"], "rig", file)
+    return orientation, air_density
 
 
 def _parse_balls(data: dict, file: str, collect: _Collector | None = None) -> dict[str, BallType]:
@@ -515,6 +567,19 @@ def _parse_balls(data: dict, file: str, collect: _Collector | None = None) -> di
         outer.balls = balls  # every key, for the checks of impacts.csv
     _raise_collected(collect.problems)
     return balls
+
+
+def _check_distance_to_plate(distance_to_plate_m: float | None, balls: dict, file: str) -> None:
+    """Gate 2 must be further from the plate than a ball is wide [m]."""
+    if distance_to_plate_m is None:
+        return
+    for ball in balls.values():
+        diameter_m = ball.diameter_m if ball.diameter_m is not None else DEFAULT_BALL_DIAMETER_M
+        if distance_to_plate_m <= diameter_m:
+            raise SessionError(
+                f"{file}: key 'gates.distance_to_plate_m' ({distance_to_plate_m:g} m) must exceed the diameter "
+                f"of ball '{ball.key}' ({diameter_m * 1000:g} mm): gate 2 would be blocked during the contact"
+            )
 
 
 def _parse_synthetic(data: dict, file: str) -> bool:
@@ -541,7 +606,10 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
     plate = collect(_parse_plate, data, file)
     daq = collect(_parse_daq, data, file)
     gates = collect(_parse_gates, data, file)
+    rig = collect(_parse_rig, data, file)
     balls = collect(_parse_balls, data, file, collect)
+    if gates is not None and balls is not None:
+        collect(_check_distance_to_plate, gates[2], balls, file)
     synthetic = collect(_parse_synthetic, data, file)
     operator = collect(_text, data.get("operator"), "operator", file)
     description = collect(_text, data.get("description"), "description", file)
@@ -551,7 +619,8 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         return None
     polarity, kcal_range = plate
     sample_rate_hz, adc, mains_hz = daq
-    spacing_m, resolution_s = gates
+    spacing_m, resolution_s, distance_to_plate_m = gates
+    orientation, air_density = rig
     return SessionMeta(
         session_id=session_id,
         date=date,
@@ -567,6 +636,9 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         synthetic=synthetic,
         raw=data,
         kcal_range_N_per_V=kcal_range,
+        distance_to_plate_m=distance_to_plate_m,
+        rig_orientation=orientation,
+        air_density_kg_m3=air_density,
     )
 
 

@@ -18,7 +18,11 @@ The chain, in the order a real rig applies it:
 5. polarity, DC offset, 50 Hz mains hum with harmonics, white noise;
 6. the ADC: 16-bit quantisation over its range, clipping at the rails;
 7. light gates: beam-break times on the timer's own clock, rounded down to the
-   timer resolution.
+   timer resolution. By default the ball flies at constant speed between the gates
+   and the plate; with ``SynthConfig.flight_drag`` it flies with air drag (and
+   gravity on a vertical rig, :mod:`ballimpact.flight`), so the gates see a faster
+   inbound and a slower rebound speed than the plate, and session.yaml gives
+   ``gates.distance_to_plate_m`` and ``rig``.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ import yaml
 from scipy import signal
 
 from .balls import BALLS, BallModelParameters
+from .flight import BALL_DIAMETER_M, G_M_S2, drag_constant, flight_time, speed_before
 from .model import simulate_impact
 
 __all__ = [
@@ -150,6 +155,18 @@ class SynthConfig:
         Sensor chain settings.
     date : str
         ISO date for session.yaml.
+    itf_rebound_cm : dict
+        Ball key -> measured ITF drop-test rebound [cm] written to session.yaml
+        (default: Table 1 of the paper for its four ball keys).
+    flight_drag : bool
+        Gate times from a flight with air drag (and gravity when vertical) between
+        the gates and the plate, at ``chain.gate_to_plate_m`` from gate 2; session.yaml
+        then gives ``gates.distance_to_plate_m`` and ``rig``. The truth's speeds are
+        the speeds at the plate.
+    rig_orientation : str
+        "horizontal" or "vertical" (ball fired down onto the plate), with ``flight_drag``.
+    air_density_kg_m3 : float
+        Air density of the flight [kg/m^3], with ``flight_drag``.
     """
 
     session_id: str = "synthetic"
@@ -168,6 +185,12 @@ class SynthConfig:
     kb0_in_config: bool = True
     chain: SensorChain = field(default_factory=SensorChain)
     date: str = "2026-11-21"
+    itf_rebound_cm: dict[str, float] = field(
+        default_factory=lambda: {k: b.itf_rebound_cm for k, b in BALLS.items()}
+    )
+    flight_drag: bool = False
+    rig_orientation: str = "horizontal"
+    air_density_kg_m3: float = 1.2
 
     def __post_init__(self):
         if self.polarity not in (1, -1):
@@ -185,6 +208,15 @@ class SynthConfig:
             raise ValueError(f"vin_range_m_s must satisfy 0 < lo <= hi, got {self.vin_range_m_s}")
         if not self.balls:
             raise ValueError("balls must name at least one ball type")
+        if self.rig_orientation not in ("horizontal", "vertical"):
+            raise ValueError(f"rig_orientation must be 'horizontal' or 'vertical', got {self.rig_orientation!r}")
+        if self.flight_drag and not self.chain.gate_to_plate_m > BALL_DIAMETER_M:
+            raise ValueError(
+                f"flight_drag needs chain.gate_to_plate_m > the ball diameter {BALL_DIAMETER_M:g} m, "
+                f"got {self.chain.gate_to_plate_m!r}"
+            )
+        if not 0 < self.air_density_kg_m3 < 2:
+            raise ValueError(f"air_density_kg_m3 must be in (0, 2), got {self.air_density_kg_m3!r}")
 
 
 def _plate_and_amplifier(force_N, chain: SensorChain, dt_s: float):
@@ -365,10 +397,14 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
 
         # Gate times on the timer clock, rounded down to the timer resolution.
         t_contact = timer
-        g_in_2 = t_contact - chain.gate_to_plate_m / vin
-        g_in_1 = g_in_2 - chain.gate_spacing_m / vin
-        g_out_2 = t_contact + tc + chain.gate_to_plate_m / vout
-        g_out_1 = g_out_2 + chain.gate_spacing_m / vout
+        if config.flight_drag:
+            g_in_1, g_in_2, g_out_2, g_out_1 = _gate_times_with_drag(t_contact, tc, vin, vout, params.mass_kg,
+                                                                     config)
+        else:
+            g_in_2 = t_contact - chain.gate_to_plate_m / vin
+            g_in_1 = g_in_2 - chain.gate_spacing_m / vin
+            g_out_2 = t_contact + tc + chain.gate_to_plate_m / vout
+            g_out_1 = g_out_2 + chain.gate_spacing_m / vout
         res = chain.gate_resolution_s
         gates = [np.floor(g / res) * res for g in (g_in_1, g_in_2, g_out_2, g_out_1)]
         gate_txt = [f"{g:.7f}" for g in gates]
@@ -412,6 +448,26 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
     return out, truth_csv
 
 
+def _gate_times_with_drag(t_contact, tc, vin, vout, mass_kg, config: SynthConfig):
+    """Beam-break times of a flight with drag (and gravity on a vertical rig), leading surface at the beam.
+
+    Inbound, the leading surface reaches the plate at ``t_contact`` after d from gate 2
+    and d + L from gate 1; rebound, it leaves at D from the plate and meets gate 2 after
+    d - D, gate 1 after d - D + L (:func:`ballimpact.flight.plate_speeds` inverts this).
+    """
+    chain = config.chain
+    d, L, D = chain.gate_to_plate_m, chain.gate_spacing_m, BALL_DIAMETER_M
+    k = drag_constant(mass_kg, D, config.air_density_kg_m3)
+    g = G_M_S2 if config.rig_orientation == "vertical" else 0.0
+    v_gate2 = speed_before(vin, d, k, +g)
+    v_gate1 = speed_before(vin, d + L, k, +g)
+    g_in_2 = t_contact - flight_time(v_gate2, d, k, +g)
+    g_in_1 = t_contact - flight_time(v_gate1, d + L, k, +g)
+    g_out_2 = t_contact + tc + flight_time(vout, d - D, k, -g)
+    g_out_1 = t_contact + tc + flight_time(vout, d - D + L, k, -g)
+    return g_in_1, g_in_2, g_out_2, g_out_1
+
+
 def _write_impacts_csv(path: Path, rows):
     import csv
 
@@ -429,6 +485,8 @@ def _write_session_yaml(path: Path, config: SynthConfig):
         entry = {"label": config.labels.get(key, key), "mass_g": round(p.mass_kg * 1000, 4)}
         if config.kb0_in_config:
             entry["kb0_kN_m"] = round(p.kb0_N_m / 1000, 6)
+        if key in config.itf_rebound_cm:
+            entry["itf_rebound_cm"] = float(config.itf_rebound_cm[key])
         balls[key] = entry
     doc = {
         "session_id": config.session_id,
@@ -452,6 +510,11 @@ def _write_session_yaml(path: Path, config: SynthConfig):
         "gates": {"spacing_m": chain.gate_spacing_m, "resolution_s": chain.gate_resolution_s},
         "balls": balls,
     }
+    if config.flight_drag:
+        doc["gates"]["distance_to_plate_m"] = chain.gate_to_plate_m
+        doc["rig"] = {"orientation": config.rig_orientation, "air_density_kg_m3": config.air_density_kg_m3}
+        doc = {k: doc[k] for k in ("session_id", "date", "operator", "description", "synthetic", "plate", "daq",
+                                   "gates", "rig", "balls")}
     path.write_text(
         "# Synthetic session written by `ballimpact synth`. Not real measurements.\n"
         + yaml.safe_dump(doc, sort_keys=False, width=88),
@@ -473,6 +536,10 @@ def _write_truth(path: Path, truth, config: SynthConfig):
         "seed": config.seed,
         "balls": {k: asdict(p) for k, p in config.balls.items()},
         "sensor_chain": json.loads(json.dumps(asdict(config.chain))),
+        **({"flight": {"drag": True, "orientation": config.rig_orientation,
+                       "air_density_kg_m3": config.air_density_kg_m3, "diameter_m": BALL_DIAMETER_M,
+                       "note": "vin_m_s, vout_m_s and cor of the truth are at the plate"}}
+           if config.flight_drag else {}),
         "note": "Ground truth of a synthetic session written by ballimpact synth; SI units.",
     }
     path.with_suffix(".yaml").write_text(yaml.safe_dump(meta, sort_keys=False), encoding="utf-8")

@@ -182,6 +182,7 @@ def benchmark_path(name):
 # PNG file stems the figures job writes (captions: workflow/report/<stem>.rst)
 FIGURES = (
     "fig7_contact_time_cor",
+    "cor_speed_itf",
     "fig8_stiffness",
     "fig9_force_curves",
     "fig10_components",

@@ -13,6 +13,13 @@ rule figures:
             subcategory="{session}",
             labels={"session": "{session}", "figure": "Fig. 7", "shows": "contact time and COR vs inbound speed"},
         ),
+        cor_speed_itf=report(
+            result_path("figures/cor_speed_itf.png"),
+            caption="../report/cor_speed_itf.rst",
+            category="Model fit",
+            subcategory="{session}",
+            labels={"session": "{session}", "figure": "COR 3-40 m/s", "shows": "COR vs speed, extrapolation, ITF drop test"},
+        ),
         fig8_stiffness=report(
             result_path("figures/fig8_stiffness.png"),
             caption="../report/fig8_stiffness.rst",
