@@ -348,13 +348,13 @@ def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset
                 attrs["units"] = units
             if overwrite or "long_name" not in attrs:
                 attrs["long_name"] = long_name
-        if name not in ds.coords and (overwrite or "coverage_content_type" not in attrs):
-            attrs["coverage_content_type"] = coverage_content_type(name)
         elif "units" not in attrs or "long_name" not in attrs:
             warnings.warn(
                 f"archive variable {name!r} has no units/long_name and is not in VARIABLE_ATTRS",
                 stacklevel=2,
             )
+        if name not in ds.coords and (overwrite or "coverage_content_type" not in attrs):
+            attrs["coverage_content_type"] = coverage_content_type(name)
     return ds
 
 
