@@ -11,9 +11,12 @@ intervals, the median relative interval width, how often the planted outlier was
 and how many good impacts were removed (sessions of the four Table 2 balls with no
 removal at all).
 
-    python bench/coverage.py --seeds 100 --kb0 config|extrapolated [--outlier] [--json]
+    python bench/coverage.py --seeds 100 --kb0 config|extrapolated|both --outlier no|yes|both \
+        [--jsonl bench/out/records.jsonl] [--json]
+    python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
 
-Results of the runs quoted in the README are in bench/out/ (one JSON per run).
+With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
+run can be stopped and summarised at any time.
 """
 
 from __future__ import annotations
@@ -52,82 +55,114 @@ def session(p, rng, n_impacts=10, vmin=14.0, vmax=30.0, tc_noise=0.004, cor_nois
     return vin, tc, e, bad
 
 
-def run(seeds: int, kb0_mode: str, outlier: bool, vmin: float = 14.0, n_impacts: int = 10, first_seed: int = 0):
-    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
+    """One ball type of one seed: a record of hits, widths and removals."""
+    kind = KINDS[seed % 3] if outlier else None
+    vin, tc, e, bad = session(p, rng, n_impacts, vmin=vmin, outlier=kind)
     names = ["ak", "a", "ac", "kb_20mm"] + (["kb0"] if kb0_mode == "extrapolated" else [])
-    hits = {k: {nm: 0 for nm in names} for k in sets}
-    widths = {k: {nm: [] for nm in names} for k in sets}
-    found = {k: 0 for k in sets}
-    false_removed = {k: 0 for k in sets}
-    sessions_clean = 0
-    fails = {k: 0 for k in sets}
-    total = 0
+    rec = {"seed": seed, "ball": key, "kb0": kb0_mode, "outlier": bool(outlier), "kind": kind}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = fit_ball_model(vin, tc, e, p.mass_kg, n_bootstrap=0, seed=seed,
+                               kb0_N_m=p.kb0_N_m if kb0_mode == "config" else None)
+    except FitError as exc:
+        rec["fail"] = str(exc)
+        return rec
+    removed = [int(i) for i in np.flatnonzero(~f.used)]
+    rec["planted_named"] = bad in removed if bad is not None else None
+    rec["false_removed"] = int(sum(i != bad for i in removed))
+    truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
+    rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
+    rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
+    return rec
+
+
+def run(seeds: int, modes, vmin: float = 14.0, n_impacts: int = 10, first_seed: int = 0, jsonl=None):
+    """Records of every (seed, mode, ball type); modes: list of (kb0_mode, outlier)."""
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    records = []
     for seed in range(first_seed, first_seed + seeds):
-        rng = np.random.default_rng(1000 + seed)
-        removed_table2 = 0
-        for key, p in sets.items():
-            kind = KINDS[seed % 3] if outlier else None
-            vin, tc, e, bad = session(p, rng, n_impacts, vmin=vmin, outlier=kind)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    f = fit_ball_model(vin, tc, e, p.mass_kg, n_bootstrap=0, seed=seed,
-                                       kb0_N_m=p.kb0_N_m if kb0_mode == "config" else None)
-            except FitError:
-                fails[key] += 1
-                continue
-            removed = np.flatnonzero(~f.used)
-            if bad is not None and bad in removed:
-                found[key] += 1
-            n_false = int(sum(i != bad for i in removed))
-            false_removed[key] += n_false
-            if key in BALLS:
-                removed_table2 += n_false
-            truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m,
-                     "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
-            for nm in names:
-                lo, hi = getattr(f, f"{nm}_lo"), getattr(f, f"{nm}_hi")
-                hits[key][nm] += int(lo <= truth[nm] <= hi)
-                widths[key][nm].append((hi - lo) / truth[nm])
-        sessions_clean += int(removed_table2 == 0)
-        total += 1
-    cov = {k: {nm: v / total for nm, v in h.items()} for k, h in hits.items()}
-    pooled = {nm: float(np.mean([cov[k][nm] for k in sets])) for nm in names}
-    width = {k: {nm: float(np.median(w)) if w else float("nan") for nm, w in ws.items()} for k, ws in widths.items()}
-    return {
-        "seeds": total, "kb0": kb0_mode, "outlier": outlier, "vmin": vmin, "n_impacts": n_impacts,
-        "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
-        "planted_outlier_named": {k: v / total for k, v in found.items()} if outlier else None,
-        "good_impacts_removed_per_ball": {k: v / total for k, v in false_removed.items()},
-        "sessions_without_removal": sessions_clean / total,
-        "fit_failures": fails,
-    }
+        for kb0_mode, outlier in modes:
+            rng = np.random.default_rng(1000 + seed)
+            for key, p in sets.items():
+                rec = fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=vmin, n_impacts=n_impacts)
+                records.append(rec)
+                if jsonl:
+                    with open(jsonl, "a") as fh:
+                        fh.write(json.dumps(rec) + "\n")
+    return records
+
+
+def summarise(records):
+    """Coverage per (mode, ball type, quantity), pooled, median widths, outlier figures."""
+    out = {}
+    for kb0_mode, outlier in sorted({(r["kb0"], r["outlier"]) for r in records}):
+        rs = [r for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "hit" in r]
+        seeds = sorted({r["seed"] for r in rs})
+        balls = list(dict.fromkeys(r["ball"] for r in rs))
+        names = list(rs[0]["hit"]) if rs else []
+        cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
+        pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
+        width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
+        clean = []
+        for s in seeds:
+            t2 = [r for r in rs if r["seed"] == s and r["ball"] in BALLS]
+            clean.append(all(r["false_removed"] == 0 for r in t2))
+        named = [r["planted_named"] for r in rs if r["planted_named"] is not None]
+        by_kind = {k: float(np.mean([r["planted_named"] for r in rs if r["kind"] == k])) for k in KINDS
+                   if any(r["kind"] == k for r in rs)}
+        out[f"kb0 {kb0_mode}, {'one outlier per ball' if outlier else 'no outlier'}"] = {
+            "seeds": len(seeds), "fits": len(rs),
+            "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
+            "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
+            "good_impacts_removed_per_fit": float(np.mean([r["false_removed"] for r in rs])) if rs else float("nan"),
+            "planted_outlier_named": float(np.mean(named)) if named else None,
+            "planted_outlier_named_by_kind": by_kind or None,
+        }
+    return out
+
+
+def _print(summary):
+    for mode, s in summary.items():
+        print(f"{mode}: {s['seeds']} seeds, {s['fits']} fits, {s['failures']} failures")
+        for k, c in s["coverage"].items():
+            print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
+        print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
+        print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        print(f"  sessions (4 Table 2 balls) without a good impact removed: {s['sessions_without_false_removal']:.3f}")
+        if s["planted_outlier_named"] is not None:
+            print(f"  planted outlier named: {s['planted_outlier_named']:.3f} "
+                  + ", ".join(f"{k} {v:.2f}" for k, v in s["planted_outlier_named_by_kind"].items()))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--kb0", choices=("config", "extrapolated"), default="config")
-    ap.add_argument("--outlier", action="store_true", help="plant one outlier per ball type")
+    ap.add_argument("--kb0", choices=("config", "extrapolated", "both"), default="config")
+    ap.add_argument("--outlier", choices=("no", "yes", "both"), default="no",
+                    help="plant one outlier per ball type")
     ap.add_argument("--vmin", type=float, default=14.0, help="lowest inbound speed [m/s]")
+    ap.add_argument("--jsonl", help="append one JSON record per fit to this file (a run can be stopped)")
+    ap.add_argument("--summarise", nargs="+", metavar="JSONL", help="only summarise these record files")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
-    t0 = time.perf_counter()
-    out = run(args.seeds, args.kb0, args.outlier, vmin=args.vmin, first_seed=args.first_seed)
-    out["seconds"] = time.perf_counter() - t0
+    if args.summarise:
+        records = [json.loads(line) for path in args.summarise for line in open(path) if line.strip()]
+    else:
+        kb0s = ("config", "extrapolated") if args.kb0 == "both" else (args.kb0,)
+        outs = (False, True) if args.outlier == "both" else (args.outlier == "yes",)
+        t0 = time.perf_counter()
+        records = run(args.seeds, [(k, o) for k in kb0s for o in outs], vmin=args.vmin,
+                      first_seed=args.first_seed, jsonl=args.jsonl)
+        print(f"({time.perf_counter() - t0:.0f} s)")
+    summary = summarise(records)
     if args.json:
-        print(json.dumps(out, indent=2))
-        return
-    print(f"coverage of nominal 95 % intervals over {out['seeds']} seeds (kB(0) {args.kb0}, "
-          f"{'one planted outlier per ball' if args.outlier else 'no outlier'}):")
-    for k, c in out["coverage"].items():
-        print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
-    print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in out["pooled_coverage"].items()))
-    if args.outlier:
-        print("planted outlier named: " + ", ".join(f"{k} {v:.2f}" for k, v in out["planted_outlier_named"].items()))
-    print(f"sessions (4 Table 2 balls) without a good impact removed: {out['sessions_without_removal']:.3f}")
-    print(f"({out['seconds']:.0f} s)")
+        print(json.dumps(summary, indent=2))
+    else:
+        _print(summary)
 
 
 if __name__ == "__main__":

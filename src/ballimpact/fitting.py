@@ -81,8 +81,10 @@ LOW_SPEED_M_S = 10.0
 OUTLIER_LEVEL = 0.01
 #: Largest share of a ball type's impacts that may be removed as fit outliers [-].
 OUTLIER_MAX_SHARE = 0.2
-#: Relative offset (Bates & Watts 1981) below which a least-squares problem has converged [-].
-CONVERGENCE_OFFSET = 1.0e-3
+#: Relative offset (Bates & Watts 1981) below which a least-squares problem has converged [-]:
+#: the parameters are then within about 1 % of a standard error of the optimum. (1e-3 is
+#: below what the model's finite-difference Jacobian resolves at some optima.)
+CONVERGENCE_OFFSET = 1.0e-2
 _FD_STEP = 1.0e-4  # forward-difference step in the internal parameters (log kR, a, log AC)
 
 
@@ -523,7 +525,7 @@ def _batched_lm(resid, p0, lo, hi, max_iter=100, offset_tol=CONVERGENCE_OFFSET):
     offset criterion of Bates & Watts (1981), i.e. by the gradient relative to the
     residual scatter: a problem has converged when the part of its residual vector
     in the model's tangent plane is below ``offset_tol`` of the residual scatter
-    (the parameters are then within 1e-3 standard errors of the optimum). A problem
+    (the parameters are then within about ``offset_tol`` standard errors of the optimum). A problem
     started at its optimum is converged before the first step. ``max_iter`` is only
     a safety stop: a problem that reaches it, or whose damping grows without an
     accepted step, is reported as not converged.

@@ -19,7 +19,7 @@ __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "write_report", "report_page_cou
 #: A4 portrait page size [in].
 A4_PORTRAIT_IN = (8.27, 11.69)
 _MARGIN_IN = 0.6  # page margin [in]
-_SOURCE_SHORT = {"extrapolated": "extrap."}
+_SOURCE_SHORT = {"extrapolated": "extrap.", "fitted": "fitted"}
 
 #: Title and caption of each report figure (keys are the PNG names of figures.FIGURE_FILES).
 FIGURE_CAPTIONS = {
@@ -285,9 +285,11 @@ def _summary_page(ds, info) -> Figure:
     cur.text(
         x0,
         "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
-        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is either fixed in session.yaml "
-        "(config) or extrapolated from the Kelvin-Voigt\nstiffness to zero speed. RMSE: relative RMS residual of "
-        "TC and COR over the impacts used in the fit.",
+        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
+        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
+        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
+        "TC and COR over the impacts used in the fit."
+        + _conditional_note(ds),
         size=8, color="0.25",
     )
     cur.skip(0.08)
@@ -349,6 +351,7 @@ def _summary_page(ds, info) -> Figure:
     for (r, c), cell in table.get_celld().items():
         cell.set_y(tops[r])
     cur.skip(total_h + 0.15)
+    _stiffness_block(fig, cur, ds)
     for note in no_fit_notes:
         if cur.y < h - _MARGIN_IN - 0.9:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
@@ -456,8 +459,56 @@ def _figure_page(ds, info, name, number, figures_dir) -> Figure:
     return fig
 
 
+def _conditional_note(ds) -> str:
+    """The sentence saying AK and a are conditional on kB(0) from the config, when one is."""
+    if "kb0_source" not in ds:
+        return ""
+    labels = [_fig._label(ds, b) for b in _fig._balls(ds) if _text(_fig._ball_value(ds, "kb0_source", b, "")) == "config"]
+    if not labels:
+        return ""
+    return ("\nAK and a are conditional on kB(0) from config (" + ", ".join(labels)[:80]
+            + "): their intervals do not include kB(0)'s uncertainty.")
+
+
+def _stiffness_block(fig, cur, ds):
+    """kB(10 mm) and kB(20 mm) with 95 % intervals beside the values Table 2 gives (Eq. 4)."""
+    w, h = A4_PORTRAIT_IN
+    if "kb_20mm_kN_m" not in ds:
+        return
+    cells = [["Ball type", "kB(10 mm) [kN/m]", "Table 2", "kB(20 mm) [kN/m]", "Table 2"]]
+    for ball in _fig._balls(ds):
+        get = _ball_values(ds, ball)
+        row = ["\n".join(textwrap.wrap(_fig._label(ds, ball), 30)[:1])]
+        for mm in (10, 20):
+            x = mm / 1000.0
+            paper = get("paper_kb0_kN_m") + get("paper_ak_kN_m") * x ** get("paper_a")
+            row += [_interval(get(f"kb_{mm}mm_kN_m"), get(f"kb_{mm}mm_kN_m_lo"), get(f"kb_{mm}mm_kN_m_hi"), ".1f")
+                    .replace("\n", " "), _fmt(paper, ".1f")]
+        cells.append(row)
+    row_h = 0.2
+    tab_h = row_h * len(cells)
+    if cur.y + tab_h + 0.5 > h - _MARGIN_IN - 0.9:
+        return
+    cur.text(_MARGIN_IN, "Structural stiffness at 10 and 20 mm, kB(0) + AK x^a (well determined even when AK "
+             "and a are not), beside Table 2's values", size=8, color="0.25")
+    ax = fig.add_axes([_MARGIN_IN / w, 1 - (cur.y + tab_h) / h, (w - 2 * _MARGIN_IN) / w, tab_h / h])
+    _table(ax, cells, [0.26, 0.25, 0.12, 0.25, 0.12], font_size=7.5)
+    cur.skip(tab_h + 0.15)
+
+
+def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
+    """(impact_id, ball, note) of every good impact left out of its ball type's fit."""
+    if ds.sizes.get("impact", 0) == 0 or "used_in_fit" not in ds:
+        return []
+    ids, balls, status = (_fig._text(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
+    used = np.asarray(ds["used_in_fit"].values, dtype=float) > 0
+    notes = _fig._text(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
+    return [(ids[i], balls[i], "left out of the fit (status ok): " + (notes[i] or "fit outlier"))
+            for i in range(len(ids)) if status[i] == "ok" and not used[i]]
+
+
 def _excluded_pages(ds, info) -> list[Figure]:
-    rows = _fig.excluded_impacts(ds)
+    rows = _fig.excluded_impacts(ds) + _fit_outlier_rows(ds)
     w, h = A4_PORTRAIT_IN
     x_id, x_ball, x_reason = _MARGIN_IN, _MARGIN_IN + 1.15, _MARGIN_IN + 2.75
     reason_chars = 78
@@ -473,8 +524,12 @@ def _excluded_pages(ds, info) -> list[Figure]:
         cur.text(_MARGIN_IN, title, size=14, weight="bold", dy=0.35)
         if not continued:
             n_total = ds.sizes.get("impact", 0)
-            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were excluded from the fits. Each has a "
-                     "QC page with its raw trace in the appendix.", size=9.5, dy=0.3)
+            n_outl = len(_fit_outlier_rows(ds))
+            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were excluded from the fits. Each excluded "
+                     "impact has a QC page with its raw trace in the appendix."
+                     + (f"\n{n_outl} of them passed the per-impact checks but sit far off their ball type's fit "
+                        "(fit outliers, listed last with their residuals)." if n_outl else ""),
+                     size=9.5, dy=0.3 + (0.17 if n_outl else 0.0))
         for x, label in ((x_id, "Impact"), (x_ball, "Ball type"), (x_reason, "Reason")):
             fig.text(x / w, 1 - cur.y / h, label, fontsize=9, weight="bold", va="top")
         cur.skip(0.2)
