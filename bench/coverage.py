@@ -14,6 +14,7 @@ removal at all).
     python bench/coverage.py --seeds 100 --kb0 config|extrapolated|both --outlier no|yes|both \
         [--jsonl bench/out/records.jsonl] [--json]
     python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
+    python bench/coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
 
 With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
 run can be stopped and summarised at any time.
@@ -72,6 +73,9 @@ def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
     removed = [int(i) for i in np.flatnonzero(~f.used)]
     rec["planted_named"] = bad in removed if bad is not None else None
     rec["false_removed"] = int(sum(i != bad for i in removed))
+    rec["n"] = int(vin.size)
+    rec["bad"] = bad
+    rec["esd_steps"] = [[int(i), float(pv)] for i, pv in f.outlier_steps]
     truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
     rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
     rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
@@ -124,6 +128,31 @@ def summarise(records):
     return out
 
 
+def noise_free(vmin=14.0, vmax=30.0, n_impacts=10):
+    """kB(0) on noise-free model impacts (evenly spaced speeds): the straight line, the
+    quadratic, the reported interval and kB(20 mm), per Table 2 ball."""
+    rows = []
+    for key, b in BALLS.items():
+        p = b.params
+        vin = np.linspace(vmin, vmax, n_impacts)
+        s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = fit_ball_model(vin, s.contact_time_s, s.cor, p.mass_kg, n_bootstrap=0)
+        kb20 = p.kb0_N_m + p.ak * 0.020**p.a
+        rows.append({
+            "ball": key, "kb0_source": f.kb0_source, "true_kb0_kN_m": p.kb0_N_m / 1e3,
+            "kb0_kN_m": f.kb0_N_m / 1e3, "kb0_error_pct": 100 * (f.kb0_N_m / p.kb0_N_m - 1),
+            "linear_error_pct": 100 * (f.kb0_linear_N_m / p.kb0_N_m - 1),
+            "quadratic_error_pct": 100 * (f.kb0_quadratic_N_m / p.kb0_N_m - 1),
+            "kb0_lo_kN_m": f.kb0_lo / 1e3, "kb0_hi_kN_m": f.kb0_hi / 1e3,
+            "kb0_inside": bool(f.kb0_lo <= p.kb0_N_m <= f.kb0_hi),
+            "kb_20mm_error_pct": 100 * (f.kb_20mm_N_m / kb20 - 1),
+            "kb_20mm_inside": bool(f.kb_20mm_lo <= kb20 <= f.kb_20mm_hi),
+        })
+    return rows
+
+
 def _print(summary):
     for mode, s in summary.items():
         print(f"{mode}: {s['seeds']} seeds, {s['fits']} fits, {s['failures']} failures")
@@ -147,8 +176,22 @@ def main():
     ap.add_argument("--vmin", type=float, default=14.0, help="lowest inbound speed [m/s]")
     ap.add_argument("--jsonl", help="append one JSON record per fit to this file (a run can be stopped)")
     ap.add_argument("--summarise", nargs="+", metavar="JSONL", help="only summarise these record files")
+    ap.add_argument("--noise-free", action="store_true",
+                    help="only kB(0) of noise-free impacts, evenly spaced from --vmin to 30 m/s")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
+    if args.noise_free:
+        rows = noise_free(vmin=args.vmin)
+        if args.json:
+            print(json.dumps(rows, indent=2))
+        else:
+            for r in rows:
+                print(f"{r['ball']:13s} kB(0) {r['kb0_source']}: {r['kb0_kN_m']:.2f} kN/m ({r['kb0_error_pct']:+.1f} %), "
+                      f"interval [{r['kb0_lo_kN_m']:.2f}, {r['kb0_hi_kN_m']:.2f}] holds {r['true_kb0_kN_m']:.0f}: "
+                      f"{r['kb0_inside']}; line {r['linear_error_pct']:+.1f} %, quadratic "
+                      f"{r['quadratic_error_pct']:+.1f} %; kB(20 mm) {r['kb_20mm_error_pct']:+.2f} % "
+                      f"(inside: {r['kb_20mm_inside']})")
+        return
     if args.summarise:
         records = [json.loads(line) for path in args.summarise for line in open(path) if line.strip()]
     else:

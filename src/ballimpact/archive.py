@@ -103,11 +103,11 @@ PARAMETER_COLUMNS = [
     "contact_time_rmse_pct",
     "cor_rmse_pct",
     "kb_10mm_kN_m",
-    "kb_10mm_kN_m_lo",
-    "kb_10mm_kN_m_hi",
+    "kb_10mm_lo",
+    "kb_10mm_hi",
     "kb_20mm_kN_m",
-    "kb_20mm_kN_m_lo",
-    "kb_20mm_kN_m_hi",
+    "kb_20mm_lo",
+    "kb_20mm_hi",
 ]
 
 #: Citation of the paper the model comes from (ACDD ``references``).
@@ -217,11 +217,11 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "cor_rmse_pct": ("percent", "relative RMS COR residual over the impacts used"),
     "fit_message": ("1", "fit status message"),
     "kb_10mm_kN_m": ("kN m-1", "structural stiffness kB at 10 mm displacement, kB(0) + AK x^a (Eq. 4)"),
-    "kb_10mm_kN_m_lo": ("kN m-1", "lower end of the 95 % interval of kB(10 mm)"),
-    "kb_10mm_kN_m_hi": ("kN m-1", "upper end of the 95 % interval of kB(10 mm)"),
+    "kb_10mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(10 mm)"),
+    "kb_10mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(10 mm)"),
     "kb_20mm_kN_m": ("kN m-1", "structural stiffness kB at 20 mm displacement, kB(0) + AK x^a (Eq. 4)"),
-    "kb_20mm_kN_m_lo": ("kN m-1", "lower end of the 95 % interval of kB(20 mm)"),
-    "kb_20mm_kN_m_hi": ("kN m-1", "upper end of the 95 % interval of kB(20 mm)"),
+    "kb_20mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(20 mm)"),
+    "kb_20mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(20 mm)"),
     "contact_time_scatter_pct": ("percent", "relative scatter of the impacts about the fitted TC curve (unbiased)"),
     "cor_scatter_pct": ("percent", "relative scatter of the impacts about the fitted COR curve (unbiased)"),
     "bootstrap_dropped": ("1", "bootstrap resamples dropped (refit not converged)"),
@@ -518,7 +518,7 @@ def fit_dataset(
     params = {k: nan for k in (
         "kb0_kN_m", "kb0_lo", "kb0_hi", "ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi",
         "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct",
-        "kb_10mm_kN_m", "kb_10mm_kN_m_lo", "kb_10mm_kN_m_hi", "kb_20mm_kN_m", "kb_20mm_kN_m_lo", "kb_20mm_kN_m_hi",
+        "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m", "kb_20mm_lo", "kb_20mm_hi",
         "contact_time_scatter_pct", "cor_scatter_pct", "bootstrap_dropped")}
     if fit is None:
         text = {"kb0_source": kb0_source, "fit_message": message or "no fit", "interval_method": "none"}
@@ -538,8 +538,9 @@ def fit_dataset(
         # v1.1: the well-determined stiffness at 10 and 20 mm, scatter and bootstrap drops
         # (getattr: a fit object without them leaves NaN)
         for mm in (10, 20):
-            for suffix, attr in (("", f"kb_{mm}mm_N_m"), ("_lo", f"kb_{mm}mm_lo"), ("_hi", f"kb_{mm}mm_hi")):
-                params[f"kb_{mm}mm_kN_m{suffix}"] = float(getattr(fit, attr, nan)) / kn
+            for name, attr in ((f"kb_{mm}mm_kN_m", f"kb_{mm}mm_N_m"), (f"kb_{mm}mm_lo", f"kb_{mm}mm_lo"),
+                               (f"kb_{mm}mm_hi", f"kb_{mm}mm_hi")):
+                params[name] = float(getattr(fit, attr, nan)) / kn
         params["contact_time_scatter_pct"] = 100.0 * float(getattr(fit, "contact_time_scatter", nan))
         params["cor_scatter_pct"] = 100.0 * float(getattr(fit, "cor_scatter", nan))
         params["bootstrap_dropped"] = float(getattr(fit, "bootstrap_dropped", nan))

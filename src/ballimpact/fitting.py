@@ -78,7 +78,7 @@ KB0_BOUNDS_N_M = (1.0e2, 2.0e5)
 #: kB(0) is fitted with AK, a and AC when some impact is slower than this [m/s].
 LOW_SPEED_M_S = 10.0
 #: Family-wise level of the fit-outlier test per ball type [-].
-OUTLIER_LEVEL = 0.01
+OUTLIER_LEVEL = 0.005
 #: Largest share of a ball type's impacts that may be removed as fit outliers [-].
 OUTLIER_MAX_SHARE = 0.2
 #: Relative offset (Bates & Watts 1981) below which a least-squares problem has converged [-]:
@@ -174,6 +174,8 @@ class BallFit:
         Per impact given: True when used in the fit, False for a fit outlier.
     outlier_notes : list of str
         Per impact given: why it was left out of the fit, else empty.
+    outlier_steps : list of (int, float)
+        Steps of the fit-outlier search: (impact index, p value) in order [-].
     kb0_linear_N_m, kb0_quadratic_N_m : float
         Linear (the paper's) and quadratic extrapolations of the Kelvin-Voigt
         stiffness to zero speed [N/m] (NaN when kB(0) is from the config).
@@ -213,6 +215,7 @@ class BallFit:
     bootstrap_dropped: int = 0
     used: np.ndarray | None = None
     outlier_notes: list = field(default_factory=list)
+    outlier_steps: list = field(default_factory=list)
     kb0_linear_N_m: float = float("nan")
     kb0_quadratic_N_m: float = float("nan")
 
@@ -843,6 +846,8 @@ class FitOutliers:
         Remarks (e.g. more outliers than the cap allows).
     start : tuple
         (theta, sigma_tc, sigma_cor) of the robust fit, a start for the final fit (None when not fitted).
+    steps : list of (int, float)
+        The generalised ESD steps in order: (impact index, p value) [-].
     """
 
     used: np.ndarray
@@ -852,6 +857,7 @@ class FitOutliers:
     max_removed: int
     messages: list = field(default_factory=list)
     start: tuple | None = None
+    steps: list = field(default_factory=list)
 
 
 def _robust_kb0(vin, kv):
@@ -959,6 +965,7 @@ def detect_fit_outliers(vin_m_s, contact_time_s, cor, mass_kg, *, kb0_N_m=None, 
             i, p, note, theta = step
             steps.append((i, p, note))
             keep[i] = False
+    result.steps = [(int(i), float(p)) for i, p, _ in steps]
     n_out = 0
     for k, (i, p, note) in enumerate(steps):
         pvals[i] = p
@@ -1131,12 +1138,14 @@ def fit_ball_model(
     used = np.ones(n_all, dtype=bool)
     outlier_notes = [""] * n_all
     start = None
+    steps = []
     if detect_outliers:
         found = detect_fit_outliers(vin, tc, e, mass, kb0_N_m=kb0_N_m, level=outlier_level,
                                     max_share=max_outlier_share)
         used, outlier_notes = found.used, found.notes
         messages += found.messages
         start = found.start
+        steps = found.steps
         if (~used).any():
             messages.append(f"{int((~used).sum())} fit outlier(s) left out")
     vin, tc, e, mass = vin[used], tc[used], e[used], mass[used]
@@ -1233,6 +1242,7 @@ def fit_ball_model(
         bootstrap_dropped=int(dropped),
         used=used,
         outlier_notes=list(outlier_notes),
+        outlier_steps=list(steps),
         kb0_linear_N_m=line[0][0] if line else nan,
         kb0_quadratic_N_m=line[1][0] if line else nan,
     )
