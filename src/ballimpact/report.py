@@ -294,7 +294,7 @@ def _summary_page(ds, info) -> Figure:
     )
     cur.skip(0.08)
     head = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
-            "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
+            "kB(10 mm)\n[kN/m]", "kB(20 mm)\n[kN/m]", "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
     cells = [head]
     shade = []
     no_fit_notes = []
@@ -311,6 +311,8 @@ def _summary_page(ds, info) -> Figure:
             _interval(get("ak_kN_m"), get("ak_lo"), get("ak_hi"), ",.0f"),
             _interval(get("a"), get("a_lo"), get("a_hi"), ".3f"),
             _interval(get("ac_kN_s_m3"), get("ac_lo"), get("ac_hi"), ".2f"),
+            _interval(get("kb_10mm_kN_m"), get("kb_10mm_lo"), get("kb_10mm_hi"), ".1f"),
+            _interval(get("kb_20mm_kN_m"), get("kb_20mm_lo"), get("kb_20mm_hi"), ".1f"),
             _fmt(get("contact_time_rmse_pct"), ".2f"),
             _fmt(get("cor_rmse_pct"), ".2f"),
         ]
@@ -325,8 +327,11 @@ def _summary_page(ds, info) -> Figure:
         paper = [get("paper_kb0_kN_m"), get("paper_ak_kN_m"), get("paper_a"), get("paper_ac_kN_s_m3")]
         if np.isfinite(np.asarray(paper, dtype=float)).any():
             shade.append(len(cells))
+            # kB(10 mm), kB(20 mm) from Table 2's values by Eq. 4 (x in m)
+            kb_paper = [paper[0] + paper[1] * x ** paper[2] for x in (0.010, 0.020)]
             cells.append(["", "paper Table 2", "", _fmt(paper[0], ".1f"), _fmt(paper[1], ",.0f"),
-                          _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), "", ""])
+                          _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), _fmt(kb_paper[0], ".1f"),
+                          _fmt(kb_paper[1], ".1f"), "", ""])
     available = h - _MARGIN_IN - 0.9 - cur.y
     line_h = 0.17
     heights = [max(c.count("\n") + 1 for c in row) for row in cells]
@@ -336,7 +341,7 @@ def _summary_page(ds, info) -> Figure:
         scale = available / total_h
         total_h, font = available, max(5.0, 8.0 * scale)
     ax = fig.add_axes([x0 / w, 1 - (cur.y + total_h) / h, (w - 2 * x0) / w, total_h / h])
-    table = _table(ax, cells, [0.17, 0.115, 0.04, 0.105, 0.165, 0.125, 0.12, 0.08, 0.08], font_size=font,
+    table = _table(ax, cells, [0.14, 0.1, 0.035, 0.085, 0.135, 0.1, 0.095, 0.095, 0.095, 0.06, 0.06], font_size=font,
                    shade_rows=tuple(shade))
     # row heights proportional to the number of text lines
     units = [hh * line_h + 0.06 for hh in heights]
@@ -351,7 +356,6 @@ def _summary_page(ds, info) -> Figure:
     for (r, c), cell in table.get_celld().items():
         cell.set_y(tops[r])
     cur.skip(total_h + 0.15)
-    _stiffness_block(fig, cur, ds)
     for note in no_fit_notes:
         if cur.y < h - _MARGIN_IN - 0.9:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
@@ -466,34 +470,9 @@ def _conditional_note(ds) -> str:
     labels = [_fig._label(ds, b) for b in _fig._balls(ds) if _text(_fig._ball_value(ds, "kb0_source", b, "")) == "config"]
     if not labels:
         return ""
-    return ("\nAK and a are conditional on kB(0) from config (" + ", ".join(labels)[:80]
+    text = ("AK and a are conditional on kB(0) from config (" + ", ".join(labels)
             + "): their intervals do not include kB(0)'s uncertainty.")
-
-
-def _stiffness_block(fig, cur, ds):
-    """kB(10 mm) and kB(20 mm) with 95 % intervals beside the values Table 2 gives (Eq. 4)."""
-    w, h = A4_PORTRAIT_IN
-    if "kb_20mm_kN_m" not in ds:
-        return
-    cells = [["Ball type", "kB(10 mm) [kN/m]", "Table 2", "kB(20 mm) [kN/m]", "Table 2"]]
-    for ball in _fig._balls(ds):
-        get = _ball_values(ds, ball)
-        row = ["\n".join(textwrap.wrap(_fig._label(ds, ball), 30)[:1])]
-        for mm in (10, 20):
-            x = mm / 1000.0
-            paper = get("paper_kb0_kN_m") + get("paper_ak_kN_m") * x ** get("paper_a")
-            row += [_interval(get(f"kb_{mm}mm_kN_m"), get(f"kb_{mm}mm_kN_m_lo"), get(f"kb_{mm}mm_kN_m_hi"), ".1f")
-                    .replace("\n", " "), _fmt(paper, ".1f")]
-        cells.append(row)
-    row_h = 0.2
-    tab_h = row_h * len(cells)
-    if cur.y + tab_h + 0.5 > h - _MARGIN_IN - 0.9:
-        return
-    cur.text(_MARGIN_IN, "Structural stiffness at 10 and 20 mm, kB(0) + AK x^a (well determined even when AK "
-             "and a are not), beside Table 2's values", size=8, color="0.25")
-    ax = fig.add_axes([_MARGIN_IN / w, 1 - (cur.y + tab_h) / h, (w - 2 * _MARGIN_IN) / w, tab_h / h])
-    _table(ax, cells, [0.26, 0.25, 0.12, 0.25, 0.12], font_size=7.5)
-    cur.skip(tab_h + 0.15)
+    return "\n" + "\n".join(textwrap.wrap(text, 118)[:2])
 
 
 def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
@@ -525,11 +504,11 @@ def _excluded_pages(ds, info) -> list[Figure]:
         if not continued:
             n_total = ds.sizes.get("impact", 0)
             n_outl = len(_fit_outlier_rows(ds))
-            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were excluded from the fits. Each excluded "
-                     "impact has a QC page with its raw trace in the appendix."
-                     + (f"\n{n_outl} of them passed the per-impact checks but sit far off their ball type's fit "
-                        "(fit outliers, listed last with their residuals)." if n_outl else ""),
-                     size=9.5, dy=0.3 + (0.17 if n_outl else 0.0))
+            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were left out of the fits. Each excluded "
+                     "impact has a QC page with its raw trace\nin the appendix."
+                     + (f" {n_outl} of them passed the per-impact checks but sit far off their ball type's "
+                        "fit\n(fit outliers, listed last with their residuals)." if n_outl else ""),
+                     size=9.5, dy=0.3 + (0.34 if n_outl else 0.17))
         for x, label in ((x_id, "Impact"), (x_ball, "Ball type"), (x_reason, "Reason")):
             fig.text(x / w, 1 - cur.y / h, label, fontsize=9, weight="bold", va="top")
         cur.skip(0.2)
