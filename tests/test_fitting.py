@@ -273,3 +273,39 @@ def test_bootstrap_keeps_resamples_and_bands_are_ordered():
     new_tc = s.contact_time_s * (1 + 0.004 * rng.standard_normal((200, SPEEDS.size)))
     inside = (new_tc >= c["contact_time_s_pred_lo"]) & (new_tc <= c["contact_time_s_pred_hi"])
     assert 0.85 <= inside.mean() <= 0.995
+
+
+def test_fit_outliers_flow_into_impacts_table_and_fit_arrays():
+    """pipeline.mark_fit_outliers names the planted impact; impacts.csv says used_in_fit
+    false with the note; fit_arrays leaves it out; excluded impacts stay unused."""
+    import xarray as xr
+    from types import SimpleNamespace
+
+    from ballimpact.archive import impacts_table
+    from ballimpact.pipeline import fit_arrays, mark_fit_outliers
+
+    p = BALLS["pressurised"].params
+    vin, tc, e = _impacts(p, n=10, seed=6, tc_noise=0.004, cor_noise=0.003)
+    tc[3] *= 1.15
+    n = vin.size + 1  # one more impact, excluded by processing
+    status = ["ok"] * vin.size + ["excluded"]
+    ds = xr.Dataset({
+        "impact_id": ("impact", [f"p-{i:03d}" for i in range(n)]),
+        "impact_ball": ("impact", ["pressurised"] * n),
+        "status": ("impact", status),
+        "reason": ("impact", [""] * vin.size + ["no contact found"]),
+        "vin_m_s": ("impact", np.append(vin, np.nan)),
+        "contact_time_ms": ("impact", np.append(tc * 1e3, np.nan)),
+        "cor": ("impact", np.append(e, np.nan)),
+        "impact_mass_kg": ("impact", np.full(n, p.mass_kg)),
+    })
+    balls = {"pressurised": SimpleNamespace(mass_kg=p.mass_kg, kb0_N_m=p.kb0_N_m)}
+    out = mark_fit_outliers(ds, balls)
+    assert out["used_in_fit"].values.tolist() == [1, 1, 1, 0, 1, 1, 1, 1, 1, 1, 0]
+    table = impacts_table(out)
+    assert table["used_in_fit"].tolist() == ["true"] * 3 + ["false"] + ["true"] * 6 + ["false"]
+    assert table["fit_note"][3].startswith("fit outlier (contact time): TC +1")
+    assert table["fit_note"][10] == ""
+    arrays = fit_arrays(out, "pressurised", p.mass_kg)
+    assert arrays["vin_m_s"].size == 9
+    assert_allclose(np.sort(arrays["vin_m_s"]), np.sort(np.delete(vin, 3)), rtol=0)
