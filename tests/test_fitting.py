@@ -256,6 +256,24 @@ def test_batched_lm_started_at_the_optimum_counts_as_converged():
     assert_allclose(p, np.repeat(coef[None], 2, axis=0), atol=1e-4)
 
 
+def test_bootstrap_resample_equal_to_the_data_started_at_the_optimum_is_converged():
+    """The real model: a resample that is the data itself (all weights 1), started at the
+    joint optimum, is converged before any step (no iteration cap involved)."""
+    from ballimpact.fitting import _batched_lm, _full_bounds, _residuals
+
+    p = BALLS["oversize"].params
+    vin, tc, e = _impacts(p, seed=12, tc_noise=0.004, cor_noise=0.003)
+    f = fit_ball_model(vin, tc, e, p.mass_kg, kb0_N_m=p.kb0_N_m, n_bootstrap=0, detect_outliers=False)
+    theta = f.result.x
+    lo, hi = _full_bounds(3)
+
+    def resid(pts, rows):
+        return _residuals(pts, vin, tc, e, p.mass_kg, p.kb0_N_m, f.contact_time_scatter, f.cor_scatter)
+
+    pts, conv = _batched_lm(resid, np.repeat(theta[None], 3, axis=0), lo, hi, max_iter=0)
+    assert conv.all()
+
+
 def test_bootstrap_keeps_resamples_and_bands_are_ordered():
     p = BALLS["punctured"].params
     vin, tc, e = _impacts(p, seed=8, tc_noise=0.004, cor_noise=0.003)
