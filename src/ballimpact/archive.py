@@ -474,7 +474,8 @@ def fit_dataset(
 
     Parameters in the units of Table 2 of Goodwill & Haake 2004 with their 95 %
     intervals, the model curves TC [ms], COR [-] and peak force [N] on
-    :data:`SPEED_GRID_M_S` with 95 % bands (:func:`ballimpact.fitting.model_curves`),
+    :data:`SPEED_GRID_M_S` with 95 % confidence and prediction bands
+    (:func:`ballimpact.fitting.model_curves`), kB(10 mm) and kB(20 mm) with intervals,
     the force components of Eq. (14) at :data:`COMPONENT_SPEED_M_S` on 0.01 ms
     steps, the stiffness law kB(x) of Eq. (4) on :data:`STIFFNESS_X_M`, and the
     paper's Table 2 values.

@@ -275,7 +275,9 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     one chunk (none dropped, none twice). The session kCAL check
     (:func:`ballimpact.processing.flag_calibration_outliers`) excludes impacts whose
     calibration factor is far from the session's typical value; the session median
-    and robust standard deviation of kCAL [N/V] go into the file's attributes.
+    and robust standard deviation of kCAL [N/V] go into the file's attributes. Then
+    the fit outliers of every ball type are named (:func:`mark_fit_outliers`:
+    ``used_in_fit``, ``fit_note``), so that impacts.csv carries them.
 
     Parameters
     ----------
@@ -456,7 +458,10 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     Fit the ball model (kB(0), AK, a, AC) to the ok impacts of one ball type.
 
     Rule ``fit_ball``: :func:`ballimpact.fitting.fit_ball_model` on the impacts with
-    status ok, kB(0) fixed when session.yaml gives ``kb0_kN_m``, else extrapolated.
+    status ok that are not fit outliers (named by :func:`mark_fit_outliers` in rule
+    ``collect_impacts``; their ids go into ``fit_message``, their count into
+    ``n_fit_outliers``), kB(0) fixed when session.yaml gives ``kb0_kN_m``, else
+    extrapolated (or fitted, when impacts reach below 10 m/s).
     A ball whose fit fails (e.g. fewer than 3 ok impacts) still gets a file, with NaN
     parameters and the reason in ``fit_message``, so the rest of the session goes on.
 
