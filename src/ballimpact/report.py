@@ -27,10 +27,13 @@ FIGURE_CAPTIONS = {
         "Contact time and coefficient of restitution against inbound speed",
         "Each row is one ball type. Circles are the good impacts of this session (contact time TC from "
         "the force trace, COR = VB'/VB from the light gates); the black line is the improved model "
-        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts and the shaded "
-        "area its 95 % band from the parameter uncertainty. TC is set by the stiffness law (AK, a), COR "
-        "mainly by the damping constant AC. The paper reports agreement within about 5 %; points well "
-        "outside the band point to a poor fit or to impacts that deserve a look.",
+        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts, the shaded "
+        "area its 95 % confidence band (where the curve lies, from the parameter uncertainty) and the "
+        "dashed lines the 95 % prediction band (where the next impact of this ball type will fall: "
+        "parameter uncertainty plus the impacts' own scatter). Red crosses are fit outliers: good "
+        "impacts left out of the fit because they sit far off their siblings' curve (listed with their "
+        "residuals among the excluded impacts). TC is set by the stiffness law (AK, a), COR mainly by "
+        "the damping constant AC. The paper reports agreement within about 5 %.",
     ),
     "fig8_stiffness.png": (
         "Structural stiffness against centre-of-mass displacement",
