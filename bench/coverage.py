@@ -1,12 +1,23 @@
 """Coverage of the fitted parameters' 95 % intervals on model-generated data.
 
-For each seed and ball type: 10 impacts at random speeds in 14-30 m/s simulated
-with known parameters (Table 2, plus a ball unlike Table 2), measurement noise
-added (TC 0.4 % relative, COR 0.003 absolute, the scatter our processing leaves
-on synthetic sessions), then fitted with ``fit_ball_model``; counts how often the
-true AK, a and AC lie inside the reported intervals.
+For each seed and ball type (Table 2 and a ball unlike Table 2): 10 impacts at random
+speeds in 14-30 m/s (``--vmin`` to change the lowest speed) simulated with known
+parameters, measurement noise added (TC 0.4 % relative, COR 0.003 absolute, the
+scatter our processing leaves on synthetic sessions), optionally one planted outlier
+per ball type (``--outlier``: TC +15 %, COR -6 % or inbound speed +4 %, in turn by
+seed), then fitted with ``fit_ball_model`` (intervals only, no bootstrap). Counts how
+often the true AK, a, AC, kB(20 mm) (and kB(0) when estimated) lie inside the reported
+intervals, the median relative interval width, how often the planted outlier was named
+and how many good impacts were removed (sessions of the four Table 2 balls with no
+removal at all).
 
-    python bench/coverage.py --seeds 20 [--kb0 config|extrapolated] [--json]
+    python bench/coverage.py --seeds 100 --kb0 config|extrapolated|both --outlier no|yes|both \
+        [--jsonl bench/out/records.jsonl] [--json]
+    python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
+    python bench/coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
+
+With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
+run can be stopped and summarised at any time.
 """
 
 from __future__ import annotations
@@ -14,52 +25,187 @@ from __future__ import annotations
 import argparse
 import json
 import time
+import warnings
 
 import numpy as np
 
 from ballimpact.balls import BALLS, BallModelParameters
-from ballimpact.fitting import fit_ball_model
+from ballimpact.fitting import FitError, fit_ball_model
 from ballimpact.model import simulate_impact
 
 UNLIKE_TABLE2 = BallModelParameters.from_table_units(58.0, 30.0, 40_000, 1.9, 2.5)
+KINDS = ("tc+15%", "cor-6%", "vin+4%")
 
 
-def run(seeds: int, kb0_mode: str, n_impacts: int = 10, tc_noise=0.004, cor_noise=0.003):
+def session(p, rng, n_impacts=10, vmin=14.0, vmax=30.0, tc_noise=0.004, cor_noise=0.003, outlier=None):
+    """Impacts (vin, tc, cor) of one ball type; ``outlier`` plants one bad impact (index returned)."""
+    vin = np.sort(rng.uniform(vmin, vmax, n_impacts))
+    s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+    tc = s.contact_time_s * (1 + tc_noise * rng.standard_normal(n_impacts))
+    e = s.cor + cor_noise * rng.standard_normal(n_impacts)
+    bad = None
+    if outlier is not None:
+        bad = int(rng.integers(n_impacts))
+        if outlier == "tc+15%":
+            tc[bad] *= 1.15
+        elif outlier == "cor-6%":
+            e[bad] *= 0.94
+        else:  # the gates read the inbound speed 4 % high: vin up, COR = vout / vin down
+            vin[bad] *= 1.04
+            e[bad] /= 1.04
+    return vin, tc, e, bad
+
+
+def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
+    """One ball type of one seed: a record of hits, widths and removals."""
+    kind = KINDS[seed % 3] if outlier else None
+    vin, tc, e, bad = session(p, rng, n_impacts, vmin=vmin, outlier=kind)
+    names = ["ak", "a", "ac", "kb_20mm"] + (["kb0"] if kb0_mode == "extrapolated" else [])
+    rec = {"seed": seed, "ball": key, "kb0": kb0_mode, "outlier": bool(outlier), "kind": kind}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = fit_ball_model(vin, tc, e, p.mass_kg, n_bootstrap=0, seed=seed,
+                               kb0_N_m=p.kb0_N_m if kb0_mode == "config" else None)
+    except FitError as exc:
+        rec["fail"] = str(exc)
+        return rec
+    removed = [int(i) for i in np.flatnonzero(~f.used)]
+    rec["planted_named"] = bad in removed if bad is not None else None
+    rec["false_removed"] = int(sum(i != bad for i in removed))
+    rec["n"] = int(vin.size)
+    rec["bad"] = bad
+    rec["esd_steps"] = [[int(i), float(pv)] for i, pv in f.outlier_steps]
+    truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
+    rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
+    rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
+    return rec
+
+
+def run(seeds: int, modes, vmin: float = 14.0, n_impacts: int = 10, first_seed: int = 0, jsonl=None):
+    """Records of every (seed, mode, ball type); modes: list of (kb0_mode, outlier)."""
     sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
-    hits = {k: {"ak": 0, "a": 0, "ac": 0} for k in sets}
-    total = 0
-    for seed in range(seeds):
-        rng = np.random.default_rng(1000 + seed)
-        for key, p in sets.items():
-            vin = np.sort(rng.uniform(14, 30, n_impacts))
-            s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
-            tc = s.contact_time_s * (1 + tc_noise * rng.standard_normal(n_impacts))
-            e = s.cor + cor_noise * rng.standard_normal(n_impacts)
-            f = fit_ball_model(vin, tc, e, p.mass_kg,
-                               kb0_N_m=p.kb0_N_m if kb0_mode == "config" else None, seed=seed)
-            for name, true in (("ak", p.ak), ("a", p.a), ("ac", p.ac)):
-                lo, hi = getattr(f, f"{name}_lo"), getattr(f, f"{name}_hi")
-                hits[key][name] += int(lo <= true <= hi)
-        total += 1
-    return {k: {n: v / total for n, v in h.items()} for k, h in hits.items()}, total
+    records = []
+    for seed in range(first_seed, first_seed + seeds):
+        for kb0_mode, outlier in modes:
+            rng = np.random.default_rng(1000 + seed)
+            for key, p in sets.items():
+                rec = fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=vmin, n_impacts=n_impacts)
+                records.append(rec)
+                if jsonl:
+                    with open(jsonl, "a") as fh:
+                        fh.write(json.dumps(rec) + "\n")
+    return records
+
+
+def summarise(records):
+    """Coverage per (mode, ball type, quantity), pooled, median widths, outlier figures."""
+    out = {}
+    for kb0_mode, outlier in sorted({(r["kb0"], r["outlier"]) for r in records}):
+        rs = [r for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "hit" in r]
+        seeds = sorted({r["seed"] for r in rs})
+        balls = list(dict.fromkeys(r["ball"] for r in rs))
+        names = list(rs[0]["hit"]) if rs else []
+        cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
+        pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
+        width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
+        clean = []
+        for s in seeds:
+            t2 = [r for r in rs if r["seed"] == s and r["ball"] in BALLS]
+            clean.append(all(r["false_removed"] == 0 for r in t2))
+        named = [r["planted_named"] for r in rs if r["planted_named"] is not None]
+        by_kind = {k: float(np.mean([r["planted_named"] for r in rs if r["kind"] == k])) for k in KINDS
+                   if any(r["kind"] == k for r in rs)}
+        out[f"kb0 {kb0_mode}, {'one outlier per ball' if outlier else 'no outlier'}"] = {
+            "seeds": len(seeds), "fits": len(rs),
+            "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
+            "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
+            "good_impacts_removed_per_fit": float(np.mean([r["false_removed"] for r in rs])) if rs else float("nan"),
+            "planted_outlier_named": float(np.mean(named)) if named else None,
+            "planted_outlier_named_by_kind": by_kind or None,
+        }
+    return out
+
+
+def noise_free(vmin=14.0, vmax=30.0, n_impacts=10):
+    """kB(0) on noise-free model impacts (evenly spaced speeds): the straight line, the
+    quadratic, the reported interval and kB(20 mm), per Table 2 ball."""
+    rows = []
+    for key, b in BALLS.items():
+        p = b.params
+        vin = np.linspace(vmin, vmax, n_impacts)
+        s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = fit_ball_model(vin, s.contact_time_s, s.cor, p.mass_kg, n_bootstrap=0)
+        kb20 = p.kb0_N_m + p.ak * 0.020**p.a
+        rows.append({
+            "ball": key, "kb0_source": f.kb0_source, "true_kb0_kN_m": p.kb0_N_m / 1e3,
+            "kb0_kN_m": f.kb0_N_m / 1e3, "kb0_error_pct": 100 * (f.kb0_N_m / p.kb0_N_m - 1),
+            "linear_error_pct": 100 * (f.kb0_linear_N_m / p.kb0_N_m - 1),
+            "quadratic_error_pct": 100 * (f.kb0_quadratic_N_m / p.kb0_N_m - 1),
+            "kb0_lo_kN_m": f.kb0_lo / 1e3, "kb0_hi_kN_m": f.kb0_hi / 1e3,
+            "kb0_inside": bool(f.kb0_lo <= p.kb0_N_m <= f.kb0_hi),
+            "kb_20mm_error_pct": 100 * (f.kb_20mm_N_m / kb20 - 1),
+            "kb_20mm_inside": bool(f.kb_20mm_lo <= kb20 <= f.kb_20mm_hi),
+        })
+    return rows
+
+
+def _print(summary):
+    for mode, s in summary.items():
+        print(f"{mode}: {s['seeds']} seeds, {s['fits']} fits, {s['failures']} failures")
+        for k, c in s["coverage"].items():
+            print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
+        print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
+        print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        print(f"  sessions (4 Table 2 balls) without a good impact removed: {s['sessions_without_false_removal']:.3f}")
+        if s["planted_outlier_named"] is not None:
+            print(f"  planted outlier named: {s['planted_outlier_named']:.3f} "
+                  + ", ".join(f"{k} {v:.2f}" for k, v in s["planted_outlier_named_by_kind"].items()))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
-    ap.add_argument("--kb0", choices=("config", "extrapolated"), default="config")
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--kb0", choices=("config", "extrapolated", "both"), default="config")
+    ap.add_argument("--outlier", choices=("no", "yes", "both"), default="no",
+                    help="plant one outlier per ball type")
+    ap.add_argument("--vmin", type=float, default=14.0, help="lowest inbound speed [m/s]")
+    ap.add_argument("--jsonl", help="append one JSON record per fit to this file (a run can be stopped)")
+    ap.add_argument("--summarise", nargs="+", metavar="JSONL", help="only summarise these record files")
+    ap.add_argument("--noise-free", action="store_true",
+                    help="only kB(0) of noise-free impacts, evenly spaced from --vmin to 30 m/s")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
-    t0 = time.perf_counter()
-    cov, n = run(args.seeds, args.kb0)
-    out = {"seeds": n, "kb0": args.kb0, "coverage": cov, "seconds": time.perf_counter() - t0}
-    if args.json:
-        print(json.dumps(out, indent=2))
+    if args.noise_free:
+        rows = noise_free(vmin=args.vmin)
+        if args.json:
+            print(json.dumps(rows, indent=2))
+        else:
+            for r in rows:
+                print(f"{r['ball']:13s} kB(0) {r['kb0_source']}: {r['kb0_kN_m']:.2f} kN/m ({r['kb0_error_pct']:+.1f} %), "
+                      f"interval [{r['kb0_lo_kN_m']:.2f}, {r['kb0_hi_kN_m']:.2f}] holds {r['true_kb0_kN_m']:.0f}: "
+                      f"{r['kb0_inside']}; line {r['linear_error_pct']:+.1f} %, quadratic "
+                      f"{r['quadratic_error_pct']:+.1f} %; kB(20 mm) {r['kb_20mm_error_pct']:+.2f} % "
+                      f"(inside: {r['kb_20mm_inside']})")
+        return
+    if args.summarise:
+        records = [json.loads(line) for path in args.summarise for line in open(path) if line.strip()]
     else:
-        print(f"coverage of nominal 95 % intervals over {n} seeds (kB(0) {args.kb0}):")
-        for k, c in cov.items():
-            print(f"  {k:15s} AK {c['ak']:.2f}  a {c['a']:.2f}  AC {c['ac']:.2f}")
-        print(f"({out['seconds']:.0f} s)")
+        kb0s = ("config", "extrapolated") if args.kb0 == "both" else (args.kb0,)
+        outs = (False, True) if args.outlier == "both" else (args.outlier == "yes",)
+        t0 = time.perf_counter()
+        records = run(args.seeds, [(k, o) for k in kb0s for o in outs], vmin=args.vmin,
+                      first_seed=args.first_seed, jsonl=args.jsonl)
+        print(f"({time.perf_counter() - t0:.0f} s)")
+    summary = summarise(records)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        _print(summary)
 
 
 if __name__ == "__main__":

@@ -7,10 +7,14 @@
 Keys:
   model_impacts_per_s       batched simulate_impact, Table 2 ball 1, speeds 14-30 m/s, one process
   fit_seconds               fit_ball_model for every ball type of raw/demo-2004, intervals included
-                            (processing the session is not timed)
+                            (processing the session is not timed); fit_cpu_seconds: its CPU time
   workflow_seconds_<n>      `snakemake --cores 2` wall time on a synthetic session of n impacts
   peak_memory_mb_<n>        largest resident set of any process of that run (getrusage of children)
   process_seconds_per_impact  process_impact on raw/demo-2004, one core
+  bootstrap_dropped(_pct)   bootstrap resamples dropped (unconverged) over the demo's ball types
+  fit_outliers              impacts the fit-outlier search named on the demo
+  no_kb0_*                  the same on the demo remade by `ballimpact synth --seed 2004 --no-kb0`
+                            (kB(0) extrapolated); --fit-only runs just the fit figures
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
 that time plus the extra impacts' processing time (process_seconds_per_impact, shared by
 2 cores), peak memory is the 50-impact run's; the model runs on 4 000 instead of 20 000
@@ -65,11 +69,52 @@ def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
     apply_calibration_check(results)
     ds = impacts_dataset(results)
     inputs = {key: fit_arrays(ds, key, ball.mass_kg) for key, ball in session.meta.balls.items()}
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
+    fits = {}
     for key, ball in session.meta.balls.items():
-        fit_ball_model(**inputs[key], kb0_N_m=ball.kb0_N_m, n_bootstrap=n_bootstrap)
-    return {"fit_seconds": time.perf_counter() - t0, "fit_ball_types": len(inputs),
-            "process_seconds_per_impact": process_s}
+        fits[key] = fit_ball_model(**inputs[key], kb0_N_m=ball.kb0_N_m, n_bootstrap=n_bootstrap)
+    # CPU seconds of this process too: the wall time grows with other work on the machine
+    out = {"fit_seconds": time.perf_counter() - t0, "fit_cpu_seconds": time.process_time() - c0,
+           "fit_ball_types": len(inputs), "process_seconds_per_impact": process_s}
+    out.update(_fit_summary(fits, n_bootstrap, ""))
+    return out
+
+
+def _fit_summary(fits, n_bootstrap, prefix) -> dict:
+    """Bootstrap resamples dropped and fit outliers named, over the ball types of one session."""
+    dropped = sum(f.bootstrap_dropped for f in fits.values())
+    return {
+        f"{prefix}bootstrap_dropped": int(dropped),
+        f"{prefix}bootstrap_dropped_pct": 100.0 * dropped / (n_bootstrap * len(fits)) if fits else float("nan"),
+        f"{prefix}fit_outliers": int(sum(int((~f.used).sum()) for f in fits.values())),
+        f"{prefix}kb0_sources": sorted({f.kb0_source for f in fits.values()}),
+    }
+
+
+def bench_fit_no_kb0(n_bootstrap: int = 200) -> dict:
+    """The demo remade without kB(0) in session.yaml (`ballimpact synth --seed 2004 --no-kb0`),
+    processed and fitted (kB(0) extrapolated): fit time, bootstrap resamples dropped."""
+    from ballimpact.archive import impacts_dataset
+    from ballimpact.fitting import fit_ball_model
+    from ballimpact.pipeline import fit_arrays
+    from ballimpact.processing import apply_calibration_check, iter_process
+    from ballimpact.session import read_session
+
+    with tempfile.TemporaryDirectory(prefix="ballimpact-nokb0-") as tmp:
+        sdir = Path(tmp) / "demo-2004-no-kb0"
+        subprocess.run([str(Path(sys.executable).parent / "ballimpact"), "synth", str(sdir), "--seed", "2004",
+                        "--no-kb0"], check=True, capture_output=True, text=True)
+        session = read_session(sdir)
+        results = list(iter_process(session))
+        apply_calibration_check(results)
+        ds = impacts_dataset(results)
+        t0, c0 = time.perf_counter(), time.process_time()
+        fits = {key: fit_ball_model(**fit_arrays(ds, key, ball.mass_kg), kb0_N_m=ball.kb0_N_m,
+                                    n_bootstrap=n_bootstrap)
+                for key, ball in session.meta.balls.items()}
+        out = {"no_kb0_fit_seconds": time.perf_counter() - t0, "no_kb0_fit_cpu_seconds": time.process_time() - c0}
+    out.update(_fit_summary(fits, n_bootstrap, "no_kb0_"))
+    return out
 
 
 def _run_workflow(n_impacts: int, workdir: Path) -> tuple[float, float]:
@@ -134,13 +179,17 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--quick", action="store_true", help="smaller runs, same keys (< 1 min)")
     ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
+    ap.add_argument("--fit-only", action="store_true",
+                    help="only the fit figures (demo and the demo made with synth --no-kb0)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
-    figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
-    figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
+    if not args.fit_only:
+        figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
+        figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
     figures.update(bench_fit(REPO / "raw" / "demo-2004", n_bootstrap=200))
-    if not args.skip_workflow:
+    figures.update(bench_fit_no_kb0(n_bootstrap=200))
+    if not args.skip_workflow and not args.fit_only:
         figures.update(bench_workflow(SIZES, args.quick, figures["process_seconds_per_impact"]))
     if args.json:
         print(json.dumps(figures, indent=2))

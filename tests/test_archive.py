@@ -34,11 +34,13 @@ SPEC_IMPACT_COLUMNS = [
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
     "kv_stiffness_kN_m", "kv_damping_N_s_m",
+    "used_in_fit", "fit_note",  # v1.1
 ]
 SPEC_PARAMETER_COLUMNS = [
     "ball", "n_impacts", "mass_kg", "kb0_kN_m", "kb0_source", "ak_kN_m", "a", "ac_kN_s_m3",
     "ak_lo", "ak_hi", "a_lo", "a_hi", "ac_lo", "ac_hi", "kb0_lo", "kb0_hi",
     "contact_time_rmse_pct", "cor_rmse_pct",
+    "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m", "kb_20mm_lo", "kb_20mm_hi",  # v1.1
     "itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm", "fit_warnings",
 ]
 

@@ -25,6 +25,7 @@ IMPACTS_CSV_COLUMNS = [  # docs/outputs.md, in order
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
     "kv_stiffness_kN_m", "kv_damping_N_s_m",
+    "used_in_fit", "fit_note",  # v1.1
 ]
 
 def run_snakemake(*args, cwd=REPO, check=None):

@@ -75,6 +75,8 @@ IMPACT_COLUMNS = [
     "max_displacement_mm",
     "kv_stiffness_kN_m",
     "kv_damping_N_s_m",
+    "used_in_fit",
+    "fit_note",
     "vin_gate_m_s",
     "vout_gate_m_s",
 ]
@@ -102,6 +104,12 @@ PARAMETER_COLUMNS = [
     "kb0_hi",
     "contact_time_rmse_pct",
     "cor_rmse_pct",
+    "kb_10mm_kN_m",
+    "kb_10mm_lo",
+    "kb_10mm_hi",
+    "kb_20mm_kN_m",
+    "kb_20mm_lo",
+    "kb_20mm_hi",
     "itf_rebound_pred_cm",  # v1.1: the ITF 254 cm drop test predicted by the fitted model (ballimpact.itf)
     "itf_rebound_pred_cm_lo",
     "itf_rebound_pred_cm_hi",
@@ -205,6 +213,8 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
         "share of the contact after 0.2 ms where the fitted model force is within 10 % of the measured peak",
     ),
     "model_rms_N": ("N", "RMS difference between fitted model and measured force over the contact"),
+    "used_in_fit": ("1", "1 when this ok impact was used in its ball type's fit, 0 otherwise"),
+    "fit_note": ("1", "why an ok impact was left out of the fit (fit outlier: its residuals and the test), else empty"),
     # series (impact, sample)
     "time_s": ("s", "time since contact start"),
     "voltage_V": ("V", "force-plate voltage over the contact (conditioned, polarity applied)"),
@@ -237,6 +247,16 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "contact_time_rmse_pct": ("percent", "relative RMS contact-time residual over the impacts used"),
     "cor_rmse_pct": ("percent", "relative RMS COR residual over the impacts used"),
     "fit_message": ("1", "fit status message"),
+    "kb_10mm_kN_m": ("kN m-1", "structural stiffness kB at 10 mm displacement, kB(0) + AK x^a (Eq. 4)"),
+    "kb_10mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(10 mm)"),
+    "kb_10mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(10 mm)"),
+    "kb_20mm_kN_m": ("kN m-1", "structural stiffness kB at 20 mm displacement, kB(0) + AK x^a (Eq. 4)"),
+    "kb_20mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(20 mm)"),
+    "kb_20mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(20 mm)"),
+    "contact_time_scatter_pct": ("percent", "relative scatter of the impacts about the fitted TC curve (unbiased)"),
+    "cor_scatter_pct": ("percent", "relative scatter of the impacts about the fitted COR curve (unbiased)"),
+    "bootstrap_dropped": ("1", "bootstrap resamples dropped (refit not converged)"),
+    "n_fit_outliers": ("1", "ok impacts of the ball type left out of the fit as fit outliers"),
     "interval_method": ("1", "how the 95 % intervals were obtained"),
     "paper_kb0_kN_m": ("kN m-1", "kB(0) of Table 2 in Goodwill & Haake 2004"),
     "paper_ak_kN_m": (_AK_UNITS, "AK of Table 2 in Goodwill & Haake 2004"),
@@ -259,6 +279,10 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "model_cor_lo": ("1", "lower end of the 95 % band of the model COR"),
     "model_cor_hi": ("1", "upper end of the 95 % band of the model COR"),
     "model_peak_force_N": ("N", "fitted model peak force"),
+    "model_contact_time_ms_pred_lo": ("ms", "lower end of the 95 % prediction band of one impact's contact time"),
+    "model_contact_time_ms_pred_hi": ("ms", "upper end of the 95 % prediction band of one impact's contact time"),
+    "model_cor_pred_lo": ("1", "lower end of the 95 % prediction band of one impact's COR"),
+    "model_cor_pred_hi": ("1", "upper end of the 95 % prediction band of one impact's COR"),
     # components (ball, model_time)
     "comp_total_force_N": ("N", "total model force at 20 m/s (Eq. 14)"),
     "comp_stiffness_force_N": ("N", "structural stiffness force kB x at 20 m/s"),
@@ -523,7 +547,8 @@ def fit_dataset(
 
     Parameters in the units of Table 2 of Goodwill & Haake 2004 with their 95 %
     intervals, the model curves TC [ms], COR [-] and peak force [N] on
-    :data:`SPEED_GRID_M_S` with 95 % bands (:func:`ballimpact.fitting.model_curves`),
+    :data:`SPEED_GRID_M_S` with 95 % confidence and prediction bands
+    (:func:`ballimpact.fitting.model_curves`), kB(10 mm) and kB(20 mm) with intervals,
     the force components of Eq. (14) at :data:`COMPONENT_SPEED_M_S` on 0.01 ms
     steps, the stiffness law kB(x) of Eq. (4) on :data:`STIFFNESS_X_M`, and the
     paper's Table 2 values.
@@ -566,14 +591,17 @@ def fit_dataset(
     n_speed, n_x = SPEED_GRID_M_S.size, STIFFNESS_X_M.size
     curves = {k: np.full(n_speed, nan) for k in (
         "model_contact_time_ms", "model_contact_time_ms_lo", "model_contact_time_ms_hi",
-        "model_cor", "model_cor_lo", "model_cor_hi", "model_peak_force_N")}
+        "model_cor", "model_cor_lo", "model_cor_hi", "model_peak_force_N",
+        "model_contact_time_ms_pred_lo", "model_contact_time_ms_pred_hi", "model_cor_pred_lo", "model_cor_pred_hi")}
     comps = {k: np.full(MODEL_TIME_STEPS, nan) for k in (
         "comp_total_force_N", "comp_stiffness_force_N", "comp_damping_force_N",
         "comp_momentum_flux_force_N", "comp_displacement_m")}
     stiffness = np.full(n_x, nan)
     params = {k: nan for k in (
         "kb0_kN_m", "kb0_lo", "kb0_hi", "ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi",
-        "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct")}
+        "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct",
+        "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m", "kb_20mm_lo", "kb_20mm_hi",
+        "contact_time_scatter_pct", "cor_scatter_pct", "bootstrap_dropped")}
     if fit is None:
         text = {"kb0_source": kb0_source, "fit_message": message or "no fit", "interval_method": "none"}
         mass, n_used = float(mass_kg), int(n_impacts)
@@ -589,6 +617,15 @@ def fit_dataset(
             ak_a_correlation=fit.ak_a_correlation,
             contact_time_rmse_pct=fit.contact_time_rmse_pct, cor_rmse_pct=fit.cor_rmse_pct,
         )
+        # v1.1: the well-determined stiffness at 10 and 20 mm, scatter and bootstrap drops
+        # (getattr: a fit object without them leaves NaN)
+        for mm in (10, 20):
+            for name, attr in ((f"kb_{mm}mm_kN_m", f"kb_{mm}mm_N_m"), (f"kb_{mm}mm_lo", f"kb_{mm}mm_lo"),
+                               (f"kb_{mm}mm_hi", f"kb_{mm}mm_hi")):
+                params[name] = float(getattr(fit, attr, nan)) / kn
+        params["contact_time_scatter_pct"] = 100.0 * float(getattr(fit, "contact_time_scatter", nan))
+        params["cor_scatter_pct"] = 100.0 * float(getattr(fit, "cor_scatter", nan))
+        params["bootstrap_dropped"] = float(getattr(fit, "bootstrap_dropped", nan))
         notes = list(getattr(fit, "messages", None) or [])
         if message:
             notes.append(message)
@@ -608,8 +645,12 @@ def fit_dataset(
             ("model_contact_time_ms_hi", "contact_time_s_hi", 1e3), ("model_cor", "cor", 1.0),
             ("model_cor_lo", "cor_lo", 1.0), ("model_cor_hi", "cor_hi", 1.0),
             ("model_peak_force_N", "peak_force_N", 1.0),
+            ("model_contact_time_ms_pred_lo", "contact_time_s_pred_lo", 1e3),
+            ("model_contact_time_ms_pred_hi", "contact_time_s_pred_hi", 1e3),
+            ("model_cor_pred_lo", "cor_pred_lo", 1.0), ("model_cor_pred_hi", "cor_pred_hi", 1.0),
         ):
-            curves[key] = np.asarray(mc[src], dtype=float) * scale
+            if src in mc:
+                curves[key] = np.asarray(mc[src], dtype=float) * scale
         m = min(comp.time_s.size, MODEL_TIME_STEPS)
         for key, arr in (
             ("comp_total_force_N", comp.force_N), ("comp_stiffness_force_N", comp.stiffness_force_N),
@@ -825,6 +866,14 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
         elif col == "ball":
             data[col] = _column(ds, "impact_ball", n, text=True)
         elif col in ("status", "reason"):
+            data[col] = _column(ds, col, n, text=True)
+        elif col == "used_in_fit":
+            # v1.1: set by the fit-outlier search; without it every ok impact is used
+            ok = np.array(_column(ds, "status", n, text=True)) == "ok"
+            if "used_in_fit" in ds.variables:
+                ok &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
+            data[col] = np.where(ok, "true", "false")
+        elif col == "fit_note":
             data[col] = _column(ds, col, n, text=True)
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)

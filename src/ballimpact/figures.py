@@ -300,16 +300,26 @@ def _draw_contact_time_cor(fig, ds):
             (ax_tc, "contact_time_ms", "model_contact_time_ms", "Contact time TC [ms]"),
             (ax_cor, "cor", "model_cor", "COR [-]"),
         ):
+            # fit outliers (used_in_fit 0) are drawn apart, as crosses
+            outl = np.zeros(good.size, dtype=bool)
+            if "used_in_fit" in ds and good.size:
+                outl = np.asarray(ds["used_in_fit"].values[good], dtype=float) <= 0
             vin = ds["vin_m_s"].values[good] if good.size else np.empty(0)
             y = ds[meas].values[good] if good.size else np.empty(0)
             if good.size:
-                ax.plot(vin, y, "o", color=c, ms=4.5, mfc="none", mew=1.2, label="measured")
+                ax.plot(vin[~outl], y[~outl], "o", color=c, ms=4.5, mfc="none", mew=1.2, label="measured")
+            if outl.any():
+                ax.plot(vin[outl], y[outl], "x", color="crimson", ms=7, mew=1.8, label="fit outlier (left out)")
             curve = _ball_array(ds, model, ball)
             lo, hi = _ball_array(ds, model + "_lo", ball), _ball_array(ds, model + "_hi", ball)
+            plo, phi = _ball_array(ds, model + "_pred_lo", ball), _ball_array(ds, model + "_pred_hi", ball)
             if speed is not None and curve is not None and np.isfinite(curve).any():
                 _plot_model_curve(ax, ds, ball, speed, curve, color="k")
                 if lo is not None and hi is not None and np.isfinite(lo).any():
-                    ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
+                    ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % confidence (curve)")
+                if plo is not None and phi is not None and np.isfinite(plo).any():
+                    ax.plot(speed, plo, "--", color=c, lw=0.9, label="95 % prediction (one impact)")
+                    ax.plot(speed, phi, "--", color=c, lw=0.9)
             elif good.size:
                 ax.plot([], [], ls="none", label=f"model: {_NO_FIT}")
             else:
@@ -348,8 +358,11 @@ def fig_contact_time_cor(ds) -> Figure:
     """Measured contact time and COR against inbound speed with the fitted model (paper Fig. 7).
 
     One row per ball type: TC [ms] and COR [-] of the good impacts against VB
-    [m/s], the fitted model curve (Eq. (14) in Goodwill & Haake 2004) and its 95 %
-    band. Panels of a ball without good impacts or fit say so.
+    [m/s], the fitted model curve (Eq. (14) in Goodwill & Haake 2004), its 95 %
+    confidence band (shaded: where the curve lies) and its 95 % prediction band
+    (dashed: where the next impact of this ball type will fall). Fit outliers (good
+    impacts left out of the fit) are marked by red crosses. Panels of a ball without
+    good impacts or fit say so.
 
     Parameters
     ----------

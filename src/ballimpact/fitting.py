@@ -1,26 +1,35 @@
 """Fitting the ball model to measured contact times and COR (section 3.4 of Goodwill & Haake 2004).
 
-Method (our reading of section 3.4, made a proper least-squares problem):
+What the code does (details in :func:`fit_ball_model`):
 
-* kB(0) is fixed from session.yaml when given; otherwise it is the zero-speed
-  intercept of a straight line through the per-impact Kelvin-Voigt stiffness
-  (Eq. (2)) against inbound speed (:func:`fit_kb0`).
-* Stage one (:func:`fit_contact_time`): AK and a so that the model's TC matches
-  the measured TC of every impact (the paper used Goal Seek on a trend line; we
-  use least squares on the impacts themselves).
-* Stage two (:func:`fit_restitution`): AC so that the model's COR matches the
-  measured COR, AK and a fixed.
-* Joint refinement (:func:`fit_ball_model`): AK, a and AC on both TC and COR,
-  each residual relative and weighted by the scatter of its own kind, then 95 %
-  intervals by a case-resampling bootstrap over impacts (kB(0) re-extrapolated in
-  every resample when it was extrapolated).
+* Fit outliers (:func:`detect_fit_outliers`): a robust (soft-L1) fit, then each
+  suspect impact is tested against the ordinary fit of the others (externally
+  studentised TC, COR and inbound-speed directions, Bonferroni over the impacts at
+  :data:`OUTLIER_LEVEL` per ball type); at most :data:`OUTLIER_MAX_SHARE` of the
+  impacts are removed, every removal with its residuals in a note.
+* kB(0): fixed from session.yaml when given ("config"; the other parameters are then
+  conditional on it); fitted with AK, a and AC when impacts reach below
+  :data:`LOW_SPEED_M_S` ("fitted"); otherwise the paper's straight-line
+  extrapolation of the Kelvin-Voigt stiffness (Eq. (2), :func:`fit_kb0`,
+  "extrapolated"), with an interval that includes the extrapolation-model
+  uncertainty (the hull with the model's own, curved, extrapolation).
+* Stage one (:func:`fit_contact_time`) and stage two (:func:`fit_restitution`) start
+  a joint least-squares fit on the relative TC and COR residuals of the impacts,
+  each kind weighted by its own unbiased scatter.
+* Intervals (AK, a, AC, kB(10 mm), kB(20 mm), kB(0) when fitted): profile likelihood
+  with an F(1, nu) critical value, nu from Satterthwaite's formula for the two
+  separately estimated scatters. ``bench/coverage.py`` measures their coverage.
+* A case-resampling bootstrap over impacts gives the AK-a correlation and the
+  confidence bands of the model curves; :func:`model_curves` adds the impacts'
+  own scatter for prediction bands.
 
 Internally the stiffness law is parametrised by the stiffness increment at a
 reference displacement, kR = AK xR^a with xR = 20 mm, instead of AK: AK and a
 trade off strongly (a slightly larger a with a much larger AK gives nearly the
 same kB over the displacements reached), and the (log kR, a) pair is far better
 conditioned. Results are reported as AK, a as in Table 2, together with the
-correlation between AK and a.
+correlation between log AK and a, and with the well-determined kB(10 mm) and
+kB(20 mm).
 
 The objective is smooth in the parameters because the model's end of contact is
 interpolated between time steps (see :mod:`ballimpact.model`).
@@ -43,6 +52,12 @@ __all__ = [
     "StageFit",
     "BallFit",
     "FitError",
+    "FitOutliers",
+    "LOW_SPEED_M_S",
+    "OUTLIER_LEVEL",
+    "OUTLIER_MAX_SHARE",
+    "CONVERGENCE_OFFSET",
+    "detect_fit_outliers",
     "fit_kb0",
     "fit_contact_time",
     "fit_restitution",
@@ -58,6 +73,18 @@ PARAMETER_BOUNDS = {
     "a": (0.3, 4.0),
     "ac": (1.0e1, 1.0e5),
 }
+#: Search bounds of kB(0) when it is fitted [N/m].
+KB0_BOUNDS_N_M = (1.0e2, 2.0e5)
+#: kB(0) is fitted with AK, a and AC when some impact is slower than this [m/s].
+LOW_SPEED_M_S = 10.0
+#: Family-wise level of the fit-outlier test per ball type [-].
+OUTLIER_LEVEL = 0.005
+#: Largest share of a ball type's impacts that may be removed as fit outliers [-].
+OUTLIER_MAX_SHARE = 0.2
+#: Relative offset (Bates & Watts 1981) below which a least-squares problem has converged [-]:
+#: the parameters are then within about 1 % of a standard error of the optimum. (1e-3 is
+#: below what the model's finite-difference Jacobian resolves at some optima.)
+CONVERGENCE_OFFSET = 1.0e-2
 _FD_STEP = 1.0e-4  # forward-difference step in the internal parameters (log kR, a, log AC)
 
 
@@ -115,7 +142,7 @@ class BallFit:
     kb0_N_m, kb0_lo, kb0_hi : float
         kB(0) and its 95 % interval [N/m] (interval NaN when fixed from the config).
     kb0_source : str
-        "config" or "extrapolated".
+        "config", "extrapolated" or "fitted" (with AK, a, AC; impacts below LOW_SPEED_M_S).
     ak, ak_lo, ak_hi : float
         AK and its 95 % interval [N/m^(1+a)].
     a, a_lo, a_hi : float
@@ -123,7 +150,7 @@ class BallFit:
     ac, ac_lo, ac_hi : float
         AC and its 95 % interval [N s/m^3].
     ak_a_correlation : float
-        Correlation between AK and a over the bootstrap resamples [-].
+        Correlation between log AK and a over the bootstrap resamples [-].
     contact_time_rmse_pct, cor_rmse_pct : float
         RMS of the relative residuals over the impacts used [%].
     interval_method : str
@@ -134,6 +161,24 @@ class BallFit:
         The joint least-squares result.
     bootstrap : numpy.ndarray
         Resampled parameters, columns kb0 [N/m], ak, a, ac (SI); rows that failed are dropped.
+    kb_10mm_N_m, kb_10mm_lo, kb_10mm_hi, kb_20mm_N_m, kb_20mm_lo, kb_20mm_hi : float
+        Structural stiffness kB(x) = kB(0) + AK x^a (Eq. (4)) at 10 and 20 mm and its
+        95 % interval [N/m].
+    contact_time_scatter, cor_scatter : float
+        Unbiased relative scatter of the impacts about the fitted TC and COR curves [-].
+    scatter_dof : float
+        Residual degrees of freedom of the smaller of the two scatters [-].
+    bootstrap_dropped : int
+        Bootstrap resamples dropped (unconverged refit or no kB(0) extrapolation).
+    used : numpy.ndarray of bool
+        Per impact given: True when used in the fit, False for a fit outlier.
+    outlier_notes : list of str
+        Per impact given: why it was left out of the fit, else empty.
+    outlier_steps : list of (int, float)
+        Steps of the fit-outlier search: (impact index, p value) in order [-].
+    kb0_linear_N_m, kb0_quadratic_N_m : float
+        Linear (the paper's) and quadratic extrapolations of the Kelvin-Voigt
+        stiffness to zero speed [N/m] (NaN when kB(0) is from the config).
     """
 
     mass_kg: float
@@ -158,6 +203,21 @@ class BallFit:
     messages: list[str] = field(default_factory=list)
     result: optimize.OptimizeResult | None = None
     bootstrap: np.ndarray | None = None
+    kb_10mm_N_m: float = float("nan")
+    kb_10mm_lo: float = float("nan")
+    kb_10mm_hi: float = float("nan")
+    kb_20mm_N_m: float = float("nan")
+    kb_20mm_lo: float = float("nan")
+    kb_20mm_hi: float = float("nan")
+    contact_time_scatter: float = float("nan")
+    cor_scatter: float = float("nan")
+    scatter_dof: float = float("nan")
+    bootstrap_dropped: int = 0
+    used: np.ndarray | None = None
+    outlier_notes: list = field(default_factory=list)
+    outlier_steps: list = field(default_factory=list)
+    kb0_linear_N_m: float = float("nan")
+    kb0_quadratic_N_m: float = float("nan")
 
 
 def _as_1d(name, value, n=None):
@@ -235,13 +295,26 @@ def _theta_bounds():
 
 
 def _simulate(theta, vin, mass, kb0):
-    """TC [s] and COR for parameter sets theta (..., 3) at every impact: shape (..., n)."""
-    ak, a, ac = _from_theta(theta)
-    sim = simulate_impact(
-        vin, mass, np.asarray(kb0)[..., None] if np.ndim(kb0) else kb0,
-        ak[..., None], a[..., None], ac[..., None],
-    )
-    return sim.contact_time_s, sim.cor
+    """TC [s] and COR for parameter sets theta (..., 3) at every impact: shape (..., n).
+
+    theta = (log kR, a, log AC), or (..., 4) with log kB(0) last (``kb0`` [N/m] is then
+    ignored). Parameter sets that are not finite and positive give NaN.
+    """
+    theta = np.asarray(theta, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        ak, a, ac = _from_theta(theta[..., :3])
+        kb0 = np.exp(theta[..., 3]) if theta.shape[-1] == 4 else np.asarray(kb0, dtype=float)
+    ak, a, ac, kb0 = np.broadcast_arrays(ak, a, ac, kb0)
+    good = (np.isfinite(ak) & (ak > 0) & np.isfinite(a) & (a > 0) & np.isfinite(ac) & (ac > 0)
+            & np.isfinite(kb0) & (kb0 >= 0))
+    if not np.all(good):
+        ak, a, ac, kb0 = (np.where(good, x, d) for x, d in ((ak, 1e4), (a, 1.5), (ac, 3e3), (kb0, 2e4)))
+    sim = simulate_impact(vin, mass, kb0[..., None], ak[..., None], a[..., None], ac[..., None])
+    tc_m, cor_m = sim.contact_time_s, sim.cor
+    if not np.all(good):
+        tc_m = np.where(good[..., None], tc_m, np.nan)
+        cor_m = np.where(good[..., None], cor_m, np.nan)
+    return tc_m, cor_m
 
 
 class _Problem:
@@ -416,21 +489,60 @@ def fit_restitution(vin_m_s, cor, mass_kg, kb0_N_m, ak, a, *, ac_start=3.5e3) ->
     return StageFit(float(ak), float(a), float(np.exp(res.x[0])), _rmse_pct(res.fun), res)
 
 
-def _batched_lm(resid, p0, lo, hi, max_iter=10):
-    """Levenberg-Marquardt on many independent problems at once.
+def _relative_offset(jac, r, p, lo, hi):
+    """Bates & Watts (1981) relative offset of each batch row: how far the residual vector
+    still has a component in the tangent plane of the model, relative to the residual
+    scatter. Parameters held on a bound by the gradient are left out of the plane.
 
-    resid : callable mapping points (..., B, k) to residuals (..., B, m); it is
-        called with the current points and their forward-difference neighbours
-        stacked, so every iteration is one batched model simulation.
+    jac (B, m, k), r (B, m), p/lo/hi (B, k) -> (B,) [-]; 0 when the residuals vanish.
+    """
+    g = np.einsum("bij,bi->bj", jac, r)
+    at_bound = ((p <= lo + 1e-12) & (g > 0)) | ((p >= hi - 1e-12) & (g < 0))
+    free = ~at_bound
+    k = p.shape[-1]
+    jtj = np.einsum("bij,bik->bjk", jac, jac)
+    mask = free[:, :, None] & free[:, None, :]
+    jtj = np.where(mask, jtj, 0.0) + np.eye(k) * (~free)[:, None, :]
+    jtj = jtj + 1e-14 * np.eye(k) * np.maximum(np.einsum("bjj->b", jtj), 1e-300)[:, None, None]
+    g = np.where(free, g, 0.0)
+    proj2 = np.einsum("bj,bj->b", g, np.linalg.solve(jtj, g[..., None])[..., 0])
+    rr = np.sum(r**2, axis=-1)
+    m = np.count_nonzero(r, axis=-1)
+    n_free = free.sum(axis=-1)
+    den = np.maximum(rr - proj2, 0.0) / np.maximum(m - n_free, 1)
+    num = np.maximum(proj2, 0.0) / np.maximum(n_free, 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        off = np.sqrt(num / den)
+    return np.where(rr < 1e-24, 0.0, np.where(np.isfinite(off), off, np.inf))
+
+
+def _batched_lm(resid, p0, lo, hi, max_iter=100, offset_tol=CONVERGENCE_OFFSET):
+    """Levenberg-Marquardt on many independent least-squares problems at once.
+
+    resid : callable mapping points (..., B, k) and row indices (B,) to residuals
+        (..., B, m); it is called with the current points and their forward-difference
+        neighbours stacked, so every iteration is one batched model simulation.
     p0 : (B, k) starting points; lo, hi : bounds, (k,) or (B, k).
+
+    Convergence is judged at the current point of each problem by the relative
+    offset criterion of Bates & Watts (1981), i.e. by the gradient relative to the
+    residual scatter: a problem has converged when the part of its residual vector
+    in the model's tangent plane is below ``offset_tol`` of the residual scatter
+    (the parameters are then within about ``offset_tol`` standard errors of the optimum). A problem
+    started at its optimum is converged before the first step. ``max_iter`` is only
+    a safety stop: a problem that reaches it, or whose damping grows without an
+    accepted step, is reported as not converged.
+
     Returns the points (B, k) and a converged flag (B,).
     """
     p = np.array(p0, dtype=float)
     b, k = p.shape
     lo = np.broadcast_to(np.asarray(lo, dtype=float), p.shape)
     hi = np.broadcast_to(np.asarray(hi, dtype=float), p.shape)
+    p = np.clip(p, lo, hi)
     lam = np.full(b, 1e-3)
     converged = np.zeros(b, dtype=bool)
+    stuck = np.zeros(b, dtype=bool)
     eye = np.eye(k)
 
     def with_jacobian(points, rows):
@@ -444,9 +556,15 @@ def _batched_lm(resid, p0, lo, hi, max_iter=10):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         r0, jac = with_jacobian(p, np.arange(b))
-        for _ in range(max_iter):
-            act = np.flatnonzero(~converged)
+        for _ in range(max_iter + 1):
+            act = np.flatnonzero(~converged & ~stuck)
             if not act.size:
+                break
+            off = _relative_offset(jac[act], r0[act], p[act], lo[act], hi[act])
+            converged[act[off < offset_tol]] = True
+            stuck[act[lam[act] > 1e12]] = True
+            act = np.flatnonzero(~converged & ~stuck)
+            if not act.size or _ == max_iter:
                 break
             ja, ra = jac[act], r0[act]
             jtj = np.einsum("bij,bik->bjk", ja, ja)
@@ -455,105 +573,473 @@ def _batched_lm(resid, p0, lo, hi, max_iter=10):
             a_mat = jtj + lam[act][:, None, None] * eye * diag[:, None, :] + 1e-12 * eye
             step = -np.linalg.solve(a_mat, jtr[..., None])[..., 0]
             new = np.clip(p[act] + step, lo[act], hi[act])
-            # One call per iteration: the trial point comes with its Jacobian, used
-            # at once when the trial is accepted (LM rejects rarely near the optimum).
             r_new, jac_new = with_jacobian(new, act)
             c0 = np.sum(ra**2, axis=-1)
             c1 = np.sum(r_new**2, axis=-1)
             better = c1 < c0
             acc = act[better]
             p[acc], r0[acc], jac[acc] = new[better], r_new[better], jac_new[better]
-            lam[acc] *= 0.3
+            lam[acc] = np.maximum(lam[acc] * 0.3, 1e-9)
             lam[act[~better]] *= 10.0
-            # converged: the step moves no parameter by more than 1e-5 (log scale: a
-            # relative 1e-5) or no longer lowers the cost by a relative 1e-7
-            tiny = np.max(np.abs(step), axis=-1) < 1e-5
-            conv = (better & ((c0 - c1) <= 1e-7 * np.maximum(c0, 1e-30))) | tiny | (lam[act] > 1e8)
-            converged[act[conv]] = True
     return p, converged
 
 
-def _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, kb0, sqrt_w, to_theta):
-    """Residual function for :func:`_batched_lm`: free points -> weighted relative residuals."""
-
-    def resid(pts, rows):
-        tc_m, cor_m = _simulate(to_theta(pts, rows), vin, mass, kb0[rows])
-        r = np.concatenate([(tc_m - tc) / tc / sigma_tc, (cor_m - cor) / cor / sigma_cor], axis=-1)
-        return np.where(np.isfinite(r), r, 1.0e3) * sqrt_w[rows]
-
-    return resid
+def _residuals(theta, vin, tc, cor, mass, kb0, sigma_tc, sigma_cor):
+    """Weighted relative residuals (model - measured) / measured / sigma, TC then COR: (..., 2n)."""
+    tc_m, cor_m = _simulate(theta, vin, mass, kb0)
+    r = np.concatenate([(tc_m - tc) / tc / sigma_tc, (cor_m - cor) / cor / sigma_cor], axis=-1)
+    return np.where(np.isfinite(r), r, 1.0e3)
 
 
-def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, theta, jac, confidence, n_grid=25):
-    """Profile-likelihood intervals of log AK, a and log AC (Bates & Watts 1988, ch. 6).
+def _jacobian(fun, theta):
+    """Forward-difference Jacobian of fun at theta (P,) -> (m, P), one batched call."""
+    k = theta.size
+    pts = np.repeat(theta[None], k + 1, axis=0)
+    pts[1:] += np.eye(k) * _FD_STEP
+    r = fun(pts)
+    return ((r[1:] - r[0]) / _FD_STEP).T
 
-    For each parameter psi on a grid about its estimate, the other two are refitted;
-    the interval is where (S(psi) - S_min) / s^2 stays below the F(1, N - P) quantile,
-    s^2 = S_min / (N - P) (N residuals, P = 3 parameters). Follows the curved AK-a
-    ridge instead of assuming an ellipse.
+
+def _full_bounds(n_par):
+    lo, hi = _theta_bounds()
+    if n_par == 4:
+        lo = np.append(lo, np.log(KB0_BOUNDS_N_M[0]))
+        hi = np.append(hi, np.log(KB0_BOUNDS_N_M[1]))
+    return lo, hi
+
+
+def _fit_weighted(vin, tc, cor, mass, kb0, theta0, sigma_tc, sigma_cor, what, loss="linear"):
+    """Least squares of all free parameters (3, or 4 with log kB(0) last) at fixed weights."""
+    n_par = theta0.size
+    lo, hi = _full_bounds(n_par)
+
+    def fun_batch(pts):
+        return _residuals(pts, vin, tc, cor, mass, kb0, sigma_tc, sigma_cor)
+
+    cache = {}
+
+    def fun(p):
+        pts = np.repeat(p[None], n_par + 1, axis=0)
+        pts[1:] += np.eye(n_par) * _FD_STEP
+        r = fun_batch(pts)
+        cache["p"], cache["j"] = p.copy(), ((r[1:] - r[0]) / _FD_STEP).T
+        return r[0]
+
+    def jac(p):
+        if "p" not in cache or not np.array_equal(cache["p"], p):
+            fun(p)
+        return cache["j"]
+
+    p0 = np.clip(np.asarray(theta0, dtype=float), lo + 1e-9, hi - 1e-9)
+    res = optimize.least_squares(fun, p0, jac=jac, bounds=(lo, hi), method="trf", loss=loss, f_scale=1.0,
+                                 x_scale=1.0, xtol=1e-8, ftol=1e-9, gtol=1e-9, max_nfev=300)
+    if res.status <= 0:
+        raise FitError(f"{what}: the optimiser did not converge ({res.message})")
+    return res
+
+
+def _block_scatter(jac, r_raw_tc, r_raw_cor, n):
+    """Unbiased relative scatter of the TC and COR residuals and their degrees of freedom.
+
+    jac : (2n, P) Jacobian of the weighted residuals. The effective number of
+    parameters each block uses is the trace of its part of the hat matrix
+    (Hoaglin & Welsch 1978); sigma_b^2 = RSS_b / (n - p_b).
     """
-    lo_b, hi_b = _theta_bounds()
-    r_opt = _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, np.array([kb0]), np.ones((1, 2 * vin.size)),
-                            lambda pts, rows: pts)(theta[None, None], np.array([0]))[0, 0]
-    n_res, n_par = r_opt.size, 3
-    s_min = float(np.sum(r_opt**2))
-    s2 = max(s_min / max(n_res - n_par, 1), 1e-12)
-    f_crit = stats.f.ppf(confidence, 1, max(n_res - n_par, 1))
-    # Wald standard errors in the profiled coordinates (log AK, a, log AC) set the grid.
+    cov = np.linalg.pinv(jac.T @ jac)
+    h = np.einsum("ij,jk,ik->i", jac, cov, jac)
+    p_tc, p_cor = float(np.sum(h[:n])), float(np.sum(h[n:]))
+    dof_tc, dof_cor = max(n - p_tc, 1.0), max(n - p_cor, 1.0)
+    s_tc = max(float(np.sqrt(np.sum(r_raw_tc**2) / dof_tc)), 1e-5)
+    s_cor = max(float(np.sqrt(np.sum(r_raw_cor**2) / dof_cor)), 1e-5)
+    return s_tc, s_cor, dof_tc, dof_cor, h
+
+
+def _satterthwaite_dof(grad, jac, n, dof_tc, dof_cor):
+    """Degrees of freedom of the variance of a function of the parameters with gradient
+    ``grad`` when the TC and COR scatter are estimated separately (Satterthwaite 1946)."""
+    cov = np.linalg.pinv(jac.T @ jac)
+    v = cov @ grad
+    v_tc = float(np.sum((jac[:n] @ v) ** 2))
+    v_cor = float(np.sum((jac[n:] @ v) ** 2))
+    den = v_tc**2 / dof_tc + v_cor**2 / dof_cor
+    return float((v_tc + v_cor) ** 2 / den) if den > 0 else float(min(dof_tc, dof_cor))
+
+
+class _Quantity:
+    """A profiled quantity q(theta) [log scale except a]; theta[drop] is solved from q."""
+
+    def __init__(self, key, drop, fwd, inv):
+        self.key, self.drop, self.fwd, self.inv = key, drop, fwd, inv
+
+
+def _quantities(n_par, kb0_fixed):
     log_xr = np.log(REFERENCE_DISPLACEMENT_M)
-    phi_hat = np.array([theta[0] - theta[1] * log_xr, theta[1], theta[2]])
-    dtheta_dphi = np.array([[1.0, log_xr, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    j_phi = jac @ dtheta_dphi
-    try:
-        cov = s2 * np.linalg.inv(j_phi.T @ j_phi)
-        se = np.sqrt(np.clip(np.diag(cov), 1e-12, None))
-    except np.linalg.LinAlgError:
-        se = np.array([1.0, 0.3, 0.2])
-    offsets = np.concatenate([-np.geomspace(12, 0.25, n_grid // 2), [0.0], np.geomspace(0.25, 12, n_grid // 2)])
+
+    def kb0_of(th):
+        return np.exp(th[..., 3]) if n_par == 4 else kb0_fixed
+
+    def kb_x(x):
+        lx = np.log(x / REFERENCE_DISPLACEMENT_M)
+
+        def fwd(th):
+            return np.log(kb0_of(th) + np.exp(th[..., 0] + th[..., 1] * lx))
+
+        def inv(q, th):
+            with np.errstate(invalid="ignore", divide="ignore"):
+                return np.log(np.exp(q) - kb0_of(th)) - th[..., 1] * lx
+        return fwd, inv
+
+    qs = [
+        _Quantity("ak", 0, lambda th: th[..., 0] - th[..., 1] * log_xr, lambda q, th: q + th[..., 1] * log_xr),
+        _Quantity("a", 1, lambda th: th[..., 1], lambda q, th: q),
+        _Quantity("ac", 2, lambda th: th[..., 2], lambda q, th: q),
+        _Quantity("kb_10mm", 0, *kb_x(0.010)),
+        _Quantity("kb_20mm", 0, *kb_x(0.020)),
+    ]
+    if n_par == 4:
+        qs.append(_Quantity("kb0", 3, lambda th: th[..., 3], lambda q, th: q))
+    return qs
+
+
+def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof_cor, theta, confidence,
+                       n_grid=17):
+    """Profile-likelihood intervals (Bates & Watts 1988, ch. 6) of every quantity of
+    :func:`_quantities`, with the critical value calibrated for the estimated scatter.
+
+    The residuals are weighted by the unbiased TC and COR scatter (``sigma_*``), so the
+    profile deviance S(q) - S_min of a quantity q is compared with the F(1, nu)
+    quantile, nu the Satterthwaite degrees of freedom of q's variance (the TC and COR
+    scatter are estimated separately, from nu_TC and nu_COR residual degrees of
+    freedom; :func:`_satterthwaite_dof`). The other parameters are refitted at every
+    grid point (started from the Wald-linearised conditional optimum), so the interval
+    follows the curved AK-a ridge.
+
+    Returns {key: (lo, hi, closed)} on the quantity's scale (log for all but a).
+    """
+    n, n_par = vin.size, theta.size
+    lo_b, hi_b = _full_bounds(n_par)
+
+    def fun(pts):
+        return _residuals(pts, vin, tc, cor, mass, kb0, sigma_tc, sigma_cor)
+
+    r_opt = fun(theta[None])[0]
+    s_min = float(np.sum(r_opt**2))
+    jac = _jacobian(fun, theta)
+    cov = np.linalg.pinv(jac.T @ jac)
+    qs = _quantities(n_par, kb0)
+    offsets = np.concatenate([-np.geomspace(10, 0.3, n_grid // 2), [0.0], np.geomspace(0.3, 10, n_grid // 2)])
     g = offsets.size
-    # All three profiles in one batch: row r profiles parameter r // g at grid point r % g.
-    prof_of = np.repeat(np.arange(3), g)
-    # grid points outside the search bounds of a and AC are clipped onto them
-    # log AK = log kR - a log xR, bounded by the kR and a bounds
-    lo_phi = np.array([lo_b[0] - lo_b[1] * log_xr, lo_b[1], lo_b[2]])
-    hi_phi = np.array([hi_b[0] - hi_b[1] * log_xr, hi_b[1], hi_b[2]])
-    psi = np.clip(phi_hat[:, None] + offsets[None, :] * se[:, None], lo_phi[:, None], hi_phi[:, None]).ravel()
-    free_idx = np.array([[i for i in range(3) if i != j] for j in range(3)])[prof_of]  # (3g, 2)
+    centre = g // 2
+    q_hat, crit, starts, psi = [], [], [], []
+    for spec in qs:
+        qh = float(spec.fwd(theta))
+        grad = np.zeros(n_par)
+        for j in range(n_par):
+            th = theta.copy()
+            th[j] += 1e-6
+            grad[j] = (float(spec.fwd(th)) - qh) / 1e-6
+        var = float(grad @ cov @ grad)
+        se = np.sqrt(max(var, 1e-12))
+        dof = _satterthwaite_dof(grad, jac, n, dof_tc, dof_cor)
+        crit.append(stats.f.ppf(confidence, 1, max(dof, 1.0)))
+        grid = qh + offsets * se
+        if spec.key == "a":
+            grid = np.clip(grid, lo_b[1], hi_b[1])
+        if spec.key == "ac":
+            grid = np.clip(grid, lo_b[2], hi_b[2])
+        if spec.key == "kb0":
+            grid = np.clip(grid, lo_b[3], hi_b[3])
+        # Wald-linearised conditional optimum of the other parameters at each grid point
+        shift = (cov @ grad) / max(var, 1e-300)
+        th_start = theta[None, :] + (grid - qh)[:, None] * shift[None, :]
+        keep = [i for i in range(n_par) if i != spec.drop]
+        starts.append(np.clip(th_start[:, keep], lo_b[keep], hi_b[keep]))
+        q_hat.append(qh)
+        psi.append(grid)
+    psi_all = np.concatenate(psi)
+    q_of_row = np.repeat(np.arange(len(qs)), g)
+    p0 = np.concatenate(starts)
+    lo_rows = np.concatenate([np.broadcast_to(lo_b[[i for i in range(n_par) if i != s.drop]], (g, n_par - 1))
+                              for s in qs])
+    hi_rows = np.concatenate([np.broadcast_to(hi_b[[i for i in range(n_par) if i != s.drop]], (g, n_par - 1))
+                              for s in qs])
 
     def to_theta(pts, rows):
-        phi = np.empty(pts.shape[:-1] + (3,))
-        idx = np.broadcast_to(free_idx[rows], pts.shape)
-        np.put_along_axis(phi, idx, pts, axis=-1)
-        fixed = np.broadcast_to(prof_of[rows][:, None], pts.shape[:-1] + (1,))
-        np.put_along_axis(phi, fixed, np.broadcast_to(psi[rows][:, None], pts.shape[:-1] + (1,)), axis=-1)
-        return np.stack([phi[..., 0] + phi[..., 1] * log_xr, phi[..., 1], phi[..., 2]], axis=-1)
+        out = np.empty(pts.shape[:-1] + (n_par,))
+        qi = q_of_row[rows]
+        for j, spec in enumerate(qs):
+            sel = np.flatnonzero(qi == j)
+            if not sel.size:
+                continue
+            keep = [i for i in range(n_par) if i != spec.drop]
+            th = np.zeros(pts.shape[:-1][:-1] + (sel.size, n_par))
+            th[..., keep] = pts[..., sel, :]
+            th[..., spec.drop] = spec.inv(psi_all[rows][sel], th)
+            out[..., sel, :] = th
+        return out
 
-    resid = _weighted_resid(vin, tc, cor, mass, sigma_tc, sigma_cor, np.full(3 * g, kb0),
-                            np.ones((3 * g, 2 * vin.size)), to_theta)
-    p0 = phi_hat[free_idx]
-    pts, _ = _batched_lm(resid, p0, lo_phi[free_idx], hi_phi[free_idx], max_iter=12)
+    def resid(pts, rows):
+        with np.errstate(invalid="ignore", over="ignore"):
+            return fun(to_theta(pts, rows))
+
+    pts, _ = _batched_lm(resid, p0, lo_rows, hi_rows, max_iter=30)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        r = resid(pts[None], np.arange(3 * g))[0]
-    dev_all = ((np.sum(r**2, axis=-1) - s_min) / s2).reshape(3, g)
-    psi = psi.reshape(3, g)
-    centre = int(np.flatnonzero(offsets == 0)[0])
-    intervals = []
-    for j in range(3):
-        dev = dev_all[j]
+        r = resid(pts[None], np.arange(pts.shape[0]))[0]
+    dev_all = ((np.sum(r**2, axis=-1) - s_min)).reshape(len(qs), g)
+    out = {}
+    for j, spec in enumerate(qs):
+        dev = np.where(np.isfinite(dev_all[j]), dev_all[j], np.inf)
         dev[centre] = 0.0
+        grid = psi[j]
         ends = []
         for step in (-1, 1):
-            prev, end, closed = centre, psi[j, 0 if step < 0 else g - 1], False
+            prev, end, closed = centre, grid[0 if step < 0 else g - 1], False
             for i in range(centre + step, -1 if step < 0 else g, step):
-                if dev[i] > f_crit:
-                    w = (f_crit - dev[prev]) / (dev[i] - dev[prev])
-                    end, closed = psi[j, prev] + w * (psi[j, i] - psi[j, prev]), True
+                if dev[i] > crit[j]:
+                    w = (crit[j] - dev[prev]) / (dev[i] - dev[prev]) if np.isfinite(dev[i]) else 0.0
+                    end, closed = grid[prev] + w * (grid[i] - grid[prev]), True
                     break
                 prev = i
             ends.append((end, closed))
-        intervals.append((ends[0][0], ends[1][0], ends[0][1] and ends[1][1]))
-    return intervals
+        out[spec.key] = (float(min(ends[0][0], q_hat[j])), float(max(ends[1][0], q_hat[j])),
+                         ends[0][1] and ends[1][1])
+    return out
+
+
+def _kb0_lines(vin, kv, confidence):
+    """Linear (the paper's) and quadratic extrapolation of the Kelvin-Voigt stiffness to
+    zero speed: ((kb0, lo, hi) linear, (kb0, lo, hi) quadratic) [N/m], t intervals."""
+    out = []
+    for deg in (1, 2):
+        x = np.vander(vin, deg + 1, increasing=True)
+        if vin.size <= deg + 1 or np.linalg.matrix_rank(x) < deg + 1:
+            out.append((np.nan, np.nan, np.nan))
+            continue
+        coef, *_ = np.linalg.lstsq(x, kv, rcond=None)
+        r = kv - x @ coef
+        dof = vin.size - deg - 1
+        s2 = float(r @ r) / dof
+        se = float(np.sqrt(s2 * np.linalg.inv(x.T @ x)[0, 0]))
+        t = stats.t.ppf(0.5 + confidence / 2, dof)
+        out.append((float(coef[0]), float(coef[0] - t * se), float(coef[0] + t * se)))
+    return out
+
+
+@dataclass
+class FitOutliers:
+    """Result of :func:`detect_fit_outliers`.
+
+    Attributes
+    ----------
+    used : numpy.ndarray of bool
+        True for impacts to use in the fit, False for named fit outliers.
+    notes : list of str
+        Per impact: empty, or why it was left out (its residuals and the test).
+    p_values : numpy.ndarray
+        Bonferroni-adjusted-by-kind p value of each tested impact (NaN when not tested) [-].
+    level : float
+        Family-wise test level per ball type [-].
+    max_removed : int
+        Largest number of impacts that may be removed.
+    messages : list of str
+        Remarks (e.g. more outliers than the cap allows).
+    start : tuple
+        (theta, sigma_tc, sigma_cor) of the robust fit, a start for the final fit (None when not fitted).
+    steps : list of (int, float)
+        The generalised ESD steps in order: (impact index, p value) [-].
+    """
+
+    used: np.ndarray
+    notes: list
+    p_values: np.ndarray
+    level: float
+    max_removed: int
+    messages: list = field(default_factory=list)
+    start: tuple | None = None
+    steps: list = field(default_factory=list)
+
+
+def _robust_kb0(vin, kv):
+    """Robust (Theil-Sen) straight-line intercept of the Kelvin-Voigt stiffness [N/m]."""
+    if np.ptp(vin) <= 0:
+        return float(np.median(kv))
+    slope, intercept, *_ = stats.theilslopes(kv, vin)
+    return float(intercept) if intercept > 0 else float(np.median(kv) * 0.5)
+
+
+def detect_fit_outliers(vin_m_s, contact_time_s, cor, mass_kg, *, kb0_N_m=None, level=OUTLIER_LEVEL,
+                        max_share=OUTLIER_MAX_SHARE) -> FitOutliers:
+    """Name the impacts of one ball type that sit implausibly far off their siblings' fit.
+
+    1. Robust fit: AK, a, AC by least squares with the soft-L1 loss on the relative TC
+       and COR residuals, each scaled by its median absolute deviation; kB(0) from the
+       argument or a robust (Theil-Sen) line through the Kelvin-Voigt stiffness (Eq. (2)).
+    2. Screen: when no impact's squared robust z-scores (TC and COR) sum above the
+       0.99 quantile of chi-square(2), there is no outlier and the search stops.
+    3. Generalised ESD (Rosner 1983), at most ``max(1, floor(max_share * n))`` steps:
+       every kept impact is tested against the fit of the other kept impacts
+       (leave-one-out refits; externally studentised with the leverage, t distribution
+       with each kind's residual degrees of freedom) in three directions: TC alone,
+       COR alone, and the direction in which an error of the inbound speed moves both
+       (from the model's slopes dlog TC / dlog VB and dlog COR / dlog VB). Its p value
+       is the smallest two-sided p of the three times 3. The impact with the smallest
+       p is set aside and the step repeated. The outliers are the impacts of the steps
+       up to the last one with p < ``level`` / (impacts kept at that step), so that
+       one outlier cannot mask another; none when fewer than 6 impacts.
+
+    Parameters
+    ----------
+    vin_m_s, contact_time_s, cor, mass_kg : array_like
+        Inbound speed [m/s], contact time [s], COR [-] and mass [kg] of each impact.
+    kb0_N_m : float, optional
+        kB(0) [N/m] (from the config); robustly extrapolated when None.
+    level : float
+        Family-wise level of the test per ball type [-].
+    max_share : float
+        Largest share of the impacts that may be removed [-].
+
+    Returns
+    -------
+    FitOutliers
+
+    Raises
+    ------
+    ValueError
+        Bad arguments.
+    FitError
+        When the robust fit fails.
+    """
+    vin = _as_1d("vin_m_s", vin_m_s)
+    n = vin.size
+    tc = _as_1d("contact_time_s", contact_time_s, n)
+    e = _as_1d("cor", cor, n)
+    mass = _as_1d("mass_kg", mass_kg, n)
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
+    if not 0 <= max_share < 1:
+        raise ValueError(f"max_share must be in [0, 1), got {max_share!r}")
+    cap = max(1, int(np.floor(max_share * n + 1e-9))) if max_share > 0 else 0
+    used = np.ones(n, dtype=bool)
+    notes = [""] * n
+    pvals = np.full(n, np.nan)
+    result = FitOutliers(used, notes, pvals, float(level), cap)
+    if n < 6 or cap == 0:
+        if n < 6:
+            result.messages.append(f"only {n} impacts: no search for fit outliers")
+        return result
+    if kb0_N_m is None:
+        kv, _ = kelvin_voigt_parameters(mass, tc, e)
+        kb0 = _robust_kb0(vin, kv)
+    else:
+        kb0 = float(kb0_N_m)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        s1 = fit_contact_time(vin, tc, mass, kb0)
+        s2 = fit_restitution(vin, e, mass, kb0, s1.ak, s1.a)
+        th0 = _to_theta(s2.ak, s2.a, s2.ac)
+        tc_m, cor_m = _simulate(th0, vin, mass, kb0)
+        mad_tc = max(1.4826 * float(np.median(np.abs((tc_m - tc) / tc))), 1e-4)
+        mad_cor = max(1.4826 * float(np.median(np.abs((cor_m - e) / e))), 1e-4)
+        res = _fit_weighted(vin, tc, e, mass, kb0, th0, mad_tc, mad_cor, "robust fit (soft-L1)", loss="soft_l1")
+        tc_m, cor_m = _simulate(res.x, vin, mass, kb0)
+        r_tc, r_cor = (tc_m - tc) / tc, (cor_m - e) / e
+        mad_tc = max(1.4826 * float(np.median(np.abs(r_tc))), 1e-4)
+        mad_cor = max(1.4826 * float(np.median(np.abs(r_cor))), 1e-4)
+        result.start = (res.x.copy(), mad_tc, mad_cor)
+        d2 = (r_tc / mad_tc) ** 2 + (r_cor / mad_cor) ** 2
+        suspects = np.flatnonzero(d2 > stats.chi2.ppf(0.99, 2))
+        suspects = suspects[np.argsort(-d2[suspects])][: max(n - 6, 0)]
+        if not suspects.size:
+            return result
+        # Generalised ESD (Rosner 1983): remove the most extreme impact, refit, repeat
+        # `cap` times; the number of outliers is the last step whose test is significant
+        # (so that one outlier cannot mask another).
+        keep = np.ones(n, dtype=bool)
+        theta = res.x
+        steps = []
+        for _ in range(cap):
+            step = _most_extreme(vin, tc, e, mass, kb0, keep, theta, mad_tc, mad_cor)
+            if step is None:
+                break
+            i, p, note, theta = step
+            steps.append((i, p, note))
+            keep[i] = False
+    result.steps = [(int(i), float(p)) for i, p, _ in steps]
+    n_out = 0
+    for k, (i, p, note) in enumerate(steps):
+        pvals[i] = p
+        if p < level / (n - k):
+            n_out = k + 1
+    for k, (i, p, note) in enumerate(steps[:n_out]):
+        used[i] = False
+        notes[i] = note + f"; p = {p:.1e} < {level:g}/{n - k} (Bonferroni, generalised ESD step {k + 1})"
+    return result
+
+
+def _most_extreme(vin, tc, e, mass, kb0, keep, theta, s_tc, s_cor):
+    """One step of the fit-outlier search: each kept impact against the fit of the other
+    kept impacts (leave-one-out refits, batched). Returns (index, p, note, theta of the
+    kept impacts' fit) of the impact with the smallest p, or None."""
+    idx = np.flatnonzero(keep)
+    m = idx.size
+    if m < 6:
+        return None
+    v, t, c, ms = vin[idx], tc[idx], e[idx], mass[idx]
+    fit_k = _fit_weighted(v, t, c, ms, kb0, theta, s_tc, s_cor, "fit of the kept impacts")
+    theta_k = fit_k.x
+    tcm, corm = _simulate(theta_k, v, ms, kb0)
+    s_tc, s_cor, _, _, _ = _block_scatter(fit_k.jac, (tcm - t) / t, (corm - c) / c, m)
+    fun = lambda pts: _residuals(pts, v, t, c, ms, kb0, s_tc, s_cor)  # noqa: E731
+    jac = _jacobian(fun, theta_k)
+    cov = np.linalg.pinv(jac.T @ jac)
+    h_tc = np.einsum("ij,jk,ik->i", jac[:m], cov, jac[:m])
+    h_cor = np.einsum("ij,jk,ik->i", jac[m:], cov, jac[m:])
+    # leave-one-out refits, all at once: problem j has weight 0 on impact j
+    w = 1.0 - np.eye(m)
+    sqrt_w = np.hstack([w, w])
+    lo_b, hi_b = _full_bounds(theta_k.size)
+
+    def resid(pts, rows):
+        return _residuals(pts, v, t, c, ms, kb0, s_tc, s_cor) * sqrt_w[rows]
+
+    th_loo, _ = _batched_lm(resid, np.repeat(theta_k[None], m, axis=0), lo_b, hi_b, max_iter=30)
+    tc_l, cor_l = _simulate(th_loo, v, ms, kb0)  # (m, m): row j = fit without j
+    tc_p, cor_p = _simulate(th_loo, v * 1.001, ms, kb0)
+    rows = np.arange(m)
+    r_tc = np.log(t[None, :] / tc_l)  # log residual, measured over model
+    r_cor = np.log(c[None, :] / cor_l)
+    dof_tc, dof_cor = max(m - 1 - float(h_tc.sum()), 1.0), max(m - 1 - float(h_cor.sum()), 1.0)
+    best = None
+    for j in rows:
+        others = rows != j
+        sd_tc = np.sqrt(np.sum(r_tc[j, others] ** 2) / dof_tc)
+        sd_cor = np.sqrt(np.sum(r_cor[j, others] ** 2) / dof_cor)
+        # prediction of an impact left out: variance factor 1 / (1 - h) of the kept fit
+        f_tc, f_cor = 1.0 / np.sqrt(max(1 - h_tc[j], 1e-3)), 1.0 / np.sqrt(max(1 - h_cor[j], 1e-3))
+        z_tc = r_tc[j, j] / (sd_tc * f_tc)
+        z_cor = r_cor[j, j] / (sd_cor * f_cor)
+        # an inbound speed measured (1 + delta) too high: the model is read at (1 + delta) VB
+        # and the measured COR is divided by (1 + delta): log residuals -delta (s_tc, 1 + s_cor)
+        s_v_tc = np.log(tc_p[j, j] / tc_l[j, j]) / np.log(1.001)
+        s_v_cor = np.log(cor_p[j, j] / cor_l[j, j]) / np.log(1.001)
+        u = -np.array([s_v_tc / (sd_tc * f_tc), (1 + s_v_cor) / (sd_cor * f_cor)])
+        z_v = float(u @ np.array([z_tc, z_cor]) / np.linalg.norm(u))
+        tests = {
+            "contact time": 2 * stats.t.sf(abs(z_tc), dof_tc),
+            "COR": 2 * stats.t.sf(abs(z_cor), dof_cor),
+            "inbound speed": 2 * stats.t.sf(abs(z_v), min(dof_tc, dof_cor)),
+        }
+        kind = min(tests, key=tests.get)
+        p = min(1.0, 3 * tests[kind])
+        if best is None or p < best[1]:
+            extra = f", as if the inbound speed were {100 * z_v / np.linalg.norm(u):+.1f} % off" \
+                if kind == "inbound speed" else ""
+            note = (f"fit outlier ({kind}): TC {100 * np.expm1(r_tc[j, j]):+.1f} % ({z_tc:+.1f} sd), "
+                    f"COR {100 * np.expm1(r_cor[j, j]):+.1f} % ({z_cor:+.1f} sd) off the fit of the other "
+                    f"{m - 1} impacts{extra}")
+            best = (int(idx[j]), p, note)
+    return best + (theta_k,)
 
 
 def fit_ball_model(
@@ -567,19 +1053,40 @@ def fit_ball_model(
     n_bootstrap=200,
     seed=0,
     confidence=0.95,
+    detect_outliers=True,
+    outlier_level=OUTLIER_LEVEL,
+    max_outlier_share=OUTLIER_MAX_SHARE,
 ) -> BallFit:
-    """Fit kB(0), AK, a and AC of one ball type to its impacts, with 95 % intervals.
+    """Fit kB(0), AK, a and AC of one ball type to its impacts, with calibrated intervals.
 
-    kB(0) from the argument (source "config") or by :func:`fit_kb0` from the
-    Kelvin-Voigt stiffness (Eq. (2)) when ``kb0_N_m`` is None ("extrapolated");
-    stage one :func:`fit_contact_time`; stage two :func:`fit_restitution`; then
-    a joint least-squares refinement of AK, a, AC on the relative TC and COR
-    residuals, each kind weighted by its own RMS from the stages (so neither
-    dominates by its scale). Intervals: BCa bootstrap over impacts
-    (``n_bootstrap`` resamples refitted from the joint optimum, jackknife for
-    the acceleration; kB(0) re-extrapolated in each when extrapolated), widened
-    by sqrt(n / (n - p)) for the small-sample shrinkage of case resampling. The model is Eqs. (4)-(16) of
-    Goodwill & Haake 2004.
+    The model is Eqs. (4)-(16) of Goodwill & Haake 2004; the residuals are the relative
+    TC and COR misfits of the impacts, each kind weighted by its own scatter.
+
+    1. Fit outliers (``detect_outliers``): :func:`detect_fit_outliers`; the impacts it
+       names are left out of everything below and listed in ``outlier_notes``.
+    2. kB(0):
+       * ``kb0_N_m`` given: fixed (source "config"); AK, a, AC and their intervals are
+         conditional on it.
+       * else, impacts below :data:`LOW_SPEED_M_S`: fitted with AK, a and AC (source
+         "fitted"), intervals by profile likelihood like the others.
+       * else extrapolated (source "extrapolated"): the paper's straight line through
+         the Kelvin-Voigt stiffness (Eq. (2)) against speed gives the value. Its
+         interval is the hull of the line's t interval and of the profile-likelihood
+         interval of kB(0) fitted jointly with AK, a, AC (the model's own, curved,
+         extrapolation): it carries the extrapolation-model uncertainty. The intervals
+         of AK, a, AC, kB(10 mm) and kB(20 mm) are likewise the hull of their profile
+         intervals with kB(0) fixed at the line's value and with kB(0) free.
+    3. Stage one (:func:`fit_contact_time`), stage two (:func:`fit_restitution`), then
+       a joint least-squares fit of AK, a, AC (and kB(0) when fitted) on both kinds of
+       residual, re-weighted to each kind's unbiased scatter RSS / (n - p_kind).
+    4. Intervals: profile likelihood with the F(1, nu) critical value, nu the
+       Satterthwaite degrees of freedom (:func:`_profile_intervals`), for AK, a, AC,
+       kB(10 mm), kB(20 mm) (kB = kB(0) + AK x^a, Eq. (4)) and kB(0) when fitted.
+    5. A case-resampling bootstrap over impacts (``n_bootstrap`` resamples, kB(0)
+       re-extrapolated in each when extrapolated, refitted when fitted) gives the AK-a
+       correlation and the confidence bands of the model curves (:func:`model_curves`).
+       Resamples count as converged by the relative offset criterion (:func:`_batched_lm`);
+       the others are dropped and counted in ``bootstrap_dropped``.
 
     Parameters
     ----------
@@ -590,11 +1097,15 @@ def fit_ball_model(
     kv_stiffness_N_m : array_like, optional
         Kelvin-Voigt stiffness per impact [N/m]; computed from TC and COR when omitted.
     n_bootstrap : int
-        Bootstrap resamples (0 disables the intervals).
+        Bootstrap resamples (0: no correlation, no bands).
     seed : int
         Seed of the resampling.
     confidence : float
         Interval level [-].
+    detect_outliers : bool
+        Search for fit outliers first.
+    outlier_level, max_outlier_share : float
+        Level of the outlier test per ball type [-] and largest share removed [-].
 
     Returns
     -------
@@ -606,110 +1117,111 @@ def fit_ball_model(
         Too few impacts, or an optimiser that did not succeed.
     """
     vin = _as_1d("vin_m_s", vin_m_s)
-    n = vin.size
-    tc = _as_1d("contact_time_s", contact_time_s, n)
-    e = _as_1d("cor", cor, n)
-    mass = _as_1d("mass_kg", mass_kg, n)
+    n_all = vin.size
+    tc = _as_1d("contact_time_s", contact_time_s, n_all)
+    e = _as_1d("cor", cor, n_all)
+    mass = _as_1d("mass_kg", mass_kg, n_all)
     if np.any(tc <= 0) or np.any(e <= 0) or np.any(vin <= 0) or np.any(mass <= 0):
         raise ValueError("vin_m_s, contact_time_s, cor and mass_kg must be positive")
-    if n < 3:
-        raise FitError(f"fitting AK, a and AC needs at least 3 good impacts, got {n}")
+    if n_all < 3:
+        raise FitError(f"fitting AK, a and AC needs at least 3 good impacts, got {n_all}")
     if n_bootstrap < 0:
         raise ValueError(f"n_bootstrap must be non-negative, got {n_bootstrap}")
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    if kb0_N_m is not None and (not np.isfinite(kb0_N_m) or kb0_N_m < 0):
+        raise ValueError(f"kb0_N_m must be non-negative, got {kb0_N_m!r}")
+    kv_all = None
+    if kv_stiffness_N_m is not None:
+        kv_all = _as_1d("kv_stiffness_N_m", kv_stiffness_N_m, n_all)
     messages = []
+    used = np.ones(n_all, dtype=bool)
+    outlier_notes = [""] * n_all
+    start = None
+    steps = []
+    if detect_outliers:
+        found = detect_fit_outliers(vin, tc, e, mass, kb0_N_m=kb0_N_m, level=outlier_level,
+                                    max_share=max_outlier_share)
+        used, outlier_notes = found.used, found.notes
+        messages += found.messages
+        start = found.start
+        steps = found.steps
+        if (~used).any():
+            messages.append(f"{int((~used).sum())} fit outlier(s) left out")
+    vin, tc, e, mass = vin[used], tc[used], e[used], mass[used]
+    n = vin.size
     if n < 6:
         messages.append(f"only {n} impacts: the intervals are rough")
-    if kv_stiffness_N_m is None:
-        kv_stiffness_N_m, _ = kelvin_voigt_parameters(mass, tc, e)
-    kv = _as_1d("kv_stiffness_N_m", kv_stiffness_N_m, n)
+    kv = kv_all[used] if kv_all is not None else kelvin_voigt_parameters(mass, tc, e)[0]
 
-    if kb0_N_m is None:
-        kb0_fit = fit_kb0(vin, kv, confidence=confidence)
-        kb0, kb0_source = kb0_fit.kb0_N_m, "extrapolated"
+    nan = float("nan")
+    line = None
+    if kb0_N_m is not None:
+        kb0, kb0_source = float(kb0_N_m), "config"
     else:
-        if not np.isfinite(kb0_N_m) or kb0_N_m < 0:
-            raise ValueError(f"kb0_N_m must be non-negative, got {kb0_N_m!r}")
-        kb0, kb0_source, kb0_fit = float(kb0_N_m), "config", None
+        kb0_fit = fit_kb0(vin, kv, confidence=confidence)
+        line = _kb0_lines(vin, kv, confidence)
+        kb0 = kb0_fit.kb0_N_m
+        kb0_source = "fitted" if np.min(vin) < LOW_SPEED_M_S else "extrapolated"
 
-    stage1 = fit_contact_time(vin, tc, mass, kb0)
-    stage2 = fit_restitution(vin, e, mass, kb0, stage1.ak, stage1.a)
-    # Weights: the scatter of each kind of residual in the stage fits (floored).
-    sigma_tc = max(stage1.rmse_pct / 100.0, 1e-4)
-    sigma_cor = max(stage2.rmse_pct / 100.0, 1e-4)
-    joint = _Problem(vin, tc, e, mass, kb0, True, True, sigma_tc, sigma_cor)
-    res = _least_squares(joint, _to_theta(stage2.ak, stage2.a, stage2.ac), "joint refinement (AK, a, AC)")
-    # Re-weight once with the scatter of each kind left by the joint fit (so that both
-    # blocks of weighted residuals have unit variance, as the F test of the intervals
-    # assumes), then refine from there.
-    tc_m, cor_m = _simulate(res.x, vin, mass, kb0)
-    sigma_tc = max(float(np.sqrt(np.mean(((tc_m - tc) / tc) ** 2))), 1e-4)
-    sigma_cor = max(float(np.sqrt(np.mean(((cor_m - e) / e) ** 2))), 1e-4)
-    joint = _Problem(vin, tc, e, mass, kb0, True, True, sigma_tc, sigma_cor)
-    res = _least_squares(joint, res.x, "joint refinement (AK, a, AC)")
-    theta = res.x
-    ak, a, ac = (float(v) for v in _from_theta(theta))
-    messages += _bound_messages(theta)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        cond = _joint_fit(vin, tc, e, mass, kb0, None, confidence, robust_start=start)
+        free = None
+        if kb0_source != "config":
+            free = _joint_fit(vin, tc, e, mass, kb0, cond, confidence)
+    main = free if kb0_source == "fitted" else cond
+    theta = main["theta"]
+    if kb0_source == "fitted":
+        kb0 = float(np.exp(theta[3]))
+    ak, a, ac = (float(v) for v in _from_theta(theta[:3]))
+    messages += _bound_messages(theta[:3])
+    iv = dict(main["intervals"])
+    if kb0_source == "extrapolated":
+        for key, (lo, hi, closed) in free["intervals"].items():
+            if key in iv:
+                lo0, hi0, closed0 = iv[key]
+                iv[key] = (min(lo, lo0), max(hi, hi0), closed and closed0)
+        lo_k, hi_k, closed_k = free["intervals"]["kb0"]
+        iv["kb0"] = (np.log(max(min(np.exp(lo_k), kb0_fit.kb0_lo), 1.0)),
+                     np.log(max(np.exp(hi_k), kb0_fit.kb0_hi)), closed_k)
+    lo_hi = {}
+    for key, (lo, hi, closed) in iv.items():
+        lo_hi[key] = (float(lo), float(hi)) if key == "a" else (float(np.exp(lo)), float(np.exp(hi)))
+        if not closed:
+            messages.append(f"the {key} interval reaches the end of its profile grid: the data barely constrain it")
+    if kb0_source == "config":
+        lo_hi["kb0"] = (nan, nan)
+    method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
+              "the unbiased TC and COR scatter")
+    if kb0_source == "extrapolated":
+        method += ("; kB(0) extrapolated by the paper's straight line, intervals the hull with kB(0) fixed "
+                   "there and with kB(0) fitted (extrapolation-model uncertainty)")
+    elif kb0_source == "config":
+        method += "; conditional on kB(0) from the config"
+
     tc_m, cor_m = _simulate(theta, vin, mass, kb0)
     tc_rmse = _rmse_pct((tc_m - tc) / tc)
     cor_rmse = _rmse_pct((cor_m - e) / e)
+    s_tc, s_cor = main["sigma_tc"], main["sigma_cor"]
 
-    nan = float("nan")
-    lo_hi = {k: (nan, nan) for k in ("kb0", "ak", "a", "ac")}
-    if kb0_fit is not None:
-        lo_hi["kb0"] = (kb0_fit.kb0_lo, kb0_fit.kb0_hi)
-    # 95 % intervals of AK, a, AC: profile likelihood (kB(0) held at its value).
-    prof = _profile_intervals(vin, tc, e, mass, kb0, sigma_tc, sigma_cor, theta, res.jac, confidence)
-    for key, (lo, hi, closed) in zip(("ak", "a", "ac"), prof):
-        lo_hi[key] = (float(np.exp(lo)), float(np.exp(hi))) if key != "a" else (float(lo), float(hi))
-        if not closed:
-            messages.append(f"the {key} interval reaches the end of the profile grid: the data barely constrain it")
-    method = "profile likelihood (F test)"
-
-    # Bootstrap over impacts: AK-a correlation, model-curve bands, and kB(0) propagation.
     corr = nan
     boot = np.empty((0, 4))
+    dropped = 0
     if n_bootstrap > 0:
-        rng = np.random.default_rng(seed)
-        idx = rng.integers(0, n, size=(n_bootstrap, n))
-        weights = np.stack([np.bincount(row, minlength=n) for row in idx]).astype(float)
-        kb0_b = np.full(n_bootstrap, kb0)
-        if kb0_fit is not None:
-            for i, row in enumerate(idx):
-                if np.ptp(vin[row]) > 0:
-                    reg = stats.linregress(vin[row], kv[row])
-                    kb0_b[i] = reg.intercept if reg.intercept > 0 else np.nan
-                else:
-                    kb0_b[i] = np.nan
-        ok = np.isfinite(kb0_b)
-        kb0_b, weights = kb0_b[ok], weights[ok]
-        lo_b, hi_b = _theta_bounds()
-        resid = _weighted_resid(vin, tc, e, mass, sigma_tc, sigma_cor, kb0_b, np.sqrt(np.hstack([weights, weights])),
-                                lambda pts, rows: pts)
-        th_b, conv = _batched_lm(resid, np.repeat(theta[None], kb0_b.size, axis=0), lo_b, hi_b)
-        ak_b, a_b, ac_b = _from_theta(th_b)
-        boot = np.column_stack([kb0_b, ak_b, a_b, ac_b])[conv]
-        if boot.shape[0] < 0.8 * n_bootstrap:
-            messages.append(
-                f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable"
-            )
+        boot, dropped = _bootstrap(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_bootstrap, seed)
+        if dropped > 0.2 * n_bootstrap:
+            messages.append(f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable")
         if boot.shape[0] >= 10:
-            corr = float(np.corrcoef(boot[:, 1], boot[:, 2])[0, 1])
-            method += f"; correlation and bands from {boot.shape[0]} bootstrap resamples over impacts"
-            if kb0_fit is not None:
-                # kB(0) was extrapolated: widen the intervals by the spread it adds, read off
-                # the bootstrap (in which kB(0) is re-extrapolated every time).
-                for j, key in ((1, "ak"), (2, "a"), (3, "ac")):
-                    f = np.log if key != "a" else (lambda x: x)
-                    q = np.percentile(f(boot[:, j]), 100 * np.array([0.5 - confidence / 2, 0.5 + confidence / 2]))
-                    lo, hi = (f(v) for v in lo_hi[key])
-                    lo, hi = min(lo, q[0]), max(hi, q[1])
-                    lo_hi[key] = (float(np.exp(lo)), float(np.exp(hi))) if key != "a" else (float(lo), float(hi))
-                method += " (union with bootstrap percentiles, kB(0) re-extrapolated in each)"
-
+            corr = float(np.corrcoef(np.log(boot[:, 1]), boot[:, 2])[0, 1])
+            method += (f"; AK-a correlation and curve bands from {boot.shape[0]} bootstrap resamples over impacts "
+                       f"({dropped} unconverged dropped)")
+    kb10 = kb0 + ak * 0.010**a
+    kb20 = kb0 + ak * 0.020**a
     return BallFit(
         mass_kg=float(np.mean(mass)),
         n_impacts=n,
-        kb0_N_m=kb0,
+        kb0_N_m=float(kb0),
         kb0_lo=lo_hi["kb0"][0],
         kb0_hi=lo_hi["kb0"][1],
         kb0_source=kb0_source,
@@ -721,13 +1233,97 @@ def fit_ball_model(
         cor_rmse_pct=cor_rmse,
         interval_method=method,
         messages=messages,
-        result=res,
+        result=main["result"],
         bootstrap=boot,
+        kb_10mm_N_m=float(kb10), kb_10mm_lo=lo_hi["kb_10mm"][0], kb_10mm_hi=lo_hi["kb_10mm"][1],
+        kb_20mm_N_m=float(kb20), kb_20mm_lo=lo_hi["kb_20mm"][0], kb_20mm_hi=lo_hi["kb_20mm"][1],
+        contact_time_scatter=s_tc, cor_scatter=s_cor,
+        scatter_dof=float(min(main["dof_tc"], main["dof_cor"])),
+        bootstrap_dropped=int(dropped),
+        used=used,
+        outlier_notes=list(outlier_notes),
+        outlier_steps=list(steps),
+        kb0_linear_N_m=line[0][0] if line else nan,
+        kb0_quadratic_N_m=line[1][0] if line else nan,
     )
 
 
+def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None):
+    """Joint fit of AK, a, AC (start None: kB(0) fixed) or of AK, a, AC, kB(0) (start: the
+    fixed-kB(0) result, kB(0) then free from its value), weights re-estimated to the
+    unbiased scatter of each kind, then the profile intervals. ``robust_start`` (theta,
+    sigma_tc, sigma_cor) of :func:`detect_fit_outliers` replaces the stage fits."""
+    if start is None and robust_start is not None:
+        theta, s_tc, s_cor = robust_start
+        theta = np.asarray(theta, dtype=float).copy()
+    elif start is None:
+        stage1 = fit_contact_time(vin, tc, mass, kb0)
+        stage2 = fit_restitution(vin, e, mass, kb0, stage1.ak, stage1.a)
+        theta = _to_theta(stage2.ak, stage2.a, stage2.ac)
+        s_tc = max(stage1.rmse_pct / 100.0, 1e-4)
+        s_cor = max(stage2.rmse_pct / 100.0, 1e-4)
+    else:
+        theta = np.append(start["theta"], np.log(max(kb0, KB0_BOUNDS_N_M[0] * 1.01)))
+        s_tc, s_cor = start["sigma_tc"], start["sigma_cor"]
+    n = vin.size
+    res = None
+    what = "joint fit (AK, a, AC" + (", kB(0))" if theta.size == 4 else ")")
+    for _ in range(4):
+        res = _fit_weighted(vin, tc, e, mass, kb0, theta, s_tc, s_cor, what)
+        theta = res.x
+        tc_m, cor_m = _simulate(theta, vin, mass, kb0)
+        new_tc, new_cor, dof_tc, dof_cor, _ = _block_scatter(res.jac, (tc_m - tc) / tc, (cor_m - e) / e, n)
+        # the weights are the scatter of each kind at the weights' own optimum (iterated
+        # until they change by < 2 %; the fit is insensitive to smaller changes)
+        done = abs(new_tc / s_tc - 1) < 0.02 and abs(new_cor / s_cor - 1) < 0.02
+        s_tc, s_cor = new_tc, new_cor
+        if done:
+            break
+    iv = _profile_intervals(vin, tc, e, mass, kb0, s_tc, s_cor, dof_tc, dof_cor, theta, confidence)
+    return {"theta": theta, "sigma_tc": s_tc, "sigma_cor": s_cor, "dof_tc": dof_tc, "dof_cor": dof_cor,
+            "intervals": iv, "result": res}
+
+
+def _bootstrap(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_bootstrap, seed):
+    """Case-resampling bootstrap: (resamples (B, 4): kB(0) [N/m], AK, a, AC SI; dropped count)."""
+    n = vin.size
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, n, size=(n_bootstrap, n))
+    weights = np.stack([np.bincount(row, minlength=n) for row in idx]).astype(float)
+    kb0_b = np.full(n_bootstrap, kb0)
+    if kb0_source == "extrapolated":
+        for i, row in enumerate(idx):
+            if np.ptp(vin[row]) > 0:
+                reg = stats.linregress(vin[row], kv[row])
+                kb0_b[i] = reg.intercept if reg.intercept > 0 else np.nan
+            else:
+                kb0_b[i] = np.nan
+    ok = np.isfinite(kb0_b)
+    dropped = int((~ok).sum())
+    kb0_b, weights = kb0_b[ok], weights[ok]
+    sqrt_w = np.sqrt(np.hstack([weights, weights]))
+    lo_b, hi_b = _full_bounds(theta.size)
+
+    def resid(pts, rows):
+        return _residuals(pts, vin, tc, e, mass, kb0_b[rows], s_tc, s_cor) * sqrt_w[rows]
+
+    th_b, conv = _batched_lm(resid, np.repeat(theta[None], kb0_b.size, axis=0), lo_b, hi_b)
+    dropped += int((~conv).sum())
+    ak_b, a_b, ac_b = _from_theta(th_b[:, :3])
+    if theta.size == 4:
+        kb0_b = np.exp(th_b[:, 3])
+    return np.column_stack([kb0_b, ak_b, a_b, ac_b])[conv], dropped
+
+
 def model_curves(fit: BallFit, speeds_m_s, *, confidence=0.95, max_band_samples=200):
-    """Model TC, COR and peak force against inbound speed, with bands from the bootstrap.
+    """Model TC, COR and peak force against inbound speed, with confidence and prediction bands.
+
+    The curves are Eqs. (4)-(16) of Goodwill & Haake 2004 at the fitted parameters.
+    Confidence band (where the curve lies): percentiles of the curves of the bootstrap
+    parameter sets. Prediction band (where the next impact of this ball type will
+    fall): the confidence band's half-width and the impacts' own relative scatter
+    (``contact_time_scatter``, ``cor_scatter`` times the Student t quantile with the
+    fit's residual degrees of freedom) added in quadrature about the curve.
 
     Parameters
     ----------
@@ -743,8 +1339,9 @@ def model_curves(fit: BallFit, speeds_m_s, *, confidence=0.95, max_band_samples=
     Returns
     -------
     dict
-        ``contact_time_s``, ``cor``, ``peak_force_N`` (each (n_speed,)) and
-        ``contact_time_s_lo/_hi``, ``cor_lo/_hi`` (NaN when there is no bootstrap).
+        ``contact_time_s`` [s], ``cor`` [-], ``peak_force_N`` [N] (each (n_speed,)),
+        confidence bands ``contact_time_s_lo/_hi``, ``cor_lo/_hi`` and prediction bands
+        ``contact_time_s_pred_lo/_hi``, ``cor_pred_lo/_hi`` (NaN when unavailable).
     """
     v = _as_1d("speeds_m_s", speeds_m_s)
     sim = simulate_impact(v, fit.mass_kg, fit.kb0_N_m, fit.ak, fit.a, fit.ac)
@@ -754,8 +1351,10 @@ def model_curves(fit: BallFit, speeds_m_s, *, confidence=0.95, max_band_samples=
         "peak_force_N": sim.peak_force_N,
     }
     nan = np.full(v.size, np.nan)
-    out.update(contact_time_s_lo=nan, contact_time_s_hi=nan, cor_lo=nan, cor_hi=nan)
+    out.update(contact_time_s_lo=nan, contact_time_s_hi=nan, cor_lo=nan, cor_hi=nan,
+               contact_time_s_pred_lo=nan, contact_time_s_pred_hi=nan, cor_pred_lo=nan, cor_pred_hi=nan)
     boot = fit.bootstrap
+    half = {"contact_time_s": np.zeros(v.size), "cor": np.zeros(v.size)}
     if boot is not None and boot.shape[0] >= 10:
         b = boot[: max_band_samples]
         with warnings.catch_warnings():
@@ -764,4 +1363,15 @@ def model_curves(fit: BallFit, speeds_m_s, *, confidence=0.95, max_band_samples=
         q = 100 * np.array([0.5 - confidence / 2, 0.5 + confidence / 2])
         out["contact_time_s_lo"], out["contact_time_s_hi"] = np.nanpercentile(s.contact_time_s, q, axis=0)
         out["cor_lo"], out["cor_hi"] = np.nanpercentile(s.cor, q, axis=0)
+        for key in half:
+            half[key] = np.maximum(out[key] - out[f"{key}_lo"], out[f"{key}_hi"] - out[key])
+    scatter = {"contact_time_s": getattr(fit, "contact_time_scatter", np.nan),
+               "cor": getattr(fit, "cor_scatter", np.nan)}
+    dof = getattr(fit, "scatter_dof", np.nan)
+    if np.isfinite(dof) and dof > 0:
+        t = stats.t.ppf(0.5 + confidence / 2, dof)
+        for key in half:
+            if np.isfinite(scatter[key]):
+                w = np.sqrt(half[key] ** 2 + (t * scatter[key] * out[key]) ** 2)
+                out[f"{key}_pred_lo"], out[f"{key}_pred_hi"] = out[key] - w, out[key] + w
     return out

@@ -286,7 +286,9 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     one chunk (none dropped, none twice). The session kCAL check
     (:func:`ballimpact.processing.flag_calibration_outliers`) excludes impacts whose
     calibration factor is far from the session's typical value; the session median
-    and robust standard deviation of kCAL [N/V] go into the file's attributes.
+    and robust standard deviation of kCAL [N/V] go into the file's attributes. Then
+    the fit outliers of every ball type are named (:func:`mark_fit_outliers`:
+    ``used_in_fit``, ``fit_note``), so that impacts.csv carries them.
 
     Parameters
     ----------
@@ -347,6 +349,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds["reason"] = ("impact", np.array(reason, dtype=object), ds["reason"].attrs)
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
+    ds = mark_fit_outliers(ds, read_session(session_dir).meta.balls)
     ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)
     table = archive.impacts_table(ds)
@@ -355,6 +358,83 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     n_excluded = int((table["status"] == "excluded").sum())
     logger.info("collected %d impacts from %d chunks: %d ok, %d excluded",
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
+
+
+def _fit_mask(ds, ball: str):
+    """Impacts of one ball type with status ok and positive vin, TC and COR (bool array)."""
+    import numpy as np
+
+    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
+    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float)
+    cor = np.asarray(ds["cor"].values, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return (
+            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
+            & (np.array([str(v) for v in ds["status"].values]) == "ok")
+            & (vin > 0) & (tc_s > 0) & (cor > 0)
+        )
+
+
+def mark_fit_outliers(ds, balls):
+    """Name the fit outliers of every ball type: ``used_in_fit`` and ``fit_note`` per impact.
+
+    :func:`ballimpact.fitting.detect_fit_outliers` on the ok impacts of each ball type
+    (kB(0) from session.yaml when given). An impact it names keeps status ok, gets
+    ``used_in_fit`` 0 and its residuals in ``fit_note``, and is left out of the fit by
+    :func:`fit_arrays`. A ball type whose search fails keeps all its impacts (logged).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Per-impact dataset (raw order).
+    balls : mapping
+        session.yaml ball types (``kb0_N_m`` [N/m] or None, ``mass_kg`` [kg]).
+
+    Returns
+    -------
+    xarray.Dataset
+        A copy with ``used_in_fit`` (int8: 1 used, 0 not) and ``fit_note`` (text).
+    """
+    import numpy as np
+
+    from . import fitting
+
+    ds = ds.copy()
+    status = np.array([str(v) for v in ds["status"].values])
+    used = (status == "ok").astype(np.int8)
+    notes = np.array([""] * status.size, dtype=object)
+    ids = [str(i) for i in ds["impact_id"].values]
+    for ball, ball_type in balls.items():
+        use = _fit_mask(ds, ball)
+        if use.sum() < 1:
+            continue
+        arrays = _arrays_of(ds, use, ball_type.mass_kg)
+        try:
+            found = fitting.detect_fit_outliers(**arrays, kb0_N_m=ball_type.kb0_N_m)
+        except (fitting.FitError, ValueError) as exc:
+            logger.warning("ball %s: no search for fit outliers (%s); all ok impacts used", ball, exc)
+            continue
+        for k, i in enumerate(np.flatnonzero(use)):
+            if not found.used[k]:
+                used[i] = 0
+                notes[i] = found.notes[k]
+                logger.info("%s: left out of the %s fit: %s", ids[i], ball, found.notes[k])
+        for msg in found.messages:
+            logger.info("ball %s: %s", ball, msg)
+    ds["used_in_fit"] = ("impact", used)
+    ds["fit_note"] = ("impact", notes)
+    return ds
+
+
+def _arrays_of(ds, use, default_mass_kg: float) -> dict:
+    import numpy as np
+
+    mass = np.asarray(ds["impact_mass_kg"].values, dtype=float)
+    mass = np.where(np.isfinite(mass) & (mass > 0), mass, default_mass_kg)
+    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
+    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float) * 1e-3
+    cor = np.asarray(ds["cor"].values, dtype=float)
+    return {"vin_m_s": vin[use], "contact_time_s": tc_s[use], "cor": cor[use], "mass_kg": mass[use]}
 
 
 def fit_arrays(ds, ball: str, default_mass_kg: float) -> dict:
@@ -373,22 +453,15 @@ def fit_arrays(ds, ball: str, default_mass_kg: float) -> dict:
     -------
     dict
         ``vin_m_s`` [m/s], ``contact_time_s`` [s], ``cor`` [-], ``mass_kg`` [kg] of the
-        impacts with status ok and positive values.
+        impacts with status ok and positive values, fit outliers (``used_in_fit`` 0,
+        :func:`mark_fit_outliers`) left out.
     """
     import numpy as np
 
-    mass = np.asarray(ds["impact_mass_kg"].values, dtype=float)
-    mass = np.where(np.isfinite(mass) & (mass > 0), mass, default_mass_kg)
-    vin = np.asarray(ds["vin_m_s"].values, dtype=float)
-    tc_s = np.asarray(ds["contact_time_ms"].values, dtype=float) * 1e-3
-    cor = np.asarray(ds["cor"].values, dtype=float)
-    with np.errstate(invalid="ignore"):
-        use = (
-            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
-            & (np.array([str(v) for v in ds["status"].values]) == "ok")
-            & (vin > 0) & (tc_s > 0) & (cor > 0)
-        )
-    return {"vin_m_s": vin[use], "contact_time_s": tc_s[use], "cor": cor[use], "mass_kg": mass[use]}
+    use = _fit_mask(ds, ball)
+    if "used_in_fit" in ds.variables:
+        use &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
+    return _arrays_of(ds, use, default_mass_kg)
 
 
 def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, seed: int) -> None:
@@ -396,7 +469,10 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     Fit the ball model (kB(0), AK, a, AC) to the ok impacts of one ball type.
 
     Rule ``fit_ball``: :func:`ballimpact.fitting.fit_ball_model` on the impacts with
-    status ok, kB(0) fixed when session.yaml gives ``kb0_kN_m``, else extrapolated.
+    status ok that are not fit outliers (named by :func:`mark_fit_outliers` in rule
+    ``collect_impacts``; their ids go into ``fit_message``, their count into
+    ``n_fit_outliers``), kB(0) fixed when session.yaml gives ``kb0_kN_m``, else
+    extrapolated (or fitted, when impacts reach below 10 m/s).
     A ball whose fit fails (e.g. fewer than 3 ok impacts) still gets a file, with NaN
     parameters and the reason in ``fit_message``, so the rest of the session goes on.
 
@@ -427,7 +503,8 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
             f"(defined: {', '.join(session.meta.balls)})"
         )
     ball_type = session.meta.balls[ball]
-    arrays = fit_arrays(archive.open_dataset(impacts_nc), ball, ball_type.mass_kg)
+    impacts = archive.open_dataset(impacts_nc)
+    arrays = fit_arrays(impacts, ball, ball_type.mass_kg)
     n_used = arrays["vin_m_s"].size
     kb0_source = "config" if ball_type.kb0_N_m is not None else "extrapolated"
     vin_used = arrays["vin_m_s"]
@@ -436,9 +513,14 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
         "itf_rebound_cm": ball_type.itf_rebound_cm, "diameter_m": ball_type.diameter_m,
         "air_density_kg_m3": session.meta.air_density_kg_m3,
     }
+    outliers = []
+    if "used_in_fit" in impacts.variables:
+        left_out = _fit_mask(impacts, ball) & ~(impacts["used_in_fit"].values.astype(float) > 0)
+        outliers = [str(i) for i in impacts["impact_id"].values[left_out]]
     try:
+        # the fit outliers were named (and left out) when the impacts were collected
         fit = fitting.fit_ball_model(
-            **arrays, kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed,
+            **arrays, kb0_N_m=ball_type.kb0_N_m, n_bootstrap=n_bootstrap, seed=seed, detect_outliers=False,
         )
     except fitting.FitError as exc:
         logger.warning("ball %s: fit failed with %d ok impacts: %s", ball, n_used, exc)
@@ -452,7 +534,13 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
             ball, fit.n_impacts, fit.kb0_N_m / 1e3, fit.kb0_source, fit.ak / 1e3, fit.a, fit.ac / 1e3,
             "; ".join(fit.messages) or "no warnings",
         )
-        fit_ds = archive.fit_dataset(ball, fit, label=ball_type.label, **itf_kw)
+        fit_ds = archive.fit_dataset(
+            ball, fit, label=ball_type.label,
+            message=f"fit outliers left out: {', '.join(outliers)}" if outliers else "",
+            **itf_kw,
+        )
+    fit_ds["n_fit_outliers"] = ("ball", [len(outliers)])
+    fit_ds = archive.set_variable_attrs(fit_ds)
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(fit_ds, out_nc)
 

@@ -21,7 +21,7 @@ __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "itf_comparison", "write_report"
 #: A4 portrait page size [in].
 A4_PORTRAIT_IN = (8.27, 11.69)
 _MARGIN_IN = 0.6  # page margin [in]
-_SOURCE_SHORT = {"extrapolated": "extrap."}
+_SOURCE_SHORT = {"extrapolated": "extrap.", "fitted": "fitted"}
 
 #: Title and caption of each report figure (keys are the PNG names of figures.FIGURE_FILES).
 FIGURE_CAPTIONS = {
@@ -29,10 +29,13 @@ FIGURE_CAPTIONS = {
         "Contact time and coefficient of restitution against inbound speed",
         "Each row is one ball type. Circles are the good impacts of this session (contact time TC from "
         "the force trace, COR = VB'/VB from the light gates); the black line is the improved model "
-        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts and the shaded "
-        "area its 95 % band from the parameter uncertainty. TC is set by the stiffness law (AK, a), COR "
-        "mainly by the damping constant AC. The paper reports agreement within about 5 %; points well "
-        "outside the band point to a poor fit or to impacts that deserve a look. The grey shading marks "
+        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts, the shaded "
+        "area its 95 % confidence band (where the curve lies, from the parameter uncertainty) and the "
+        "dashed lines the 95 % prediction band (where the next impact of this ball type will fall: "
+        "parameter uncertainty plus the impacts' own scatter). Red crosses are fit outliers: good "
+        "impacts left out of the fit because they sit far off their siblings' curve (listed with their "
+        "residuals among the excluded impacts). TC is set by the stiffness law (AK, a), COR mainly by "
+        "the damping constant AC. The paper reports agreement within about 5 %. The grey shading marks "
         "the speeds of the impacts fitted; outside it the curves are dashed: the model extrapolates there.",
     ),
     "cor_speed_itf.png": (
@@ -347,14 +350,16 @@ def _summary_page(ds, info) -> Figure:
     cur.text(
         x0,
         "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
-        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is either fixed in session.yaml "
-        "(config) or extrapolated from the Kelvin-Voigt\nstiffness to zero speed. RMSE: relative RMS residual of "
-        "TC and COR over the impacts used in the fit.",
+        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
+        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
+        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
+        "TC and COR over the impacts used in the fit."
+        + _conditional_note(ds),
         size=8, color="0.25",
     )
     cur.skip(0.08)
     head = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
-            "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
+            "kB(10 mm)\n[kN/m]", "kB(20 mm)\n[kN/m]", "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
     cells = [head]
     shade = []
     no_fit_notes = []
@@ -379,6 +384,8 @@ def _summary_page(ds, info) -> Figure:
             _interval(get("ak_kN_m"), get("ak_lo"), get("ak_hi"), ",.0f"),
             _interval(get("a"), get("a_lo"), get("a_hi"), ".3f"),
             _interval(get("ac_kN_s_m3"), get("ac_lo"), get("ac_hi"), ".2f"),
+            _interval(get("kb_10mm_kN_m"), get("kb_10mm_lo"), get("kb_10mm_hi"), ".1f"),
+            _interval(get("kb_20mm_kN_m"), get("kb_20mm_lo"), get("kb_20mm_hi"), ".1f"),
             _fmt(get("contact_time_rmse_pct"), ".2f"),
             _fmt(get("cor_rmse_pct"), ".2f"),
         ]
@@ -399,8 +406,11 @@ def _summary_page(ds, info) -> Figure:
         paper = [get("paper_kb0_kN_m"), get("paper_ak_kN_m"), get("paper_a"), get("paper_ac_kN_s_m3")]
         if np.isfinite(np.asarray(paper, dtype=float)).any():
             shade.append(len(cells))
+            # kB(10 mm), kB(20 mm) from Table 2's values by Eq. 4 (x in m)
+            kb_paper = [paper[0] + paper[1] * x ** paper[2] for x in (0.010, 0.020)]
             cells.append(["", "paper Table 2", "", _fmt(paper[0], ".1f"), _fmt(paper[1], ",.0f"),
-                          _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), "", ""])
+                          _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), _fmt(kb_paper[0], ".1f"),
+                          _fmt(kb_paper[1], ".1f"), "", ""])
     # room for the fit warnings under the table (issue 14): they must stay visible
     notes_h = sum(0.19 * min(3, len(textwrap.wrap(note, 110))) for note in fit_notes)
     available = h - _MARGIN_IN - 0.9 - cur.y - notes_h
@@ -412,7 +422,7 @@ def _summary_page(ds, info) -> Figure:
         scale = available / total_h
         total_h, font = available, max(5.0, 8.0 * scale)
     ax = fig.add_axes([x0 / w, 1 - (cur.y + total_h) / h, (w - 2 * x0) / w, total_h / h])
-    table = _table(ax, cells, [0.17, 0.115, 0.04, 0.105, 0.165, 0.125, 0.12, 0.08, 0.08], font_size=font,
+    table = _table(ax, cells, [0.14, 0.1, 0.035, 0.085, 0.135, 0.1, 0.095, 0.095, 0.095, 0.06, 0.06], font_size=font,
                    shade_rows=tuple(shade))
     # row heights proportional to the number of text lines
     units = [hh * line_h + 0.06 for hh in heights]
@@ -568,8 +578,31 @@ def _figure_page(ds, info, name, number, figures_dir) -> Figure:
     return fig
 
 
+def _conditional_note(ds) -> str:
+    """The sentence saying AK and a are conditional on kB(0) from the config, when one is."""
+    if "kb0_source" not in ds:
+        return ""
+    labels = [_fig._label(ds, b) for b in _fig._balls(ds) if _text(_fig._ball_value(ds, "kb0_source", b, "")) == "config"]
+    if not labels:
+        return ""
+    text = ("AK and a are conditional on kB(0) from config (" + ", ".join(labels)
+            + "): their intervals do not include kB(0)'s uncertainty.")
+    return "\n" + "\n".join(textwrap.wrap(text, 118)[:2])
+
+
+def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
+    """(impact_id, ball, note) of every good impact left out of its ball type's fit."""
+    if ds.sizes.get("impact", 0) == 0 or "used_in_fit" not in ds:
+        return []
+    ids, balls, status = (_fig._text(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
+    used = np.asarray(ds["used_in_fit"].values, dtype=float) > 0
+    notes = _fig._text(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
+    return [(ids[i], balls[i], "left out of the fit (status ok): " + (notes[i] or "fit outlier"))
+            for i in range(len(ids)) if status[i] == "ok" and not used[i]]
+
+
 def _excluded_pages(ds, info) -> list[Figure]:
-    rows = _fig.excluded_impacts(ds)
+    rows = _fig.excluded_impacts(ds) + _fit_outlier_rows(ds)
     w, h = A4_PORTRAIT_IN
     x_id, x_ball, x_reason = _MARGIN_IN, _MARGIN_IN + 1.15, _MARGIN_IN + 2.75
     reason_chars = 78
@@ -585,8 +618,12 @@ def _excluded_pages(ds, info) -> list[Figure]:
         cur.text(_MARGIN_IN, title, size=14, weight="bold", dy=0.35)
         if not continued:
             n_total = ds.sizes.get("impact", 0)
-            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were excluded from the fits. Each has a "
-                     "QC page with its raw trace in the appendix.", size=9.5, dy=0.3)
+            n_outl = len(_fit_outlier_rows(ds))
+            cur.text(_MARGIN_IN, f"{len(rows)} of {n_total} impacts were left out of the fits. Each excluded "
+                     "impact has a QC page with its raw trace\nin the appendix."
+                     + (f" {n_outl} of them passed the per-impact checks but sit far off their ball type's "
+                        "fit\n(fit outliers, listed last with their residuals)." if n_outl else ""),
+                     size=9.5, dy=0.3 + (0.34 if n_outl else 0.17))
         for x, label in ((x_id, "Impact"), (x_ball, "Ball type"), (x_reason, "Reason")):
             fig.text(x / w, 1 - cur.y / h, label, fontsize=9, weight="bold", va="top")
         cur.skip(0.2)
