@@ -1,0 +1,68 @@
+# Stage 4: the lab's catalogue across sessions (results/catalogue/), rebuilt whenever a
+# session's archive or parameters.csv changes, a session is added, or config `pool` changes.
+
+CATALOGUE_DIR = f"{RESULTS_DIR}/catalogue"
+# A session folder named like the catalogue's folder would share its results folder.
+if "catalogue" in SESSIONS:
+    raise WorkflowError(
+        f"session folder {RAW_DIR}/catalogue: the name 'catalogue' is reserved for "
+        f"{CATALOGUE_DIR} (the catalogue across sessions); rename the session folder and its session_id"
+    )
+# sessions with a session-level fault have no results and stay out of the catalogue
+CATALOGUE_SESSIONS = [s for s in SESSIONS if "fault" not in SESSION_INFO[s]]
+
+
+def _check_pools(pools):
+    """Config `pool`: every named session selected and holding the ball type, else WorkflowError."""
+    for k, pool in enumerate(pools or []):
+        for session in pool["sessions"]:
+            if session not in SESSION_INFO:
+                raise WorkflowError(
+                    f"config key 'pool' entry {k} (ball {pool['ball']!r}): session {session!r} is not selected "
+                    f"(sessions: {', '.join(SESSIONS) or 'none'})"
+                )
+            info = SESSION_INFO[session]
+            if "fault" not in info and pool["ball"] not in info["balls"]:
+                raise WorkflowError(
+                    f"config key 'pool' entry {k}: session {session!r} has no impacts of ball type "
+                    f"{pool['ball']!r} (its ball types: {', '.join(info['balls']) or 'none'})"
+                )
+    return pools or []
+
+
+POOLS = _check_pools(config.get("pool"))
+CATALOGUE_TARGETS = (
+    [f"{CATALOGUE_DIR}/catalogue.csv", f"{CATALOGUE_DIR}/catalogue.nc", f"{CATALOGUE_DIR}/catalogue.pdf"]
+    if CATALOGUE_SESSIONS
+    else []
+)
+
+
+# results/catalogue/catalogue.nc also matches rule archive's results/{session}/{session}.nc
+ruleorder: catalogue > archive
+
+
+rule catalogue:
+    """catalogue.csv, catalogue.nc, catalogue.pdf: every session x ball type, change tests, pooled fits, ranking."""
+    input:
+        archives=[f"{RESULTS_DIR}/{s}/{s}.nc" for s in CATALOGUE_SESSIONS],
+        parameters=[f"{RESULTS_DIR}/{s}/parameters.csv" for s in CATALOGUE_SESSIONS],
+    output:
+        csv=f"{CATALOGUE_DIR}/catalogue.csv",
+        nc=f"{CATALOGUE_DIR}/catalogue.nc",
+        pdf=report(
+            f"{CATALOGUE_DIR}/catalogue.pdf",
+            caption="../report/catalogue_pdf.rst",
+            category="Catalogue",
+            labels={"figure": "catalogue.pdf", "shows": "every session x ball type, changes, ranking"},
+        ),
+    params:
+        session_dirs=[f"{RESULTS_DIR}/{s}" for s in CATALOGUE_SESSIONS],
+        pool=POOLS,
+        n_bootstrap=config["bootstrap"],
+        seed=config["seed"],
+    log:
+        f"{CATALOGUE_DIR}/logs/catalogue.log",
+    threads: 1
+    script:
+        "../scripts/catalogue.py"
