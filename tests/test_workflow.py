@@ -108,7 +108,8 @@ def test_dry_run_repo_raw_dir():
         assert "Nothing to be done" in proc.stdout
         return
     assert set(counts) <= {
-        "validate_session", "process_chunk", "collect_impacts", "fit_ball", "archive", "figures", "report", "all"
+        "validate_session", "process_chunk", "collect_impacts", "fit_ball", "archive", "figures", "report",
+        "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -126,6 +127,7 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
         "archive": 1,
         "figures": 1,
         "report": 1,
+        "catalogue": 1,
         "all": 1,
     }
     for name in ("impacts.csv", "parameters.csv", "s1.nc", "report.pdf", "figures/qc",
