@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import shutil
 
 import numpy as np
@@ -248,3 +249,33 @@ def test_workflow_catalogue_flags_the_changed_ball_and_adds_a_session(tmp_path):
     table = pd.read_csv(cat / "catalogue.csv", keep_default_na=False, na_values=[""])
     assert "s2027-02-01" in set(table.session_id)
     assert "Nothing to be done" in run_snakemake(*args, "-n", cwd=work).stdout
+
+
+@pytest.fixture(scope="module")
+def two_session_raw(tmp_path_factory):
+    """raw/ with two small synthetic sessions a1 (every Table 2 ball) and a2 (pressurised only)."""
+    raw = tmp_path_factory.mktemp("pool") / "raw"
+    raw.mkdir()
+    _synth(raw, "a1", "2026-05-01", 7, n=3)
+    _synth(raw, "a2", "2026-05-02", 8, balls={"pressurised": TRUE["pressurised"]}, n=3)
+    return raw
+
+
+@pytest.mark.parametrize(("pool", "match"), [
+    ("pool=[{ball: pressurised, sessions: [a1, a2]}]", None),
+    ("pool=[{ball: pressurised, sessions: [a1, zz]}]", r"config key 'pool' entry 0 \(ball 'pressurised'\): "
+                                                       r"session 'zz' is not selected"),
+    ("pool=[{ball: punctured, sessions: [a1, a2]}]", r"session 'a2' has no impacts of ball type 'punctured'"),
+    pytest.param("pool=[{ball: pressurised, sessions: [a1]}]", r"key 'pool.0.sessions'", marks=pytest.mark.slow),
+    pytest.param("pool=[{ball: pressurised}]", r"missing required key 'pool.0.sessions'", marks=pytest.mark.slow),
+])
+def test_pool_config_is_checked_before_running(two_session_raw, tmp_path, pool, match):
+    proc = run_snakemake("-n", "--cores", "2", "--directory", tmp_path, "--snakefile", REPO / "Snakefile",
+                         "--config", f"raw_dir={two_session_raw}", f"results_dir={tmp_path / 'results'}", pool,
+                         cwd=tmp_path)
+    if match is None:
+        assert proc.returncode == 0, proc.stdout[-3000:]
+        assert "catalogue" in proc.stdout
+    else:
+        assert proc.returncode != 0
+        assert re.search(match, proc.stdout), proc.stdout[-3000:]
