@@ -38,10 +38,6 @@ CATALOGUE_TARGETS = (
 )
 
 
-# results/catalogue/catalogue.nc also matches rule archive's results/{session}/{session}.nc
-ruleorder: catalogue > archive
-
-
 rule catalogue:
     """catalogue.csv, catalogue.nc, catalogue.pdf: every session x ball type, change tests, pooled fits, ranking."""
     input:

@@ -236,7 +236,8 @@ if not SESSIONS:
 
 
 wildcard_constraints:
-    session=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
+    # "catalogue" is results/catalogue/ (workflow/rules/catalogue.smk), never a session
+    session=r"(?!catalogue(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*",
     chunk=r"[0-9]+",
     ball=r"[A-Za-z0-9_-]+",
 
@@ -340,7 +341,11 @@ def ball_keys(wildcards):
 
 
 def fit_files(wildcards):
-    """work/fit_{ball}.nc of every ball type with impacts in the session."""
+    """work/fit_{ball}.nc of every ball type with impacts in the session (one job each), or
+    work/fits.nc of rule fit_session (all in one job) when the session has at most
+    config fit_batch_impacts impacts."""
+    if _info(wildcards)["n_impacts"] <= int(config.get("fit_batch_impacts", 0)):
+        return [f"{RESULTS_DIR}/{wildcards.session}/work/fits.nc"]
     return [f"{RESULTS_DIR}/{wildcards.session}/work/fit_{ball}.nc" for ball in ball_keys(wildcards)]
 
 
