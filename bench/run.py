@@ -11,6 +11,14 @@ Keys:
   workflow_seconds_<n>      `snakemake --cores 2` wall time on a synthetic session of n impacts
   peak_memory_mb_<n>        largest resident set of any process of that run (getrusage of children)
   process_seconds_per_impact  process_impact on raw/demo-2004, one core
+  sessions_<k>x40_seconds    `snakemake --cores 2` wall time on k synthetic sessions of 40 impacts each,
+                            the catalogue included (measured for k in SESSION_COUNTS)
+  sessions_100x40_seconds   the same for 100 sessions, extrapolated: least-squares line
+                            t = t0 + k * t_session through the measured k (extrapolate_linear);
+                            sessions_seconds_per_session = t_session, sessions_fit_max_residual_s
+                            = the largest misfit of that line at the measured k
+  sessions_peak_memory_mb   largest resident set of any process of the largest measured run
+  sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
 that time plus the extra impacts' processing time (process_seconds_per_impact, shared by
 2 cores), peak memory is the 50-impact run's; the model runs on 4 000 instead of 20 000
@@ -33,6 +41,10 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 SIZES = (50, 200, 1000)
+SESSION_COUNTS = (2, 4, 8)  # sessions of 40 impacts for the year-of-sessions figure
+QUICK_SESSION_COUNTS = (1, 3)
+IMPACTS_PER_SESSION = 40
+TARGET_SESSIONS = 100
 QUICK_SIZE = 50  # the one workflow run of --quick
 
 
@@ -129,19 +141,101 @@ def bench_workflow(sizes, quick: bool, process_s_per_impact: float) -> dict:
     return out
 
 
+def extrapolate_linear(ns, ys, n_target):
+    """Least-squares line y = y0 + n * slope through (ns, ys), evaluated at n_target.
+
+    Returns (value at n_target, slope, intercept, largest absolute residual at the
+    measured ns). Needs at least two distinct ns.
+    """
+    ns = np.asarray(ns, dtype=float)
+    ys = np.asarray(ys, dtype=float)
+    if ns.shape != ys.shape or np.unique(ns).size < 2:
+        raise ValueError(f"need at least two distinct sizes with one value each, got ns={ns.tolist()}")
+    slope, intercept = np.polyfit(ns, ys, 1)
+    residual = float(np.max(np.abs(ys - (intercept + slope * ns))))
+    return float(intercept + slope * n_target), float(slope), float(intercept), residual
+
+
+def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float]:
+    """Wall time [s] and peak RSS [MB] of `snakemake --cores 2` on n fresh 40-impact sessions."""
+    from ballimpact.synth import SynthConfig, write_session
+
+    raw = workdir / f"raw_s{n_sessions}"
+    for k in range(n_sessions):
+        sid = f"year{k:03d}"
+        write_session(raw / sid, SynthConfig(session_id=sid, seed=1000 + k, total_impacts=IMPACTS_PER_SESSION,
+                                             faults_per_kind=1, date=f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"))
+    for truth in raw.glob("*.truth.*"):
+        truth.unlink()
+    results = workdir / f"results_s{n_sessions}"
+    cmd = [
+        str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
+        "--config", f"raw_dir={raw}", f"results_dir={results}",
+        "--directory", str(REPO),
+    ]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"workflow failed for {n_sessions} sessions:\n{proc.stderr[-3000:]}")
+    if not (results / "catalogue" / "catalogue.csv").is_file():
+        raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
+    return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+
+
+def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float]:
+    code = (
+        "import sys, json; sys.path.insert(0, %r); import run; "
+        "print(json.dumps(run._run_sessions(%d, run.Path(%r))))"
+        % (str(Path(__file__).parent), n_sessions, str(workdir))
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr[-3000:])
+    wall, mem = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, mem
+
+
+def bench_sessions(counts) -> dict:
+    """Many small sessions: measured wall time for each count, extrapolated to 100 sessions."""
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
+        measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
+    for k, (wall, mem) in measured.items():
+        out[f"sessions_{k}x{IMPACTS_PER_SESSION}_seconds"] = wall
+    ks = list(measured)
+    t100, slope, intercept, resid = extrapolate_linear(ks, [measured[k][0] for k in ks], TARGET_SESSIONS)
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_seconds"] = t100
+    out["sessions_seconds_per_session"] = slope
+    out["sessions_fixed_seconds"] = intercept
+    out["sessions_fit_max_residual_s"] = resid
+    out["sessions_measured_counts"] = ks
+    out["sessions_peak_memory_mb"] = measured[max(ks)][1]
+    m100 = extrapolate_linear(ks, [measured[k][1] for k in ks], TARGET_SESSIONS)[0]
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb"] = max(m100, measured[max(ks)][1])
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="ballimpact benchmarks")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--quick", action="store_true", help="smaller runs, same keys (< 1 min)")
     ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
+    ap.add_argument("--sessions-only", action="store_true",
+                    help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
+    if args.sessions_only:
+        figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
     figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
     figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
     figures.update(bench_fit(REPO / "raw" / "demo-2004", n_bootstrap=200))
     if not args.skip_workflow:
         figures.update(bench_workflow(SIZES, args.quick, figures["process_seconds_per_impact"]))
+        figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
     if args.json:
         print(json.dumps(figures, indent=2))
     else:
