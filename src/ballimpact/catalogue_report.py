@@ -17,6 +17,7 @@ __all__ = ["write_catalogue_pdf"]
 
 _A4 = (8.27, 11.69)  # portrait page [in]
 _ROWS_PER_PAGE = 34
+_MAX_LEGEND = 12  # most curves named in a legend
 _PARAMS = (  # (catalogue column, interval columns, axis label)
     ("kb0_kN_m", ("kb0_lo", "kb0_hi"), "kB(0) [kN/m]"),
     ("ak_kN_m", ("ak_lo", "ak_hi"), "AK [kN/m^(1+a)]"),
@@ -180,7 +181,11 @@ def _ball_page(ds, table: pd.DataFrame, ball: str, test) -> Figure:
     for ax in (ax_tc, ax_cor):
         ax.set_xlabel("inbound speed [m/s]", fontsize=8)
         ax.tick_params(labelsize=7)
-    ax_tc.legend(fontsize=6, ncol=1 if len(ds["session"]) < 8 else 2)
+    n_curves = len(ax_tc.get_lines())
+    if n_curves <= _MAX_LEGEND:
+        ax_tc.legend(fontsize=6, ncol=1 if n_curves < 7 else 2)
+    else:  # a year of sessions: colours cycle in date order, no legend
+        ax_tc.set_title(f"{n_curves} fits, in date order", fontsize=7)
     fig.text(0.07, 0.31, "Model TC and COR of every session's fit (lines) with 95 % bands (shaded); dashed: pooled fits.",
              fontsize=8)
     return fig
