@@ -17,6 +17,10 @@ Keys:
                             t = t0 + k * t_session through the measured k (extrapolate_linear);
                             sessions_seconds_per_session = t_session, sessions_fit_max_residual_s
                             = the largest misfit of that line at the measured k
+  sessions_100x40_cpu_seconds  CPU time (user + sys, every process) of the run, same extrapolation;
+                            sessions_100x40_idle_2core_seconds = half of it, the wall time on an
+                            otherwise idle 2-core machine if both cores stay busy (a lower bound)
+  load_average_1min_at_end  the machine's load when the last run ended (other work inflates wall times)
   sessions_peak_memory_mb   largest resident set of any process of the largest measured run
   sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
@@ -156,8 +160,8 @@ def extrapolate_linear(ns, ys, n_target):
     return float(intercept + slope * n_target), float(slope), float(intercept), residual
 
 
-def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float]:
-    """Wall time [s] and peak RSS [MB] of `snakemake --cores 2` on n fresh 40-impact sessions."""
+def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
+    """Wall time [s], peak RSS [MB] and CPU time [s] of `snakemake --cores 2` on n fresh 40-impact sessions."""
     from ballimpact.synth import SynthConfig, write_session
 
     raw = workdir / f"raw_s{n_sessions}"
@@ -180,10 +184,11 @@ def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float]:
         raise RuntimeError(f"workflow failed for {n_sessions} sessions:\n{proc.stderr[-3000:]}")
     if not (results / "catalogue" / "catalogue.csv").is_file():
         raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
-    return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
 
 
-def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float]:
+def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
     code = (
         "import sys, json; sys.path.insert(0, %r); import run; "
         "print(json.dumps(run._run_sessions(%d, run.Path(%r))))"
@@ -192,8 +197,8 @@ def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
     if out.returncode != 0:
         raise RuntimeError(out.stderr[-3000:])
-    wall, mem = json.loads(out.stdout.strip().splitlines()[-1])
-    return wall, mem
+    wall, mem, cpu = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, mem, cpu
 
 
 def bench_sessions(counts) -> dict:
@@ -201,8 +206,9 @@ def bench_sessions(counts) -> dict:
     out = {}
     with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
         measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
-    for k, (wall, mem) in measured.items():
+    for k, (wall, mem, cpu) in measured.items():
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_seconds"] = wall
+        out[f"sessions_{k}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu
     ks = list(measured)
     t100, slope, intercept, resid = extrapolate_linear(ks, [measured[k][0] for k in ks], TARGET_SESSIONS)
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_seconds"] = t100
@@ -210,6 +216,12 @@ def bench_sessions(counts) -> dict:
     out["sessions_fixed_seconds"] = intercept
     out["sessions_fit_max_residual_s"] = resid
     out["sessions_measured_counts"] = ks
+    # CPU time (user + sys of every process of the run) hardly depends on what else the
+    # machine runs; on an otherwise idle machine with 2 cores the wall time is at least half of it
+    cpu100 = extrapolate_linear(ks, [measured[k][2] for k in ks], TARGET_SESSIONS)[0]
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu100
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_idle_2core_seconds"] = cpu100 / 2
+    out["load_average_1min_at_end"] = os.getloadavg()[0]
     out["sessions_peak_memory_mb"] = measured[max(ks)][1]
     m100 = extrapolate_linear(ks, [measured[k][1] for k in ks], TARGET_SESSIONS)[0]
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb"] = max(m100, measured[max(ks)][1])
