@@ -199,7 +199,7 @@ def catalogue_table(sessions: Sequence[SessionResults], pooled: Iterable[pd.Data
     sessions : sequence of SessionResults
         In catalogue order (by date, then id).
     pooled : iterable of pandas.DataFrame
-        Pooled rows (:func:`pooled_row`-like frames with ``session_id``, ``session_date``,
+        Pooled rows (frames of one row with ``session_id``, ``session_date``,
         ``pooled_sessions`` and parameters.csv's columns).
 
     Returns
