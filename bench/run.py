@@ -20,6 +20,8 @@ Keys:
   sessions_100x40_cpu_seconds  CPU time (user + sys, every process) of the run, same extrapolation;
                             sessions_100x40_idle_2core_seconds = half of it, the wall time on an
                             otherwise idle 2-core machine if both cores stay busy (a lower bound)
+  stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
+                            process, and of the library's imports (paid again by every job)
   load_average_1min_at_end  the machine's load when the last run ended (other work inflates wall times)
   sessions_peak_memory_mb   largest resident set of any process of the largest measured run
   sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
@@ -228,16 +230,59 @@ def bench_sessions(counts) -> dict:
     return out
 
 
+def bench_session_stages(n_bootstrap: int = 200) -> dict:
+    """CPU time [s] of each stage of one 40-impact synthetic session, all in this process.
+
+    ``stage_cpu_seconds_<stage>``: time.process_time around each pipeline function
+    (the work of the rule, without the start-up of its process); ``stage_cpu_seconds_imports``:
+    importing the library's modules once (what each rule's process pays again).
+    """
+    t0 = time.process_time()
+    from ballimpact import figures, fitting, pipeline, processing, report  # noqa: F401
+    from ballimpact.session import read_session
+    from ballimpact.synth import SynthConfig, write_session
+
+    out = {"stage_cpu_seconds_imports": time.process_time() - t0}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-stages-") as tmp:
+        tmp = Path(tmp)
+        session, _ = write_session(tmp / "raw" / "stages", SynthConfig(
+            session_id="stages", seed=1000, total_impacts=IMPACTS_PER_SESSION, faults_per_kind=1))
+        w = tmp / "work"
+        w.mkdir()
+        balls = list(read_session(session).meta.balls)
+        stages = [
+            ("validate", pipeline.snapshot_session, (session, w / "session.json"), {}),
+            ("process", pipeline.process_chunk, (session, 0, 1, w / "chunk_0.nc"), {}),
+            ("collect", pipeline.collect_impacts, (session, [w / "chunk_0.nc"], w / "impacts.csv", w / "impacts.nc"), {}),
+            ("fit", pipeline.fit_balls, (w / "impacts.nc", balls, session, w / "fits.nc"),
+             {"n_bootstrap": n_bootstrap, "seed": 0}),
+            ("archive", pipeline.write_archive, (session, w / "impacts.nc", [w / "fits.nc"], w / "a.nc", w / "p.csv"), {}),
+            ("figures", pipeline.make_figures, (w / "a.nc", w / "figures"), {}),
+            ("report", pipeline.make_report, (w / "a.nc", w / "figures", w / "r.pdf"), {}),
+        ]
+        for name, func, args, kwargs in stages:
+            t0 = time.process_time()
+            func(*args, **kwargs)
+            out[f"stage_cpu_seconds_{name}"] = time.process_time() - t0
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="ballimpact benchmarks")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     ap.add_argument("--quick", action="store_true", help="smaller runs, same keys (< 1 min)")
     ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
+    ap.add_argument("--stages", action="store_true",
+                    help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
     ap.add_argument("--sessions-only", action="store_true",
                     help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
+    if args.stages:
+        figures.update(bench_session_stages())
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
     if args.sessions_only:
         figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
