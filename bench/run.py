@@ -22,7 +22,9 @@ Keys:
                             otherwise idle 2-core machine if both cores stay busy (a lower bound)
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
-  load_average_1min_at_end  the machine's load when the last run ended (other work inflates wall times)
+  load_average_1min_at_start/_end  the machine's load around the runs (other work inflates wall times);
+                            sessions_wall_reliable is false when it exceeded 2.5 or the line does not rise:
+                            then only the CPU figures mean something
   sessions_peak_memory_mb   largest resident set of any process of the largest measured run
   sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
@@ -206,6 +208,7 @@ def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float
 def bench_sessions(counts) -> dict:
     """Many small sessions: measured wall time for each count, extrapolated to 100 sessions."""
     out = {}
+    load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
         measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
     for k, (wall, mem, cpu) in measured.items():
@@ -223,7 +226,10 @@ def bench_sessions(counts) -> dict:
     cpu100 = extrapolate_linear(ks, [measured[k][2] for k in ks], TARGET_SESSIONS)[0]
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu100
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_idle_2core_seconds"] = cpu100 / 2
+    out["load_average_1min_at_start"] = load_before
     out["load_average_1min_at_end"] = os.getloadavg()[0]
+    # wall times only mean something when the 2 cores were ours: no other load, a rising line
+    out["sessions_wall_reliable"] = bool(max(load_before, out["load_average_1min_at_end"]) <= 2.5 and slope > 0)
     out["sessions_peak_memory_mb"] = measured[max(ks)][1]
     m100 = extrapolate_linear(ks, [measured[k][1] for k in ks], TARGET_SESSIONS)[0]
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb"] = max(m100, measured[max(ks)][1])
