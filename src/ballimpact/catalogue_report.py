@@ -31,7 +31,11 @@ def _fmt(value, fmt="{:.3g}") -> str:
         v = float(value)
     except (TypeError, ValueError):
         return str(value)
-    return "" if not math.isfinite(v) else fmt.format(v)
+    if not math.isfinite(v):
+        return ""
+    if fmt == "{:.3g}" and abs(v) >= 1000:  # AK: 23782 rather than 2.38e+04
+        return f"{v:.0f}"
+    return fmt.format(v)
 
 
 def _interval(row, col, lo, hi) -> str:
@@ -49,12 +53,12 @@ def _page(title: str) -> Figure:
 
 
 def _table_pages(table: pd.DataFrame) -> list[Figure]:
-    cols = ["session", "date", "ball", "n", "kB(0)", "AK [95 %]", "a [95 %]", "AC [95 %]", "TC/COR rmse %"]
+    cols = ["session", "date", "ball", "n", "kB(0)", "AK [95 %]", "a [95 %]", "AC [95 %]", "rmse % TC/COR"]
     rows = []
     for _, r in table.iterrows():
         sid = str(r["session_id"])
         rows.append([
-            sid if len(sid) <= 28 else sid[:26] + "..", str(r["session_date"]), str(r["ball"]),
+            sid if len(sid) <= 34 else sid[:32] + "..", str(r["session_date"]), str(r["ball"]),
             _fmt(r.get("n_impacts"), "{:.0f}"), _fmt(r.get("kb0_kN_m")),
             _interval(r, "ak_kN_m", "ak_lo", "ak_hi"), _interval(r, "a", "a_lo", "a_hi"),
             _interval(r, "ac_kN_s_m3", "ac_lo", "ac_hi"),
@@ -71,7 +75,7 @@ def _table_pages(table: pd.DataFrame) -> list[Figure]:
         ax.axis("off")
         if part:
             t = ax.table(cellText=part, colLabels=cols, loc="upper center", cellLoc="left",
-                         colWidths=[0.17, 0.08, 0.09, 0.03, 0.05, 0.19, 0.13, 0.16, 0.08])
+                         colWidths=[0.2, 0.08, 0.09, 0.03, 0.04, 0.17, 0.13, 0.14, 0.08])
             t.auto_set_font_size(False)
             t.set_fontsize(6)
             t.scale(1, 1.25)
