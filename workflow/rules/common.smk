@@ -203,10 +203,7 @@ def _session_info(session):
     # fault that rule validate_session reports for this session
     balls = [str(key) for key in data["balls"] if str(key) in used]
     n_impacts = len(rows)
-    # min_chunks splits a lone small session for parallelism; with several sessions they
-    # run in parallel already, and a small session is one chunk (one process start-up)
-    min_chunks = MIN_CHUNKS if len(SESSIONS) == 1 else 1
-    n_chunks = min(n_impacts, max(min_chunks, math.ceil(n_impacts / CHUNK_SIZE)))
+    n_chunks = min(n_impacts, max(MIN_CHUNKS, math.ceil(n_impacts / CHUNK_SIZE)))
     traces = [_trace_file(session_dir, row.get("trace", "")) for row in rows]
     return {
         "dir": session_dir.as_posix(),
