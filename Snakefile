@@ -1,5 +1,6 @@
 # ballimpact: force-platform tennis-ball impact tests (Goodwill & Haake 2004), raw sessions to
-# results/<session_id>/ (impacts.csv, parameters.csv, <session_id>.nc, report.pdf, figures/).
+# results/<session_id>/ (impacts.csv, parameters.csv, <session_id>.nc, report.pdf, figures/);
+# results/catalogue/ across sessions (catalogue.csv, catalogue.nc, catalogue.pdf).
 #   snakemake --cores 2                                   every session of raw/
 #   snakemake --cores 2 --config sessions=[s1]            one session
 #   snakemake --profile profiles/slurm                    on a SLURM cluster
@@ -14,7 +15,8 @@ report: "workflow/report/workflow.rst"
 
 include: "workflow/rules/common.smk"
 wildcard_constraints:
-    session=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
+    # "catalogue" is results/catalogue/ (workflow/rules/catalogue.smk), never a session
+    session=r"(?!catalogue(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*",
     chunk=r"[0-9]+",
     ball=r"[A-Za-z0-9_-]+",
 
@@ -23,8 +25,10 @@ include: "workflow/rules/process.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/summary.smk"
+include: "workflow/rules/catalogue.smk"
 
 
 rule all:
     input:
         [target for session in SESSIONS for target in session_targets(session)],
+        CATALOGUE_TARGETS,

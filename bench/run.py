@@ -15,6 +15,22 @@ Keys:
   fit_outliers              impacts the fit-outlier search named on the demo
   no_kb0_*                  the same on the demo remade by `ballimpact synth --seed 2004 --no-kb0`
                             (kB(0) extrapolated); --fit-only runs just the fit figures
+  sessions_<k>x40_seconds    `snakemake --cores 2` wall time on k synthetic sessions of 40 impacts each,
+                            the catalogue included (measured for k in SESSION_COUNTS)
+  sessions_100x40_seconds   the same for 100 sessions, extrapolated: least-squares line
+                            t = t0 + k * t_session through the measured k (extrapolate_linear);
+                            sessions_seconds_per_session = t_session, sessions_fit_max_residual_s
+                            = the largest misfit of that line at the measured k
+  sessions_100x40_cpu_seconds  CPU time (user + sys, every process) of the run, same extrapolation;
+                            sessions_100x40_idle_2core_seconds = half of it, the wall time on an
+                            otherwise idle 2-core machine if both cores stay busy (a lower bound)
+  stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
+                            process, and of the library's imports (paid again by every job)
+  load_average_1min_at_start/_end  the machine's load around the runs (other work inflates wall times);
+                            sessions_wall_reliable is false when it exceeded 2.5 or the line does not rise:
+                            then only the CPU figures mean something
+  sessions_peak_memory_mb   largest resident set of any process of the largest measured run
+  sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
 that time plus the extra impacts' processing time (process_seconds_per_impact, shared by
 2 cores), peak memory is the 50-impact run's; the model runs on 4 000 instead of 20 000
@@ -37,6 +53,10 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 SIZES = (50, 200, 1000)
+SESSION_COUNTS = (2, 4, 8)  # sessions of 40 impacts for the year-of-sessions figure
+QUICK_SESSION_COUNTS = (1, 3)
+IMPACTS_PER_SESSION = 40
+TARGET_SESSIONS = 100
 QUICK_SIZE = 50  # the one workflow run of --quick
 
 
@@ -174,6 +194,130 @@ def bench_workflow(sizes, quick: bool, process_s_per_impact: float) -> dict:
     return out
 
 
+def extrapolate_linear(ns, ys, n_target):
+    """Least-squares line y = y0 + n * slope through (ns, ys), evaluated at n_target.
+
+    Returns (value at n_target, slope, intercept, largest absolute residual at the
+    measured ns). Needs at least two distinct ns.
+    """
+    ns = np.asarray(ns, dtype=float)
+    ys = np.asarray(ys, dtype=float)
+    if ns.shape != ys.shape or np.unique(ns).size < 2:
+        raise ValueError(f"need at least two distinct sizes with one value each, got ns={ns.tolist()}")
+    slope, intercept = np.polyfit(ns, ys, 1)
+    residual = float(np.max(np.abs(ys - (intercept + slope * ns))))
+    return float(intercept + slope * n_target), float(slope), float(intercept), residual
+
+
+def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
+    """Wall time [s], peak RSS [MB] and CPU time [s] of `snakemake --cores 2` on n fresh 40-impact sessions."""
+    from ballimpact.synth import SynthConfig, write_session
+
+    raw = workdir / f"raw_s{n_sessions}"
+    for k in range(n_sessions):
+        sid = f"year{k:03d}"
+        write_session(raw / sid, SynthConfig(session_id=sid, seed=1000 + k, total_impacts=IMPACTS_PER_SESSION,
+                                             faults_per_kind=1, date=f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"))
+    for truth in raw.glob("*.truth.*"):
+        truth.unlink()
+    results = workdir / f"results_s{n_sessions}"
+    cmd = [
+        str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
+        "--config", f"raw_dir={raw}", f"results_dir={results}",
+        "--directory", str(REPO),
+    ]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"workflow failed for {n_sessions} sessions:\n{proc.stderr[-3000:]}")
+    if not (results / "catalogue" / "catalogue.csv").is_file():
+        raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
+
+
+def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
+    code = (
+        "import sys, json; sys.path.insert(0, %r); import run; "
+        "print(json.dumps(run._run_sessions(%d, run.Path(%r))))"
+        % (str(Path(__file__).parent), n_sessions, str(workdir))
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr[-3000:])
+    wall, mem, cpu = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, mem, cpu
+
+
+def bench_sessions(counts) -> dict:
+    """Many small sessions: measured wall time for each count, extrapolated to 100 sessions."""
+    out = {}
+    load_before = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
+        measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
+    for k, (wall, mem, cpu) in measured.items():
+        out[f"sessions_{k}x{IMPACTS_PER_SESSION}_seconds"] = wall
+        out[f"sessions_{k}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu
+    ks = list(measured)
+    t100, slope, intercept, resid = extrapolate_linear(ks, [measured[k][0] for k in ks], TARGET_SESSIONS)
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_seconds"] = t100
+    out["sessions_seconds_per_session"] = slope
+    out["sessions_fixed_seconds"] = intercept
+    out["sessions_fit_max_residual_s"] = resid
+    out["sessions_measured_counts"] = ks
+    # CPU time (user + sys of every process of the run) hardly depends on what else the
+    # machine runs; on an otherwise idle machine with 2 cores the wall time is at least half of it
+    cpu100 = extrapolate_linear(ks, [measured[k][2] for k in ks], TARGET_SESSIONS)[0]
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu100
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_idle_2core_seconds"] = cpu100 / 2
+    out["load_average_1min_at_start"] = load_before
+    out["load_average_1min_at_end"] = os.getloadavg()[0]
+    # wall times only mean something when the 2 cores were ours: no other load, a rising line
+    out["sessions_wall_reliable"] = bool(max(load_before, out["load_average_1min_at_end"]) <= 2.5 and slope > 0)
+    out["sessions_peak_memory_mb"] = measured[max(ks)][1]
+    m100 = extrapolate_linear(ks, [measured[k][1] for k in ks], TARGET_SESSIONS)[0]
+    out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb"] = max(m100, measured[max(ks)][1])
+    return out
+
+
+def bench_session_stages(n_bootstrap: int = 200) -> dict:
+    """CPU time [s] of each stage of one 40-impact synthetic session, all in this process.
+
+    ``stage_cpu_seconds_<stage>``: time.process_time around each pipeline function
+    (the work of the rule, without the start-up of its process); ``stage_cpu_seconds_imports``:
+    importing the library's modules once (what each rule's process pays again).
+    """
+    t0 = time.process_time()
+    from ballimpact import figures, fitting, pipeline, processing, report  # noqa: F401
+    from ballimpact.session import read_session
+    from ballimpact.synth import SynthConfig, write_session
+
+    out = {"stage_cpu_seconds_imports": time.process_time() - t0}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-stages-") as tmp:
+        tmp = Path(tmp)
+        session, _ = write_session(tmp / "raw" / "stages", SynthConfig(
+            session_id="stages", seed=1000, total_impacts=IMPACTS_PER_SESSION, faults_per_kind=1))
+        w = tmp / "work"
+        w.mkdir()
+        balls = list(read_session(session).meta.balls)
+        stages = [
+            ("validate", pipeline.snapshot_session, (session, w / "session.json"), {}),
+            ("process", pipeline.process_chunk, (session, 0, 1, w / "chunk_0.nc"), {}),
+            ("collect", pipeline.collect_impacts, (session, [w / "chunk_0.nc"], w / "impacts.csv", w / "impacts.nc"), {}),
+            ("fit", pipeline.fit_balls, (w / "impacts.nc", balls, session, w / "fits.nc"),
+             {"n_bootstrap": n_bootstrap, "seed": 0}),
+            ("archive", pipeline.write_archive, (session, w / "impacts.nc", [w / "fits.nc"], w / "a.nc", w / "p.csv"), {}),
+            ("figures", pipeline.make_figures, (w / "a.nc", w / "figures"), {}),
+            ("report", pipeline.make_report, (w / "a.nc", w / "figures", w / "r.pdf"), {}),
+        ]
+        for name, func, args, kwargs in stages:
+            t0 = time.process_time()
+            func(*args, **kwargs)
+            out[f"stage_cpu_seconds_{name}"] = time.process_time() - t0
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="ballimpact benchmarks")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
@@ -181,9 +325,21 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
     ap.add_argument("--fit-only", action="store_true",
                     help="only the fit figures (demo and the demo made with synth --no-kb0)")
+    ap.add_argument("--stages", action="store_true",
+                    help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
+    ap.add_argument("--sessions-only", action="store_true",
+                    help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
+    if args.stages:
+        figures.update(bench_session_stages())
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
+    if args.sessions_only:
+        figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
     if not args.fit_only:
         figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
         figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
@@ -191,6 +347,7 @@ def main(argv=None) -> int:
     figures.update(bench_fit_no_kb0(n_bootstrap=200))
     if not args.skip_workflow and not args.fit_only:
         figures.update(bench_workflow(SIZES, args.quick, figures["process_seconds_per_impact"]))
+        figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
     if args.json:
         print(json.dumps(figures, indent=2))
     else:

@@ -109,7 +109,8 @@ def test_dry_run_repo_raw_dir():
         assert "Nothing to be done" in proc.stdout
         return
     assert set(counts) <= {
-        "validate_session", "process_chunk", "collect_impacts", "fit_ball", "archive", "figures", "report", "all"
+        "validate_session", "process_chunk", "collect_impacts", "fit_ball", "fit_session", "archive", "figures",
+        "report", "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -123,10 +124,11 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
         "validate_session": 1,
         "process_chunk": min(n_impacts, max(2, math.ceil(n_impacts / 200))),
         "collect_impacts": 1,
-        "fit_ball": n_balls_used(session),
+        "fit_session": 1,  # a small session fits all its ball types in one job (fit_batch_impacts)
         "archive": 1,
         "figures": 1,
         "report": 1,
+        "catalogue": 1,
         "all": 1,
     }
     for name in ("impacts.csv", "parameters.csv", "s1.nc", "report.pdf", "figures/qc",
@@ -156,7 +158,8 @@ def test_number_of_chunks(synth_raw, tmp_path, chunk_size, min_chunks, expected)
 def test_dry_run_slurm_profile(synth_raw, tmp_path):
     """The SLURM profile's dry run needs no sbatch (the dry-run executor runs nothing)."""
     proc = run_snakemake(
-        "-n", "--profile", "profiles/slurm", *config_args(synth_raw, tmp_path / "results"), check=True
+        "-n", "--profile", "profiles/slurm", *config_args(synth_raw, tmp_path / "results", "fit_batch_impacts=0"),
+        check=True
     )
     assert "profiles/slurm" in proc.stdout
     assert job_counts(proc.stdout)["fit_ball"] == n_balls_used(synth_raw / "s1")
@@ -651,3 +654,26 @@ def test_misnamed_session_yaml_is_not_skipped_silently(synth_raw, tmp_path):
     summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
     assert "  lab: SESSION-LEVEL ERROR, not processed:" in summary
     assert "session.yaml: file not found, but 'session.yml' is there: rename it to 'session.yaml'" in summary
+
+
+@pytest.mark.slow
+def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
+    """Rule fit_session's file holds exactly what the fit_ball jobs write, ball by ball."""
+    import xarray as xr
+
+    from ballimpact import archive
+
+    session = synth_raw / "s1"
+    pipeline.process_chunk(session, 0, 1, tmp_path / "chunk_0.nc")
+    pipeline.collect_impacts(session, [tmp_path / "chunk_0.nc"], tmp_path / "impacts.csv", tmp_path / "impacts.nc")
+    balls = sorted({r["ball"] for r in raw_rows(session)})
+    pipeline.fit_balls(tmp_path / "impacts.nc", balls, session, tmp_path / "fits.nc", n_bootstrap=10, seed=3)
+    joined = archive.open_dataset(tmp_path / "fits.nc")
+    assert [str(b) for b in joined["ball"].values] == balls
+    for ball in balls:
+        pipeline.fit_ball(tmp_path / "impacts.nc", ball, session, tmp_path / f"fit_{ball}.nc", n_bootstrap=10, seed=3)
+        single = archive.open_dataset(tmp_path / f"fit_{ball}.nc")
+        xr.testing.assert_identical(joined.sel(ball=[ball]), single)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # staging folder removed
+    with pytest.raises(ValueError, match="balls must name at least one ball type"):
+        pipeline.fit_balls(tmp_path / "impacts.nc", [], session, tmp_path / "none.nc", n_bootstrap=0, seed=0)

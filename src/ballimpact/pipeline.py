@@ -26,6 +26,7 @@ __all__ = [
     "collect_impacts",
     "fit_arrays",
     "fit_ball",
+    "fit_balls",
     "write_archive",
     "make_figures",
     "make_report",
@@ -543,6 +544,55 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     fit_ds = archive.set_variable_attrs(fit_ds)
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(fit_ds, out_nc)
+
+
+def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed: int) -> None:
+    """
+    Fit every ball type of a small session in one process: :func:`fit_ball` for each, one file.
+
+    Rule ``fit_session`` (sessions of at most config ``fit_batch_impacts`` impacts):
+    the same fits as one ``fit_ball`` job per ball type, with the same seed, so the
+    same numbers; it saves the start-up of a process per ball type. The per-ball
+    datasets are joined on the ``ball`` dimension, in the order given, into one
+    file that rule ``archive`` takes in place of the per-ball files.
+
+    Parameters
+    ----------
+    impacts_nc : str or Path
+        ``work/impacts.nc`` of the session.
+    balls : sequence of str
+        Ball type keys with impacts in the session, in session.yaml order.
+    session_dir : str or Path
+        The raw session folder.
+    out_nc : str or Path
+        ``work/fits.nc`` to write (atomically).
+    n_bootstrap : int
+        Bootstrap resamples for the 95 % intervals, >= 0.
+    seed : int
+        Seed of the bootstrap random number generator, >= 0.
+    """
+    import xarray as xr
+
+    from . import archive
+
+    balls = [str(b) for b in balls]
+    if not balls:
+        raise ValueError("balls must name at least one ball type, got none")
+    out_nc = Path(out_nc)
+    out_nc.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out_nc.name}.", suffix=".tmp", dir=out_nc.parent))
+    try:
+        parts = []
+        for ball in balls:
+            part = staging / f"fit_{ball}.nc"
+            fit_ball(impacts_nc, ball, session_dir, part, n_bootstrap=n_bootstrap, seed=seed)
+            parts.append(archive.open_dataset(part))
+        joined = xr.concat(parts, dim="ball", data_vars="minimal", coords="minimal", compat="override",
+                           join="exact", combine_attrs="drop_conflicts")
+        archive.write_dataset(joined, out_nc)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    logger.info("fits of %d ball types (%s) written to %s", len(balls), ", ".join(balls), out_nc)
 
 
 def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) -> None:

@@ -258,9 +258,31 @@ def ball_keys(wildcards):
 
 
 def fit_files(wildcards):
-    """work/fit_{ball}.nc of every ball type with impacts in the session."""
+    """work/fit_{ball}.nc of every ball type with impacts in the session (one job each), or
+    work/fits.nc of rule fit_session (all in one job) when the session has at most
+    config fit_batch_impacts impacts."""
+    if _info(wildcards)["n_impacts"] <= int(config.get("fit_batch_impacts", 0)):
+        return [f"{RESULTS_DIR}/{wildcards.session}/work/fits.nc"]
     return [f"{RESULTS_DIR}/{wildcards.session}/work/fit_{ball}.nc" for ball in ball_keys(wildcards)]
 
 
 def session_dir(wildcards):
     return _info(wildcards)["dir"]
+
+
+def _check_pools(pools):
+    """Config `pool`: every named session selected and holding the ball type, else WorkflowError."""
+    for k, pool in enumerate(pools or []):
+        for session in pool["sessions"]:
+            if session not in SESSION_INFO:
+                raise WorkflowError(
+                    f"config key 'pool' entry {k} (ball {pool['ball']!r}): session {session!r} is not selected "
+                    f"(sessions: {', '.join(SESSIONS) or 'none'})"
+                )
+            info = SESSION_INFO[session]
+            if "fault" not in info and pool["ball"] not in info["balls"]:
+                raise WorkflowError(
+                    f"config key 'pool' entry {k}: session {session!r} has no impacts of ball type "
+                    f"{pool['ball']!r} (its ball types: {', '.join(info['balls']) or 'none'})"
+                )
+    return pools or []

@@ -23,6 +23,30 @@ rule fit_ball:
         "../scripts/fit_ball.py"
 
 
+rule fit_session:
+    """Fit every ball type of a small session in one job (config fit_batch_impacts): the
+    same fits as rule fit_ball, without a process start-up per ball type."""
+    input:
+        impacts_nc=result_path("work/impacts.nc"),
+        session_yaml=raw_path("session.yaml"),
+    output:
+        fits=result_path("work/fits.nc"),
+    params:
+        session_dir=session_dir,
+        balls=ball_keys,
+        n_bootstrap=config["bootstrap"],
+        seed=config["seed"],
+    conda:
+        "../envs/ballimpact.yaml"
+    log:
+        log_path("fit_session"),
+    benchmark:
+        benchmark_path("fit_session")
+    threads: 1
+    script:
+        "../scripts/fit_session.py"
+
+
 rule archive:
     """netCDF archive <session>.nc (impacts + fits + provenance) and parameters.csv."""
     input:
