@@ -77,3 +77,57 @@ def test_check_gate_times():
     assert len(problems) == 2
     assert problems[0].startswith("inbound gate interval not positive")
     assert problems[1].startswith("rebound gate interval not positive")
+
+
+# Cases found by mutation testing (`make mutation`, README "Mutation testing").
+
+
+def test_gate_speeds_zero_inbound_interval_is_nan():
+    vin, vout = gate_speeds(np.array([0.0, 0.0]), np.array([0.005, 0.0]), 0.02, 0.03, 0.1)
+    assert_allclose(vin, [20.0, np.nan], rtol=1e-12)
+    assert_allclose(vout, [10.0, 10.0], rtol=1e-12)
+
+
+def test_gate_speeds_incompatible_shapes():
+    with pytest.raises(ValueError, match="gate time arrays do not have compatible shapes"):
+        gate_speeds(np.zeros(3), np.ones(2), 2.0, 3.0, 0.1)
+
+
+def test_cor_types_and_edges():
+    # floats for scalars, arrays as soon as one speed is an array (either one)
+    assert isinstance(coefficient_of_restitution(20.0, 12.0), float)
+    assert_allclose(coefficient_of_restitution(np.array([20.0, 10.0]), 6.0), [0.3, 0.6], rtol=1e-12)
+    assert_allclose(coefficient_of_restitution(20.0, np.array([12.0, 6.0])), [0.6, 0.3], rtol=1e-12)
+    # slow balls, a dead stop, and impossible rebounds
+    assert_allclose(coefficient_of_restitution(0.5, 0.3), 0.6, rtol=1e-12)
+    assert_allclose(coefficient_of_restitution(0.5, 0.5), 1.0, rtol=1e-12)
+    assert coefficient_of_restitution(20.0, 0.0) == 0.0
+    assert_allclose(coefficient_of_restitution(20.0, 0.5), 0.025, rtol=1e-12)
+    assert math.isnan(coefficient_of_restitution(20.0, -1.0))
+    assert math.isnan(coefficient_of_restitution(20.0, math.inf))
+
+
+def test_speed_uncertainty_types_and_bad_input():
+    assert isinstance(speed_uncertainty(20.0, 0.1, 1e-6), float)
+    u = speed_uncertainty(np.array([-20.0, np.nan]), 0.1, 1e-6)
+    assert isinstance(u, np.ndarray)
+    assert_allclose(u, [400 * 1e-6 / (0.1 * math.sqrt(6)), np.nan], rtol=1e-12)
+    with pytest.raises(ValueError, match="spacing_m must be positive"):
+        speed_uncertainty(20.0, 0.0, 1e-6)
+    with pytest.raises(ValueError, match="resolution_s must be a number, got 'abc'"):
+        speed_uncertainty(20.0, 0.1, "abc")
+    with pytest.raises(ValueError, match="resolution_s must be non-negative and finite"):
+        speed_uncertainty(20.0, 0.1, math.inf)
+
+
+def test_check_gate_times_edges():
+    # a value that is not a number is reported as missing, not an exception
+    assert check_gate_times("abc", 0.005, 0.02, 0.03) == ["missing gate time gate_in_1_s"]
+    assert check_gate_times(None, 0.005, 0.02, 0.03) == ["missing gate time gate_in_1_s"]
+    # a zero interval is not positive; the interval is a difference of the times
+    assert check_gate_times(0.0, 0.0, 0.02, 0.03) == [
+        "inbound gate interval not positive (gate_in_2_s - gate_in_1_s = 0 s)"]
+    assert check_gate_times(10.0, 9.995, 10.02, 10.03) == [
+        "inbound gate interval not positive (gate_in_2_s - gate_in_1_s = -0.005 s)"]
+    assert check_gate_times(10.0, 10.005, 10.03, 10.03) == [
+        "rebound gate interval not positive (gate_out_1_s - gate_out_2_s = 0 s)"]
