@@ -183,3 +183,50 @@ def test_integrate_motion_bad_input():
         integrate_motion(np.array([0.0, 0.0, 1.0]), np.ones(3), MASS_KG, 20.0)
     with pytest.raises(ValueError, match="same length"):
         integrate_motion(np.arange(3.0), np.ones(4), MASS_KG, 20.0)
+
+
+# Cases found by mutation testing (`make mutation`, README "Mutation testing"): exact
+# messages (anchored, so a changed name in the message fails) and edges.
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: voltage_impulse(np.arange(3.0), np.ones(4), 0.0, 2.0),
+     r"^time_s and voltage_V must have the same length, got 3 and 4$"),
+    (lambda: integrate_motion(np.arange(3.0), np.ones(4), MASS_KG, 20.0),
+     r"^time_s and force_N must have the same length, got 3 and 4$"),
+    (lambda: contact_summary(np.arange(3.0), np.ones(4), MASS_KG, 20.0),
+     r"^time_s and force_N must have the same length, got 3 and 4$"),
+    (lambda: integrate_motion(np.array([0.0]), np.ones(1), MASS_KG, 20.0), r"^need at least 2 samples of force_N, got 1$"),
+    (lambda: integrate_motion(np.array([0.0, np.nan]), np.ones(2), MASS_KG, 20.0),
+     r"^time_s and force_N must be finite$"),
+    (lambda: integrate_motion(np.array([0.0, 1.0]), np.array([1.0, np.inf]), MASS_KG, 20.0),
+     r"^time_s and force_N must be finite$"),
+    (lambda: integrate_motion(np.array([0.0, 0.0, 1.0]), np.ones(3), MASS_KG, 20.0), r"^time_s must be strictly increasing$"),
+    (lambda: integrate_motion(np.arange(3.0), np.ones(3), -0.05, 20.0), r"^mass_kg must be positive"),
+    (lambda: integrate_motion(np.arange(3.0), np.ones(3), MASS_KG, math.nan), r"^vin_m_s must be finite, got nan$"),
+])
+def test_bad_input_messages(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_two_samples_are_enough():
+    v, x = integrate_motion(np.array([0.0, 1e-3]), np.array([100.0, 100.0]), 0.1, 2.0)
+    assert_allclose(v, [2.0, 1.0], rtol=1e-12)
+    assert_allclose(x, [0.0, 1.5e-3], rtol=1e-12)
+
+
+def test_calibration_factor_accepts_a_dead_stop():
+    # vout = 0 (and slow rebounds below 1 m/s) are valid: kCAL = m vin / integral
+    t = np.arange(101) / 1000.0
+    v = np.sin(np.pi * t / t[-1])
+    integral = voltage_impulse(t, v, 0.0, t[-1])
+    assert_allclose(calibration_factor(t, v, 0.0, t[-1], MASS_KG, 20.0, 0.0), MASS_KG * 20.0 / integral, rtol=1e-12)
+    assert_allclose(calibration_factor(t, v, 0.0, t[-1], MASS_KG, 20.0, 0.5), MASS_KG * 20.5 / integral, rtol=1e-12)
+
+
+def test_contact_summary_time_to_peak_from_the_first_sample():
+    # times need not start at 0: the time to peak counts from the first sample
+    t = 1.0 + np.linspace(0.0, 4e-3, 401)
+    s = contact_summary(t, np.sin(np.pi * (t - 1.0) / 4e-3), MASS_KG, 20.0)
+    assert_allclose(s.time_to_peak_s, 2e-3, rtol=1e-9)
