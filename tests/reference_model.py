@@ -34,7 +34,13 @@ def d_cont(x):
 
 
 def reference_impact(vin, m, kb0, ak, a, ac, dt=DT, cloth_k=0.0, t_max=20.0e-3):
-    """One impact: dict with tc [s], vout [m/s], cor [-], peak [N], t_peak [s], xmax [m]."""
+    """One impact: dict with tc [s], vout [m/s], cor [-], peak [N], t_peak [s], xmax [m].
+
+    Also "series": per step from t = 0 to the step that ends the contact, the tuple
+    (x [m], x' [m/s], F, kB x, cB x', cM x' [N]); the force parts are zero at t = 0 and the
+    cloth force counts as the stiffness part.
+    """
+    series = [(0.0, vin, 0.0, 0.0, 0.0, 0.0)]
     n_buckle = round(T_BUCKLE / dt)
     n_steps = math.ceil(t_max / dt) + 2
     x_prev, x = 0.0, vin * dt  # x(0), x(dt)
@@ -56,8 +62,11 @@ def reference_impact(vin, m, kb0, ak, a, ac, dt=DT, cloth_k=0.0, t_max=20.0e-3):
         else:
             c_m = 0.0
         f = k * x + (c_b + c_m) * v  # Eq. (14)
+        parts = (k * x, c_b * v, c_m * v)
         if v > 0.0 and x < X_CLOTH:
             f = cloth_k * x
+            parts = (f, 0.0, 0.0)
+        series.append((x, v, f) + parts)
         if f > peak:
             peak, t_peak = f, t
         xmax = max(xmax, x)
@@ -66,8 +75,8 @@ def reference_impact(vin, m, kb0, ak, a, ac, dt=DT, cloth_k=0.0, t_max=20.0e-3):
             frac = min(max(frac, 0.0), 1.0)
             tc = t - dt + frac * dt
             vout = -(v_prev + frac * (v - v_prev))
-            return dict(tc=tc, vout=vout, cor=vout / vin, peak=peak, t_peak=t_peak, xmax=xmax)
+            return dict(tc=tc, vout=vout, cor=vout / vin, peak=peak, t_peak=t_peak, xmax=xmax, series=series)
         x_next = 2.0 * x - x_prev - dt * dt / m * f  # Eq. (16)
         x_prev, x = x, x_next
         d_prev, f_prev, v_prev = d, f, v
-    return dict(tc=math.nan, vout=math.nan, cor=math.nan, peak=peak, t_peak=t_peak, xmax=xmax)
+    return dict(tc=math.nan, vout=math.nan, cor=math.nan, peak=peak, t_peak=t_peak, xmax=xmax, series=series)
