@@ -131,3 +131,14 @@ def test_check_gate_times_edges():
         "inbound gate interval not positive (gate_in_2_s - gate_in_1_s = -0.005 s)"]
     assert check_gate_times(10.0, 10.005, 10.03, 10.03) == [
         "rebound gate interval not positive (gate_out_1_s - gate_out_2_s = 0 s)"]
+
+
+def test_infinite_inputs_give_nan_without_warnings():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        vin, vout = gate_speeds(math.inf, math.inf, 0.02, 0.03, 0.1)  # inf - inf
+        cor = coefficient_of_restitution(np.array([math.inf, 20.0]), np.array([math.inf, 12.0]))  # inf / inf
+    assert math.isnan(vin) and vout == pytest.approx(10.0, rel=1e-12)
+    assert math.isnan(cor[0]) and cor[1] == pytest.approx(0.6, rel=1e-12)
