@@ -28,7 +28,7 @@ STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests"
 
 
 def equivalent_mutants(path: Path = EQUIVALENT) -> dict[str, str]:
-    """Names of mutants judged equivalent -> reason (lines 'name  reason', # comments)."""
+    """Mutants judged equivalent, name without 'ballimpact.' -> reason (lines 'name  reason', # comments)."""
     out = {}
     if path.exists():
         for line in path.read_text().splitlines():
@@ -47,7 +47,7 @@ def scores(meta_dir: Path = META_DIR) -> dict:
         counts = Counter()
         for name, code in codes.items():
             status = STATUS.get(code, "suspicious")
-            if name in equivalent and status != "killed":
+            if name.removeprefix("ballimpact.") in equivalent and status != "killed":
                 status = "equivalent"
             counts[status] += 1
             if status in ("survived", "no tests", "not checked", "suspicious", "skipped"):
