@@ -351,3 +351,28 @@ def test_recorded_series_match_reference(cloth_k):
             scale = np.max(np.abs(ref[:, k]))
             assert_allclose(got[:n, j], ref[:, k], rtol=0, atol=REFERENCE_RTOL * scale, err_msg=f"series {k}")
             assert np.all(np.isnan(got[n:, j]))
+
+
+def test_result_shapes_follow_the_inputs():
+    p = BALLS["oversize"].params
+    vin = np.array([[15.0], [25.0]])
+    ak = p.ak * np.array([0.9, 1.0, 1.1])
+    r = simulate_impact(vin, p.mass_kg, p.kb0_N_m, ak, p.a, p.ac, record=True)
+    for name in ("contact_time_s", "rebound_speed_m_s", "cor", "peak_force_N", "time_to_peak_s",
+                 "max_displacement_m"):
+        assert getattr(r, name).shape == (2, 3), name
+    n = r.time_s.size
+    for name in ("displacement_m", "velocity_m_s", "force_N", "stiffness_force_N", "damping_force_N",
+                 "momentum_flux_force_N"):
+        assert getattr(r, name).shape == (n, 2, 3), name
+    # the series end with the step that ends the longest contact: no all-NaN row
+    assert np.isfinite(r.force_N[-1]).any()
+    assert_allclose(np.nanmax(r.displacement_m, axis=0), r.max_displacement_m, rtol=1e-12)
+
+
+def test_unended_warning_message_and_caller():
+    with pytest.warns(RuntimeWarning) as rec:
+        simulate_impact(20.0, 0.0577, 10.0, 0.0, 1.0, 0.0, max_contact_time_s=3.949e-3)
+    assert str(rec[0].message) == ("1 simulated impact(s) did not end within 3.9 ms; their contact time and COR "
+                                   "are NaN (parameters far outside the physical range?)")
+    assert rec[0].filename == __file__  # attributed to the caller (stacklevel)
