@@ -69,13 +69,16 @@ def bench_model_reference_c(n: int, repeats: int = 3, n_check: int = 8) -> dict:
     cc = shutil.which(os.environ.get("CC", "cc"))
     if cc is None:
         return {"model_reference_c_impacts_per_s": None,
-                "model_reference_c_note": "no C compiler (cc) found: reference not measured"}
+                "model_reference_c_note": f"no C compiler ({os.environ.get('CC', 'cc')}) found: reference not measured"}
     p = BALLS["pressurised"].params
     vin = np.random.default_rng(0).uniform(14, 30, n)
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(tmp) / "reference_model"
-        subprocess.run([cc, "-O2", "-ffp-contract=off", "-o", str(exe), str(REPO / "bench" / "reference_model.c"),
-                        "-lm"], check=True)
+        build = subprocess.run([cc, "-O2", "-ffp-contract=off", "-o", str(exe),
+                                str(REPO / "bench" / "reference_model.c"), "-lm"], capture_output=True, text=True)
+        if build.returncode != 0:
+            return {"model_reference_c_impacts_per_s": None,
+                    "model_reference_c_note": f"{cc} failed to build bench/reference_model.c: {build.stderr.strip()[:200]}"}
         stdin = f"{p.mass_kg!r} {p.kb0_N_m!r} {p.ak!r} {p.a!r} {p.ac!r} {n} {repeats}\n"
         stdin += "\n".join(repr(float(v)) for v in vin) + "\n"
         out = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, check=True).stdout.split("\n")
@@ -85,7 +88,7 @@ def bench_model_reference_c(n: int, repeats: int = 3, n_check: int = 8) -> dict:
     diff = max(np.max(np.abs(sim.contact_time_s / ref[:, 0] - 1)), np.max(np.abs(sim.cor / ref[:, 1] - 1)))
     return {"model_reference_c_impacts_per_s": rate,
             "model_reference_c_max_rel_diff_tc_cor": float(diff),
-            "model_reference_c_note": f"bench/reference_model.c, {cc} -O2, one core, {n} impacts, best of {repeats}"}
+            "model_reference_c_note": f"bench/reference_model.c, {cc} -O2 -ffp-contract=off, one core, {n} impacts, best of {repeats}"}
 
 
 def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
