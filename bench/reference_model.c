@@ -9,7 +9,8 @@
  * One impact at a time, one core: the throughput a plain compiled loop gives.
  *
  * Build and run (bench/run.py does this in a temporary directory):
- *     cc -O2 -o reference_model bench/reference_model.c -lm
+ *     cc -O2 -ffp-contract=off -o reference_model bench/reference_model.c -lm
+ * (-ffp-contract=off: no fused multiply-add, so the arithmetic is that of numpy's)
  *     printf '0.0577 21000 16000000 1.65 3500 3 20\n14 20 30\n' | ./reference_model
  * stdin: "mass_kg kb0_N_m ak a ac n repeats", then n inbound speeds [m/s].
  * stdout: "impacts_per_s <best of repeats>", then "tc_s cor" for each impact
