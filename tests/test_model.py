@@ -370,9 +370,8 @@ def test_result_shapes_follow_the_inputs():
     assert_allclose(np.nanmax(r.displacement_m, axis=0), r.max_displacement_m, rtol=1e-12)
 
 
-def test_unended_warning_message_and_caller():
+def test_unended_warning_message():
     with pytest.warns(RuntimeWarning) as rec:
         simulate_impact(20.0, 0.0577, 10.0, 0.0, 1.0, 0.0, max_contact_time_s=3.949e-3)
     assert str(rec[0].message) == ("1 simulated impact(s) did not end within 3.9 ms; their contact time and COR "
                                    "are NaN (parameters far outside the physical range?)")
-    assert rec[0].filename == __file__  # attributed to the caller (stacklevel)
