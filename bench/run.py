@@ -6,6 +6,9 @@
 
 Keys:
   model_impacts_per_s       batched simulate_impact, Table 2 ball 1, speeds 14-30 m/s, one process
+  model_reference_c_impacts_per_s  bench/reference_model.c (scalar loop, cc -O2), same impacts, one core,
+                            measured in the same run; null without a C compiler (see _note);
+                            model_reference_c_max_rel_diff_tc_cor: its TC/COR against simulate_impact
   fit_seconds               fit_ball_model for every ball type of raw/demo-2004, intervals included
                             (processing the session is not timed); fit_cpu_seconds: its CPU time
   workflow_seconds_<n>      `snakemake --cores 2` wall time on a synthetic session of n impacts
@@ -72,6 +75,44 @@ def bench_model(n: int, repeats: int = 3) -> float:
         simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
         best = min(best, time.perf_counter() - t0)
     return n / best
+
+
+def bench_model_reference_c(n: int, repeats: int = 3, n_check: int = 8) -> dict:
+    """Compile bench/reference_model.c (the scalar loop) with `cc -O2` and time it here.
+
+    Same ball and the same speeds as bench_model (seed 0). Also returns the largest
+    relative difference of its TC and COR from simulate_impact on the first n_check
+    impacts (expected ~1e-14: the same arithmetic in another order). Without a C
+    compiler the throughput is null, with a note.
+    """
+    import shutil
+
+    from ballimpact.balls import BALLS
+    from ballimpact.model import simulate_impact
+
+    cc = shutil.which(os.environ.get("CC", "cc"))
+    if cc is None:
+        return {"model_reference_c_impacts_per_s": None,
+                "model_reference_c_note": f"no C compiler ({os.environ.get('CC', 'cc')}) found: reference not measured"}
+    p = BALLS["pressurised"].params
+    vin = np.random.default_rng(0).uniform(14, 30, n)
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "reference_model"
+        build = subprocess.run([cc, "-O2", "-ffp-contract=off", "-o", str(exe),
+                                str(REPO / "bench" / "reference_model.c"), "-lm"], capture_output=True, text=True)
+        if build.returncode != 0:
+            return {"model_reference_c_impacts_per_s": None,
+                    "model_reference_c_note": f"{cc} failed to build bench/reference_model.c: {build.stderr.strip()[:200]}"}
+        stdin = f"{p.mass_kg!r} {p.kb0_N_m!r} {p.ak!r} {p.a!r} {p.ac!r} {n} {repeats}\n"
+        stdin += "\n".join(repr(float(v)) for v in vin) + "\n"
+        out = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, check=True).stdout.split("\n")
+    rate = float(out[0].split()[1])
+    ref = np.array([[float(x) for x in line.split()] for line in out[1:1 + n_check]])
+    sim = simulate_impact(vin[:n_check], p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+    diff = max(np.max(np.abs(sim.contact_time_s / ref[:, 0] - 1)), np.max(np.abs(sim.cor / ref[:, 1] - 1)))
+    return {"model_reference_c_impacts_per_s": rate,
+            "model_reference_c_max_rel_diff_tc_cor": float(diff),
+            "model_reference_c_note": f"bench/reference_model.c, {cc} -O2 -ffp-contract=off, one core, {n} impacts, best of {repeats}"}
 
 
 def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
@@ -342,7 +383,7 @@ def main(argv=None) -> int:
         return 0
     if not args.fit_only:
         figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
-        figures["model_reference_c_impacts_per_s"] = 77000  # scalar C loop, one core (issue 2)
+        figures.update(bench_model_reference_c(4000 if args.quick else 20000))
     figures.update(bench_fit(REPO / "raw" / "demo-2004", n_bootstrap=200))
     figures.update(bench_fit_no_kb0(n_bootstrap=200))
     if not args.skip_workflow and not args.fit_only:

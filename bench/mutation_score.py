@@ -1,0 +1,85 @@
+"""Mutation score per module from a finished `mutmut run` (the last step of `make mutation`).
+
+    python bench/mutation_score.py            # table per module, then the survivors
+    python bench/mutation_score.py --json
+
+Reads the mutants/src/ballimpact/<module>.py.meta files mutmut 3 writes (exit code of the
+test run per mutant) and bench/mutation_equivalent.txt (mutants judged equivalent: they
+change no behaviour any input can show, each with its reason). Score = (killed + timeout)
+/ (mutants - equivalent). A mutant with no test covering its function counts as not killed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+META_DIR = REPO / "mutants" / "src" / "ballimpact"
+EQUIVALENT = REPO / "bench" / "mutation_equivalent.txt"
+
+# mutmut 3.8 (mutmut/stats.py): exit code of the mutant's test run -> status
+STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", 34: "skipped",
+          36: "timeout", -24: "timeout", 24: "timeout", 152: "timeout", 255: "timeout",
+          -11: "segfault", -9: "segfault", None: "not checked"}
+
+
+def equivalent_mutants(path: Path = EQUIVALENT) -> dict[str, str]:
+    """Mutants judged equivalent, name without 'ballimpact.' -> reason (lines 'name  reason', # comments)."""
+    out = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            line = line.split("#", 1)[0].strip()
+            if line:
+                name, _, reason = line.partition(" ")
+                out[name] = reason.strip()
+    return out
+
+
+def scores(meta_dir: Path = META_DIR) -> dict:
+    equivalent = equivalent_mutants()
+    table, survivors = {}, []
+    for meta in sorted(meta_dir.glob("*.py.meta")):
+        codes = json.loads(meta.read_text())["exit_code_by_key"]
+        counts = Counter()
+        for name, code in codes.items():
+            status = STATUS.get(code, "suspicious")
+            if name.removeprefix("ballimpact.") in equivalent and status != "killed":
+                status = "equivalent"
+            counts[status] += 1
+            if status in ("survived", "no tests", "not checked", "suspicious", "skipped"):
+                survivors.append((name, status))
+        total = sum(counts.values())
+        detected = counts["killed"] + counts["timeout"] + counts["segfault"]
+        judged = total - counts["equivalent"]
+        table[meta.name.removesuffix(".py.meta")] = dict(
+            counts, mutants=total, score_pct=round(100.0 * detected / judged, 1) if judged else None)
+    return {"modules": table, "not_killed": survivors}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+    if not META_DIR.exists():
+        print(f"no mutmut results in {META_DIR}: run `make mutation` first", file=sys.stderr)
+        return 2
+    res = scores()
+    if args.json:
+        print(json.dumps(res, indent=2))
+        return 0
+    cols = ("mutants", "killed", "timeout", "equivalent", "survived", "no tests", "score_pct")
+    print(f"{'module':14s}" + "".join(f"{c:>12s}" for c in cols))
+    for mod, c in res["modules"].items():
+        print(f"{mod:14s}" + "".join(f"{c.get(k, 0)!s:>12s}" for k in cols))
+    print("\nnot killed (and not listed as equivalent):")
+    for name, status in res["not_killed"]:
+        print(f"  {name}  [{status}]")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
