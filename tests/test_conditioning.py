@@ -70,12 +70,12 @@ def test_impulse_not_biased_by_the_undershoot(seed):
         results[tau] = voltage_impulse(truth.time_s, c.voltage_V, c.contact.start_s, c.contact.end_s)
     assert_allclose(results[0.3], results[None], rtol=5e-4)
     assert_allclose(results[0.3], truth.impulse_V_s, rtol=2e-3)
-    # without the decay correction the impulse would be low by about TC / (2 tau) = 0.7 %
+    # a wrong given time constant (no decay, for a 0.3 s amplifier) cannot return the
+    # baseline to zero on both sides of the contact: the integrity check names it
     v, fs, truth = make_trace(tau_s=0.3, seed=seed, **CHAIN)
     raw = condition_voltage(v, fs, tau_s=math.inf)
     assert raw.tau_source == "given"
-    naive = voltage_impulse(truth.time_s, raw.voltage_V, raw.contact.start_s, raw.contact.end_s)
-    assert naive < truth.impulse_V_s * (1 - 0.004)
+    assert any("off zero" in p for p in raw.problems)
 
 
 def test_given_time_constant_used():

@@ -6,21 +6,38 @@ The charge amplifier acts as a first-order high-pass with time constant tau:
 
     V_true(t) = V_meas(t) + (1 / tau) * integral_{start}^{t} V_meas dt'
 
-After the contact V_true = 0, so the measured signal sits at the undershoot
-``-U = -(1 / tau) * integral over the contact of V_meas``, which gives
-``tau = integral / U``. U is measured as the step of the post-contact baseline
-relative to the pre-contact baseline at the contact end.
+After the contact V_true = 0, so there the measured signal obeys
+``V_meas(t) = -(1 / tau) * integral_{start}^{t} V_meas dt'``: the undershoot and
+its exponential recovery, for any tau (0.01 s, where the signal decays visibly
+during the contact, as well as 100 s). The baseline model is therefore linear in
+``kappa = 1 / tau``:
 
-The baseline model, fitted by linear least squares to the quiet samples only
-(up to 100 ms of pre-trigger, and up to 50 ms of the post-contact stretch
-after a guard for plate ringing):
-offset + sin/cos at the mains frequency and its harmonics (one phase-continuous
-model for the whole trace) + on the post-contact stretch a step and a slope
-(the undershoot and its slow recovery). Offset and hum are subtracted
-everywhere; the step is not subtracted but removed by the decay correction.
-Contact detection (:func:`ballimpact.contact.detect_contact`) and this fit are
-iterated: a rough window from the offset-removed raw trace first, then the
-window found on the corrected signal until it no longer moves.
+* every quiet sample: offset + sin/cos at the mains frequency and its harmonics
+  (one phase-continuous model for the whole trace);
+* quiet samples after the contact start: ``- kappa * I(t)``, with ``I`` the
+  running integral of the offset- and hum-free signal from the contact start
+  (taken from the previous iteration).
+
+It is fitted by least squares, with one robust pass that drops outliers, to the
+quiet samples only: up to 100 ms of pre-trigger and up to 50 ms after a guard
+for plate ringing, minus every event found in the record (second contacts,
+with guards). Single-sample spikes are replaced by the mean of their neighbours
+first. When ``kappa`` is known (``tau_s`` given) it is used exactly.
+
+Events before baseline: each iteration decay-corrects the whole record and
+marks every run that stands out of the noise (above 6 noise deviations and 1 %
+of the peak) besides the main contact; the next fit leaves them out, so a second
+contact can never bend the baseline. The contact window and the event mask are
+iterated until they no longer move.
+
+Mains: when ``mains_hz="auto"``, the fit is done without hum, with 50 Hz and
+with 60 Hz harmonics on the same quiet samples and the smallest Bayesian
+information criterion wins; when 50 and 60 Hz fit about equally well and their
+hum differs under the contact, the impact is flagged as a problem.
+
+Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
+the impact): decay not measurable or not an amplifier decay, corrected signal
+before or after the contact not flat at zero, mains frequency not resolved.
 """
 
 from __future__ import annotations
@@ -34,20 +51,39 @@ from scipy.integrate import cumulative_trapezoid
 
 from .contact import ContactResult, detect_contact, robust_noise
 
-__all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage"]
+__all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
 
 PRE_GUARD_S = 0.5e-3  # quiet pre-trigger ends this long before the contact start [s]
 POST_GUARD_S = 2.0e-3  # quiet post stretch begins this long after the contact end (plate ringing) [s]
 PRE_WINDOW_S = 0.1  # longest pre-contact stretch used for the baseline fit [s]
-POST_WINDOW_S = 0.05  # longest post-contact stretch: the decay is close to a straight line over it [s]
+POST_WINDOW_S = 0.05  # longest post-contact stretch used for the baseline fit [s]
 MIN_QUIET_SAMPLES = 20  # fewest samples for a pre or post baseline [samples]
-MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the undershoot step [s]
-UNDERSHOOT_SIGNIFICANCE = 5.0  # undershoot must exceed this many standard errors [-]
-TAU_BOUNDS_S = (0.01, 1.0e4)  # plausible charge-amplifier time constants [s]
+MIN_PRE_SAMPLES = 8  # fewest pre-contact samples for an offset at all [samples]
+MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the decay [s]
+UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
+TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
-MAX_ITERATIONS = 6  # contact window / baseline iterations [-]
+BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
+MAX_ITERATIONS = 8  # contact window / baseline iterations [-]
 CONVERGED_SAMPLES = 0.01  # window change that ends the iteration [samples]
 NYQUIST_MARGIN = 0.45  # harmonics above this fraction of the sample rate are skipped [-]
+MAINS_CANDIDATES_HZ = (50.0, 60.0)  # mains frequencies tried when not given [Hz]
+MAINS_AMBIGUOUS_BIC = 10.0  # 50 and 60 Hz fits closer than this in BIC are not told apart [-]
+MAINS_AMBIGUOUS_FRACTION = 1.0e-3  # ... and matter when their hum differs by more under the contact [-]
+ROBUST_SIGMA = 5.0  # quiet samples off the first fit by more noise deviations are dropped [-]
+EVENT_SIGMA = 6.0  # an event stands this many noise deviations out of the corrected record [-]
+EVENT_FRACTION = 0.01  # ... and reaches this fraction of the main peak [-]
+EVENT_GUARD_BEFORE_S = 0.5e-3  # samples this long before an event are left out of the fit [s]
+EVENT_GUARD_AFTER_S = 2.0e-3  # ... and this long after it (ringing) [s]
+SPIKE_SIGMA = 12.0  # a spike's second difference exceeds this many noise deviations [-]
+SPIKE_SHAPE_TOLERANCE = 0.15  # neighbours' second differences within this fraction of h of -h/2 (0 two and three away) [-]
+FLAT_WINDOW_S = 2.0e-3  # stretches of the corrected signal checked for a level off zero [s]
+FLAT_FRACTION = 2.0e-3  # a level above this fraction of the peak ... [-]
+FLAT_SIGMA = 5.0  # ... and this many standard errors is a problem [-]
+MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
+RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end [s]
+RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
+RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
 
 class ConditioningWarning(UserWarning):
@@ -75,7 +111,8 @@ class ConditionedSignal:
     tau_source : str
         ``"estimated"``, ``"given"`` or ``"none"``.
     undershoot_V : float
-        Step of the baseline at the contact end, positive downwards [V].
+        Step of the baseline just after the contact, positive downwards
+        (``kappa`` times the contact's integral) [V].
     undershoot_se_V : float
         Standard error of undershoot_V [V].
     offset_V : float
@@ -84,14 +121,20 @@ class ConditionedSignal:
         Offset + hum model subtracted from every sample (polarity applied) [V].
     baseline_coefficients : dict
         The fitted model: ``offset_V``, ``hum_cos_V`` and ``hum_sin_V`` (one per
-        harmonic), ``hum_frequencies_hz``, ``post_step_V``, ``post_slope_V_per_s``,
-        ``post_anchor_s`` (time of the step, on the trace's time axis).
+        harmonic), ``hum_frequencies_hz``, ``kappa_per_s`` (1 / tau),
+        ``kappa_se_per_s``, ``mains_hz`` (the mains frequency used, 0 for
+        none), ``mains_source`` (``"given"``, ``"detected"`` or ``"none"``).
     contact : ContactResult
         Contact found on the corrected voltage.
     n_iterations : int
         Window/baseline iterations done [-].
     warnings : tuple of str
         Messages of the ConditioningWarnings issued.
+    problems : tuple of str
+        Reasons the impact cannot be trusted (each names what was seen);
+        empty when the conditioning passed every integrity check.
+    spike_indices : tuple of int
+        Samples replaced as single-sample spikes [-].
     """
 
     voltage_V: np.ndarray
@@ -108,86 +151,177 @@ class ConditionedSignal:
     contact: ContactResult = field(repr=False)
     n_iterations: int = 0
     warnings: tuple[str, ...] = ()
+    problems: tuple[str, ...] = ()
+    spike_indices: tuple[int, ...] = ()
 
 
 @dataclass
 class _BaselineFit:
     baseline: np.ndarray  # offset + hum at every sample [V]
     coef: dict
-    step: float  # post step at the anchor [V]
-    step_se: float  # its standard error [V]
-    has_step: bool
+    kappa: float  # 1 / tau [1/s] (the given one, or the estimate; NaN when not estimable)
+    kappa_se: float  # its standard error [1/s]
+    has_post: bool  # kappa could be estimated
     noise: float  # robust noise of the quiet residuals [V]
     hum_amplitudes: tuple[float, ...]
+    bic: float  # Bayesian information criterion of the fit [-]
+    quiet: np.ndarray  # samples used [bool]
+    pre: np.ndarray  # pre-contact quiet samples [bool]
+    post: np.ndarray  # post-contact quiet samples [bool]
 
 
-def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard) -> _BaselineFit:
-    """Least-squares offset + hum (+ post step and slope) on the quiet samples."""
-    n = v.size
+def remove_spikes(voltage_V, noise_rms_V: float | None = None):
+    """Replace isolated single-sample spikes by the mean of their two neighbours.
+
+    A spike of height h at sample k has second differences ``h`` at k, ``-h/2``
+    at k-1 and k+1 and about 0 at k-2, k+2, k-3 and k+3; a contact, ringing or a step has
+    not. Spikes are those with ``|h|`` above SPIKE_SIGMA noise deviations of the
+    second difference and that shape.
+
+    Parameters
+    ----------
+    voltage_V : array_like
+        Voltage [V].
+    noise_rms_V : float, optional
+        Noise of the second difference [V]; robust estimate when omitted.
+
+    Returns
+    -------
+    voltage_V : numpy.ndarray
+        Copy with the spikes replaced [V].
+    indices : numpy.ndarray
+        Replaced samples [-].
+    """
+    v = np.array(voltage_V, dtype=float).ravel()
+    if v.size < 7:
+        return v, np.zeros(0, dtype=int)
+    d2 = np.zeros(v.size)
+    d2[1:-1] = v[1:-1] - 0.5 * (v[:-2] + v[2:])
+    s = robust_noise(d2[1:-1]) if noise_rms_V is None else float(noise_rms_V)
+    if not (s > 0):
+        s = float(np.min(np.diff(np.unique(v)))) if np.unique(v).size > 1 else 0.0
+        if not (s > 0):
+            return v, np.zeros(0, dtype=int)
+    cand = np.flatnonzero(np.abs(d2[3:-3]) > SPIKE_SIGMA * s) + 3
+    if cand.size == 0:
+        return v, cand
+    h = d2[cand]
+    tol = SPIKE_SHAPE_TOLERANCE * np.abs(h)
+    shape = (np.abs(d2[cand - 1] + 0.5 * h) < tol) & (np.abs(d2[cand + 1] + 0.5 * h) < tol)
+    shape &= (np.abs(d2[cand - 2]) < tol) & (np.abs(d2[cand + 2]) < tol)
+    shape &= (np.abs(d2[cand - 3]) < tol) & (np.abs(d2[cand + 3]) < tol)
+    idx = cand[shape]
+    v[idx] = 0.5 * (v[idx - 1] + v[idx + 1])
+    return v, idx
+
+
+def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
     idx = np.arange(n)
     pre = (idx < start_u - pre_guard) & (idx >= start_u - pre_guard - PRE_WINDOW_S * fs)
+    if np.count_nonzero(pre & ~mask) < MIN_PRE_SAMPLES and math.isfinite(start_u):
+        # a short pre-trigger: come closer to the contact (the cloth foot is < 0.2 ms)
+        pre = (idx < start_u - min(pre_guard, 0.2e-3 * fs)) & (idx >= start_u - PRE_WINDOW_S * fs)
     post = (idx > end_u + post_guard) & (idx <= end_u + post_guard + POST_WINDOW_S * fs)
+    return pre & ~mask, post & ~mask
+
+
+def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, integral=None,
+                  kappa_given=None) -> _BaselineFit:
+    """Robust least-squares offset + hum (- kappa * running integral after the start) on the quiet samples."""
+    n = v.size
+    if mask is None:
+        mask = np.zeros(n, dtype=bool)
+    pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
-    has_pre = np.count_nonzero(pre) >= MIN_QUIET_SAMPLES
-    has_step = has_pre and np.count_nonzero(post) >= min_post
+    has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
+    has_post = has_pre and integral is not None and np.count_nonzero(post) >= min_post
+    if integral is None or not has_pre:
+        post = post & False if has_pre else post
     quiet = pre | post
-    if np.count_nonzero(quiet) < MIN_QUIET_SAMPLES:
+    if np.count_nonzero(quiet) < MIN_PRE_SAMPLES:
         # no quiet stretch at all: a median offset is the best there is
-        quiet = np.ones(n, dtype=bool)
-        has_step = False
-    t = idx / fs
+        quiet = ~mask if np.count_nonzero(~mask) >= 3 else np.ones(n, dtype=bool)
+        pre, post = quiet, np.zeros(n, dtype=bool)
+        has_post = False
+    t = np.arange(n) / fs
     tq = t[quiet]
     span = tq[-1] - tq[0] if tq.size else 0.0
     freqs = [f for f in frequencies if span * f >= 1.0]  # need a full period of each hum component
-    cols = [np.ones(n)]
+    qi = np.flatnonzero(quiet)
+    y = v[qi].copy()
+    tqi = t[qi]
+    cols = [np.ones(qi.size)]
     for f in freqs:
-        cols.append(np.cos(2 * np.pi * f * t))
-        cols.append(np.sin(2 * np.pi * f * t))
+        cols.append(np.cos(2 * np.pi * f * tqi))
+        cols.append(np.sin(2 * np.pi * f * tqi))
     n_base = len(cols)
-    anchor_s = end_u / fs
-    if has_step:
-        cols.append(post.astype(float))
-        cols.append(np.where(post, t - anchor_s, 0.0))
-    a_full = np.column_stack(cols)
-    a = a_full[quiet]
-    y = v[quiet]
+    post_q = post[qi]
+    estimate_kappa = has_post and kappa_given is None
+    if integral is not None and kappa_given is not None:
+        y = y + np.where(post_q, kappa_given * integral[qi], 0.0)
+    if estimate_kappa:
+        cols.append(np.where(post_q, -integral[qi], 0.0))
+    a = np.column_stack(cols)
     norms = np.sqrt(np.sum(a * a, axis=0))
     norms[norms == 0] = 1.0
     an = a / norms
-    # normal equations of the column-normalised design: a few columns, many rows
-    ata_inv = np.linalg.pinv(an.T @ an, rcond=1e-12, hermitian=True)
-    coef = (ata_inv @ (an.T @ y)) / norms
-    resid = y - a @ coef
-    dof = max(y.size - a.shape[1], 1)
-    s2 = float(resid @ resid) / dof
-    baseline = a_full[:, :n_base] @ coef[:n_base]
-    step = step_se = 0.0
-    if has_step:
-        cov_n = ata_inv * s2
-        step = float(coef[n_base])
-        step_se = float(math.sqrt(max(cov_n[n_base, n_base], 0.0)) / norms[n_base])
-    resid_all = v - a_full @ coef
-    noise_region = pre if has_pre else quiet
-    noise = robust_noise(resid_all[noise_region])
+    keep = np.ones(qi.size, dtype=bool)
+    for _ in range(2):
+        ak, yk = an[keep], y[keep]
+        ata_inv = np.linalg.pinv(ak.T @ ak, rcond=1e-12, hermitian=True)
+        coef_n = ata_inv @ (ak.T @ yk)
+        resid = y - an @ coef_n
+        s = robust_noise(resid[keep])
+        new_keep = np.abs(resid) <= ROBUST_SIGMA * max(s, 1e-300)
+        if np.count_nonzero(new_keep) < max(0.8 * qi.size, a.shape[1] + 3) or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    coef = coef_n / norms
+    rk = resid[keep]
+    dof = max(rk.size - a.shape[1], 1)
+    s2 = float(rk @ rk) / dof
+    baseline = np.full(n, coef[0])
+    for i, f in enumerate(freqs):
+        baseline += coef[1 + 2 * i] * np.cos(2 * np.pi * f * t) + coef[2 + 2 * i] * np.sin(2 * np.pi * f * t)
+    if estimate_kappa:
+        kappa = float(coef[n_base])
+        kappa_se = float(math.sqrt(max(ata_inv[n_base, n_base] * s2, 0.0)) / norms[n_base])
+    elif kappa_given is not None:
+        kappa, kappa_se = float(kappa_given), 0.0
+    else:
+        kappa, kappa_se = math.nan, math.nan
+    pre_q = pre[qi]
+    noise_sel = pre_q & keep if np.count_nonzero(pre_q & keep) >= MIN_QUIET_SAMPLES else keep
+    noise = robust_noise(resid[noise_sel])
+    rss = max(float(rk @ rk), 1e-300)
+    bic = rk.size * math.log(rss / rk.size) + a.shape[1] * math.log(rk.size) if rk.size else math.inf
     amps = tuple(float(math.hypot(coef[1 + 2 * i], coef[2 + 2 * i])) for i in range(len(freqs)))
     coef_dict = {
         "offset_V": float(coef[0]),
         "hum_frequencies_hz": tuple(float(f) for f in freqs),
         "hum_cos_V": tuple(float(coef[1 + 2 * i]) for i in range(len(freqs))),
         "hum_sin_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
-        "post_step_V": step if has_step else math.nan,
-        "post_slope_V_per_s": float(coef[n_base + 1]) if has_step else math.nan,
+        "kappa_per_s": kappa,
+        "kappa_se_per_s": kappa_se,
     }
-    return _BaselineFit(baseline, coef_dict, step, step_se, has_step, noise, amps)
+    return _BaselineFit(baseline, coef_dict, kappa, kappa_se, has_post or kappa_given is not None, noise, amps,
+                        bic, quiet, pre, post)
+
+
+def _running_integral(y, fs, start_u):
+    """Trapezium integral of y from the sample before start, 0 before it [V s]."""
+    i0 = max(int(math.floor(start_u)) - 1, 0)
+    out = np.zeros(y.size)
+    if i0 < y.size - 1:
+        out[i0:] = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
+    return out
 
 
 def _decay_correct(y, fs, start_u, tau):
     """Inverse first-order high-pass from the contact start: y + cumulative integral / tau."""
-    i0 = max(int(math.floor(start_u)) - 1, 0)
     x = y.copy()
-    if math.isfinite(tau) and i0 < y.size - 1:
-        c = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
-        x[i0:] += c / tau
+    if math.isfinite(tau):
+        x += _running_integral(y, fs, start_u) / tau
     return x
 
 
@@ -198,7 +332,32 @@ def _integral_to(y, fs, start_u, end_u) -> float:
     return float(np.interp(end_u - i0, np.arange(c.size), c))
 
 
-def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | None = 50.0,
+def _mains_frequencies(mains_hz, n_harmonics, fs):
+    return [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
+
+
+def _event_mask(x, fs, noise, contact: ContactResult, pre_guard, post_guard):
+    """Samples of every event other than the main contact (runs standing out of the noise), with guards."""
+    n = x.size
+    peak = max(float(x[contact.peak_index]), 0.0) if contact.found else float(np.max(x))
+    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
+    above = x > thr
+    if contact.found:
+        a = max(int(math.floor((contact.start_s - 0.0) * fs - pre_guard)), 0)
+        b = min(int(math.ceil(contact.end_s * fs + post_guard)) + 1, n)
+        above[a:b] = False
+    mask = np.zeros(n, dtype=bool)
+    if not above.any():
+        return mask
+    d = np.diff(np.concatenate([[0], above.view(np.int8), [0]]))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    gb, ga = int(round(EVENT_GUARD_BEFORE_S * fs)), int(round(EVENT_GUARD_AFTER_S * fs))
+    for s, e in zip(starts, ends):
+        mask[max(s - gb, 0):min(e + ga, n)] = True
+    return mask
+
+
+def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
@@ -217,16 +376,18 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         Sample rate [Hz].
     polarity : int
         +1 when compressive force gives positive voltage, -1 otherwise [-].
-    mains_hz : float or None
-        Mains frequency [Hz]; None or 0 fits no hum.
+    mains_hz : float, "auto" or None
+        Mains frequency [Hz], used exactly; ``"auto"`` (default) detects 50 Hz,
+        60 Hz or no hum from the quiet samples; None or 0 fits no hum.
     n_harmonics : int
         Hum components fitted: the fundamental and its harmonics up to
         ``n_harmonics * mains_hz`` [-].
     t0_s : float
         Time of the first sample [s] (only for the times reported).
     tau_s : float, optional
-        Known amplifier time constant [s]; ``math.inf`` for a DC-coupled
-        amplifier. Estimated from the undershoot when omitted.
+        Known amplifier time constant [s], undone exactly; ``math.inf`` for a
+        DC-coupled amplifier. Estimated from the post-contact baseline when
+        omitted.
     pre_guard_s, post_guard_s : float
         Samples closer than this to the contact are left out of the baseline
         fit [s].
@@ -235,14 +396,15 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     -------
     ConditionedSignal
         Corrected voltage [V] with the noise [V], hum [V], tau [s], baseline
-        model and the contact found on it. When no contact is found, only
-        offset and hum are removed and ``contact.found`` is False.
+        model, the contact found on it and the integrity problems found. When
+        no contact is found, only offset and hum are removed and
+        ``contact.found`` is False.
 
     Raises
     ------
     ValueError
         For non-finite samples, fewer than 3 samples, a non-positive sample rate,
-        a polarity other than +1/-1 or a non-positive tau_s.
+        a polarity other than +1/-1, a negative mains_hz or a non-positive tau_s.
 
     Warns
     -----
@@ -256,7 +418,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
     if polarity not in (1, -1):
         raise ValueError(f"polarity must be 1 or -1, got {polarity!r}")
-    if mains_hz is not None and (not math.isfinite(mains_hz) or mains_hz < 0):
+    auto_mains = isinstance(mains_hz, str)
+    if auto_mains and mains_hz != "auto":
+        raise ValueError(f"mains_hz must be a number of Hz, 'auto' or None, got {mains_hz!r}")
+    if not auto_mains and mains_hz is not None and (not math.isfinite(mains_hz) or mains_hz < 0):
         raise ValueError(f"mains_hz must be non-negative and finite, got {mains_hz!r}")
     if n_harmonics < 0:
         raise ValueError(f"n_harmonics must be non-negative, got {n_harmonics}")
@@ -276,104 +441,190 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if not (scale > 0 and math.isfinite(scale)):
         scale = 1.0
     v = polarity * (raw / scale)
-    frequencies = []
-    if mains_hz:
-        frequencies = [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
+    v, spikes = remove_spikes(v)
+    if auto_mains:
+        candidates = {0.0: []}
+        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
+    else:
+        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
+    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
     pre_guard = pre_guard_s * fs
     post_guard = post_guard_s * fs
     messages: list[str] = []
+    problems: list[str] = []
+    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
     rough = detect_contact(v - np.median(v), fs)
     if not rough.found:
-        fit = _fit_baseline(v, fs, frequencies, -math.inf, -math.inf, 0.0, 0.0)
+        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
+        mains = min(fits, key=lambda f: fits[f].bic)
+        fit = fits[mains]
         y = v - fit.baseline
         contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-        return _result(y, fit, math.nan, "none", math.nan, contact, 0, messages, t0_s, math.nan, scale)
+        return _result(y, fit, math.nan, "none", contact, 0, messages, problems, t0_s, scale, spikes, mains,
+                       mains_source)
 
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
+    n = v.size
+    mask = np.zeros(n, dtype=bool)
+    idx = np.arange(n)
+    pre0 = (idx < start_u - pre_guard) & (idx >= start_u - pre_guard - PRE_WINDOW_S * fs)
+    baseline_prev = np.full(n, np.median(v[pre0]) if pre0.any() else np.median(v))
     tau = math.nan
     source = "none"
     n_iter = 0
     pending: list[str] = []
+    tau_problems: list[str] = []
+    mains = next(iter(candidates))
+    ambiguous: tuple | None = None
+    fit = None
     for n_iter in range(1, MAX_ITERATIONS + 1):
-        fit = _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard)
+        integral = _running_integral(v - baseline_prev, fs, start_u)
+        if len(candidates) > 1 and n_iter <= 3:
+            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, integral, kappa_given)
+                    for f, fr in candidates.items()}
+            mains = min(fits, key=lambda f: fits[f].bic)
+            fit = fits[mains]
+            hum = [f for f in fits if f > 0]
+            ambiguous = None
+            if mains > 0 and fits[mains].hum_amplitudes:
+                other = [f for f in hum if f != mains][0]
+                if fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
+                    ambiguous = (mains, other, fits[other].baseline)
+        else:
+            fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, integral,
+                                kappa_given)
+        baseline_prev = fit.baseline
         y = v - fit.baseline
-        integral = _integral_to(y, fs, start_u, end_u)
-        tau, source, pending = _choose_tau(tau_s, fit, integral, (end_u - start_u) / fs, scale)
+        contact_integral = _integral_to(y, fs, start_u, end_u)
+        tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
+                                                         scale)
         x = _decay_correct(y, fs, start_u, tau)
         c = detect_contact(x, fs, noise_rms_V=fit.noise)
         if not c.found:
             break
+        new_mask = _event_mask(x, fs, fit.noise, c, pre_guard, post_guard)
         new_start, new_end = c.start_s * fs, c.end_s * fs
         moved = max(abs(new_start - start_u), abs(new_end - end_u))
-        start_u, end_u = new_start, new_end
-        if moved < CONVERGED_SAMPLES:
+        same_mask = np.array_equal(new_mask, mask)
+        start_u, end_u, mask = new_start, new_end, new_mask
+        if moved < CONVERGED_SAMPLES and same_mask and not (len(candidates) > 1 and n_iter < 2):
             break
     for msg in pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
+    problems.extend(tau_problems)
     contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-    undershoot = -fit.step if fit.has_step else math.nan
-    return _result(x, fit, tau, source, undershoot, contact, n_iter, messages, t0_s, end_u / fs, scale)
+    if contact.found:
+        problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
+    return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
+                   mains_source, contact_integral)
+
+
+def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u):
+    """Problems of the corrected signal: a level off zero before or after the contact, unresolved mains."""
+    out = []
+    peak = float(contact.peak_V)
+    if not peak > 0:
+        return out
+    w = max(int(round(FLAT_WINDOW_S * fs)), MIN_QUIET_SAMPLES)
+    pre_idx = np.flatnonzero(fit.pre)
+    post_idx = np.flatnonzero(fit.post)
+    stretches = []
+    if pre_idx.size >= MIN_PRE_SAMPLES:
+        stretches.append(("before", pre_idx[-w:]))
+    if post_idx.size >= 2 * MIN_QUIET_SAMPLES:
+        stretches.append(("just after", post_idx[:w]))
+        if post_idx.size > 2 * w:
+            stretches.append(("later after", post_idx[-w:]))
+    for where, sel in stretches:
+        level = float(np.mean(x[sel]))
+        se = fit.noise / math.sqrt(sel.size)
+        if abs(level) > FLAT_FRACTION * peak and abs(level) > FLAT_SIGMA * se:
+            out.append(f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
+                       f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed")
+    n_contact = (contact.end_s - contact.start_s) * fs
+    if n_contact < MIN_CONTACT_SAMPLES:
+        out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
+                   "sample rate too low for the contact time")
+    end_u_c = (contact.end_s - t0_s) * fs
+    a = int(math.ceil(end_u_c + RING_GAP_S * fs))
+    b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
+    if b - a >= 3:
+        ring = float(np.sqrt(np.mean(x[a:b] ** 2)))
+        if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
+            out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
+                       f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
+    if ambiguous is not None:
+        mains, other, other_baseline = ambiguous
+        a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
+        diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a else 0.0
+        if diff > MAINS_AMBIGUOUS_FRACTION * peak:
+            out.append(f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
+                       f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
+                       "(give daq.mains_hz)")
+    return out
 
 
 def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, scale: float):
-    """Time constant for the decay correction, its source and the warnings to give.
+    """Time constant for the decay correction, its source, the warnings to give and the problems found.
 
-    A positive undershoot always gives tau = integral / undershoot (applying a
-    noisy tau is unbiased; skipping it is not). A warning is given when the
-    undershoot is not measurable (below UNDERSHOOT_SIGNIFICANCE standard
-    errors) and the impulse could then be off by more than BIAS_WARN_FRACTION.
+    A significant positive kappa gives tau = 1 / kappa (applying a noisy tau is
+    unbiased; skipping it is not). A kappa that is not measurable is applied as
+    found when positive (0 otherwise); the impact is a problem when the decay
+    hidden in the noise could bias the impulse by more than
+    BIAS_EXCLUDE_FRACTION, and a warning is given above BIAS_WARN_FRACTION.
     """
     if tau_s is not None:
-        return float(tau_s), "given", []
-    if not fit.has_step:
-        return math.inf, "none", [
-            "charge-amplifier decay not corrected: no quiet baseline both before and at least "
-            f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot"
-        ]
-    undershoot = -fit.step
-    se = fit.step_se
-    messages = []
-    if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(undershoot):
-        # how much could an undershoot hidden in the noise change the impulse?
-        bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / (2.0 * integral)
+        return float(tau_s), "given", [], []
+    if not fit.has_post:
+        msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
+               f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
+        return math.inf, "none", [msg], [msg + " (give plate.time_constant_s)"]
+    kappa, se = fit.kappa, fit.kappa_se
+    undershoot = kappa * integral
+    messages, problems = [], []
+    if kappa < -UNDERSHOOT_SIGNIFICANCE * se:
+        msg = (f"charge-amplifier decay not corrected: the baseline after the contact is "
+               f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)")
+        return math.inf, "none", [msg], [msg]
+    if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(kappa):
+        # how much could a decay hidden in the noise change the impulse?
+        bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / 2.0
         if bias > BIAS_WARN_FRACTION:
-            messages.append(
-                f"charge-amplifier undershoot not measurable ({undershoot * scale * 1e3:.3g} "
-                f"+/- {se * scale * 1e3:.2g} mV): "
-                f"the impulse may be off by up to {bias * 100:.2g} %"
-            )
-    if not integral > 0:
-        return math.inf, "none", messages
-    if undershoot < -UNDERSHOOT_SIGNIFICANCE * se:
-        return math.inf, "none", [
-            f"charge-amplifier decay not corrected: the baseline after the contact is "
-            f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)"
-        ]
-    if undershoot <= 0:
-        return math.inf, "none", messages
-    tau = integral / undershoot
+            msg = (f"charge-amplifier undershoot not measurable ({undershoot * scale * 1e3:.3g} "
+                   f"+/- {se * integral * scale * 1e3:.2g} mV): "
+                   f"the impulse may be off by up to {bias * 100:.2g} %")
+            messages.append(msg)
+            if bias > BIAS_EXCLUDE_FRACTION:
+                problems.append(msg)
+    if not (integral > 0 and kappa > 0):
+        return math.inf, "none", messages, problems
+    tau = 1.0 / kappa
     if tau > TAU_BOUNDS_S[1]:
-        return math.inf, "none", messages  # DC-coupled in effect: the correction is negligible
+        return math.inf, "none", messages, problems  # DC-coupled in effect: the correction is negligible
     if tau < TAU_BOUNDS_S[0]:
-        return math.inf, "none", messages + [
-            f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
-            f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)"
-        ]
-    return tau, "estimated", messages
+        msg = (f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
+               f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)")
+        return math.inf, "none", messages + [msg], problems + [msg]
+    return tau, "estimated", messages, problems
 
 
-def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, messages, t0_s, anchor_s, scale):
+def _result(x, fit: _BaselineFit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
+            mains_source, contact_integral=math.nan):
     """Assemble the ConditionedSignal, back in volts."""
     coef = dict(fit.coef)
-    for key in ("offset_V", "post_step_V", "post_slope_V_per_s"):
-        coef[key] = coef[key] * scale
+    coef["offset_V"] = coef["offset_V"] * scale
     for key in ("hum_cos_V", "hum_sin_V"):
         coef[key] = tuple(c * scale for c in coef[key])
-    coef["post_anchor_s"] = t0_s + anchor_s if math.isfinite(anchor_s) else math.nan
+    has_hum = bool(fit.hum_amplitudes)
+    coef["mains_hz"] = float(mains) if has_hum else 0.0
+    coef["mains_source"] = mains_source if has_hum or mains_source == "given" else "none"
     contact = replace(contact, peak_V=contact.peak_V * scale, noise_rms_V=contact.noise_rms_V * scale,
                       threshold_V=contact.threshold_V * scale)
+    estimated = fit.has_post and math.isfinite(fit.kappa) and math.isfinite(contact_integral)
+    undershoot = fit.kappa * contact_integral * scale if estimated else math.nan
+    undershoot_se = fit.kappa_se * abs(contact_integral) * scale if estimated else math.nan
     with np.errstate(over="ignore"):
         return ConditionedSignal(
             voltage_V=x * scale,
@@ -382,12 +633,14 @@ def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, mess
             hum_harmonic_amplitudes_V=tuple(a * scale for a in fit.hum_amplitudes),
             tau_s=float(tau),
             tau_source=source,
-            undershoot_V=float(undershoot * scale),
-            undershoot_se_V=float(fit.step_se * scale) if fit.has_step else math.nan,
+            undershoot_V=float(undershoot),
+            undershoot_se_V=float(undershoot_se),
             offset_V=float(coef["offset_V"]),
             baseline_V=fit.baseline * scale,
             baseline_coefficients=coef,
             contact=contact,
             n_iterations=int(n_iter),
             warnings=tuple(messages),
+            problems=tuple(dict.fromkeys(problems)),
+            spike_indices=tuple(int(i) for i in spikes),
         )

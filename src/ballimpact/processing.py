@@ -181,7 +181,9 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         try:
-            cond = condition_voltage(raw, fs, polarity=meta.polarity, mains_hz=meta.mains_hz, t0_s=trace.t0_s)
+            cond = condition_voltage(raw, fs, polarity=meta.polarity,
+                                     mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
+                                     tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
             return res.exclude(f"unusable trace: {exc}")
     res.noise_rms_V = cond.noise_rms_V
@@ -192,9 +194,13 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
         return res.exclude("no contact found")
     res.raw_time_s = t - contact.start_s
     if contact.n_impacts > 1:
-        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found)")
+        seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
+                         f"{100 * frac:.0f} % of the peak" for k, (dt, frac) in enumerate(contact.other_impacts))
+        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found: {seen})")
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
         res.exclude("contact not entirely inside the trace (truncated trace?)")
+    for problem in cond.problems:
+        res.exclude(problem)
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):

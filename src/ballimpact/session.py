@@ -42,12 +42,12 @@ MASS_MIN_G = 1.0  # [g] exclusive lower bound of a plausible ball mass
 MASS_MAX_G = 1000.0  # [g] exclusive upper bound of a plausible ball mass
 MASS_TYPICAL_MIN_G = 40.0  # [g] below this a warning (tennis balls are 56-59.4 g)
 MASS_TYPICAL_MAX_G = 70.0  # [g] above this a warning
-DEFAULT_MAINS_HZ = 50.0  # [Hz] default `daq.mains_hz`
+DEFAULT_MAINS_HZ = None  # `daq.mains_hz` absent: found in each trace (v1.1)
 FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the timer sanity bound
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
 _KNOWN_SECTION_KEYS = {
-    "plate": {"polarity", "kcal_range_N_per_V"},
+    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
     "gates": {"spacing_m", "resolution_s"},
 }
@@ -87,10 +87,11 @@ class SessionMeta:
     gate_spacing_m: float  # [m] distance between gate 1 and gate 2
     gate_resolution_s: float  # [s] timer resolution
     balls: dict[str, BallType]
-    mains_hz: float  # [Hz] mains frequency, optional `daq.mains_hz`, default 50
+    mains_hz: float | None  # [Hz] mains frequency, optional `daq.mains_hz`; None = find it in each trace
     synthetic: bool  # optional top-level `synthetic`, default False
     raw: dict  # the parsed YAML, for the archive
     kcal_range_N_per_V: tuple[float, float] | None = None  # [N/V] optional `plate.kcal_range_N_per_V`
+    time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
 
 
 @dataclass
@@ -343,6 +344,9 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
                 f"got {value!r}"
             )
         kcal_range = (bounds[0], bounds[1])
+    time_constant_s = None
+    if plate.get("time_constant_s") is not None:
+        time_constant_s = _number(plate["time_constant_s"], "plate.time_constant_s", file, positive=True)
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
 
     daq = _section(data, "daq", file)
@@ -424,6 +428,7 @@ def _parse_meta(data: dict, folder_name: str, file: str) -> SessionMeta:
         synthetic=synthetic,
         raw=data,
         kcal_range_N_per_V=kcal_range,
+        time_constant_s=time_constant_s,
     )
 
 
