@@ -12,8 +12,8 @@ its exponential recovery, for any tau (0.01 s, where the signal decays visibly
 during the contact, as well as 100 s). The baseline model is therefore linear in
 ``kappa = 1 / tau``:
 
-* every quiet sample: offset + sin/cos at the mains frequency and its harmonics
-  (one phase-continuous model for the whole trace);
+* every quiet sample: offset + linear drift + sin/cos at the mains frequency and
+  its harmonics (one phase-continuous model for the whole trace);
 * quiet samples after the contact start: ``- kappa * I(t)``, with ``I`` the
   running integral of the offset- and hum-free signal from the contact start
   (taken from the previous iteration).
@@ -83,6 +83,8 @@ FLAT_SIGMA = 5.0  # ... and this many standard errors is a problem [-]
 MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
+RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
+RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
 
@@ -250,7 +252,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     qi = np.flatnonzero(quiet)
     y = v[qi].copy()
     tqi = t[qi]
-    cols = [np.ones(qi.size)]
+    t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
+    cols = [np.ones(qi.size), tqi - t_mid]
     for f in freqs:
         cols.append(np.cos(2 * np.pi * f * tqi))
         cols.append(np.sin(2 * np.pi * f * tqi))
@@ -280,9 +283,9 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     rk = resid[keep]
     dof = max(rk.size - a.shape[1], 1)
     s2 = float(rk @ rk) / dof
-    baseline = np.full(n, coef[0])
+    baseline = coef[0] + coef[1] * (t - t_mid)
     for i, f in enumerate(freqs):
-        baseline += coef[1 + 2 * i] * np.cos(2 * np.pi * f * t) + coef[2 + 2 * i] * np.sin(2 * np.pi * f * t)
+        baseline += coef[2 + 2 * i] * np.cos(2 * np.pi * f * t) + coef[3 + 2 * i] * np.sin(2 * np.pi * f * t)
     if estimate_kappa:
         kappa = float(coef[n_base])
         kappa_se = float(math.sqrt(max(ata_inv[n_base, n_base] * s2, 0.0)) / norms[n_base])
@@ -295,17 +298,32 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     noise = robust_noise(resid[noise_sel])
     rss = max(float(rk @ rk), 1e-300)
     bic = rk.size * math.log(rss / rk.size) + a.shape[1] * math.log(rk.size) if rk.size else math.inf
-    amps = tuple(float(math.hypot(coef[1 + 2 * i], coef[2 + 2 * i])) for i in range(len(freqs)))
+    amps = tuple(float(math.hypot(coef[2 + 2 * i], coef[3 + 2 * i])) for i in range(len(freqs)))
     coef_dict = {
-        "offset_V": float(coef[0]),
+        "offset_V": float(coef[0] + coef[1] * (t[0] - t_mid)),
+        "drift_V_per_s": float(coef[1]),
         "hum_frequencies_hz": tuple(float(f) for f in freqs),
-        "hum_cos_V": tuple(float(coef[1 + 2 * i]) for i in range(len(freqs))),
-        "hum_sin_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
+        "hum_cos_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
+        "hum_sin_V": tuple(float(coef[3 + 2 * i]) for i in range(len(freqs))),
         "kappa_per_s": kappa,
         "kappa_se_per_s": kappa_se,
     }
     return _BaselineFit(baseline, coef_dict, kappa, kappa_se, has_post or kappa_given is not None, noise, amps,
                         bic, quiet, pre, post)
+
+
+def _rough_trend(v, n_blocks=20):
+    """A robust straight line through the record (Theil-Sen on block medians) [V]."""
+    n = v.size
+    if n < 4 * n_blocks:
+        return np.full(n, np.median(v))
+    edges = np.linspace(0, n, n_blocks + 1).astype(int)
+    centres = 0.5 * (edges[:-1] + edges[1:] - 1)
+    meds = np.array([np.median(v[a:b]) for a, b in zip(edges[:-1], edges[1:])])
+    i, j = np.triu_indices(n_blocks, 1)
+    slope = float(np.median((meds[j] - meds[i]) / (centres[j] - centres[i])))
+    icpt = float(np.median(meds - slope * centres))
+    return icpt + slope * np.arange(n)
 
 
 def _running_integral(y, fs, start_u):
@@ -454,7 +472,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     problems: list[str] = []
     kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
-    rough = detect_contact(v - np.median(v), fs)
+    trend = _rough_trend(v)
+    rough = detect_contact(v - trend, fs)
     if not rough.found:
         fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
         mains = min(fits, key=lambda f: fits[f].bic)
@@ -467,9 +486,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
     n = v.size
     mask = np.zeros(n, dtype=bool)
-    idx = np.arange(n)
-    pre0 = (idx < start_u - pre_guard) & (idx >= start_u - pre_guard - PRE_WINDOW_S * fs)
-    baseline_prev = np.full(n, np.median(v[pre0]) if pre0.any() else np.median(v))
+    baseline_prev = trend
     tau = math.nan
     source = "none"
     n_iter = 0
@@ -555,6 +572,12 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
             out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
                        f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
+    line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs)
+    if line is not None:
+        f_line, amp_line, prominence = line
+        out.append(f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
+                   f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
+                   "force and plate ringing not separable")
     if ambiguous is not None:
         mains, other, other_baseline = ambiguous
         a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
@@ -564,6 +587,38 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
                        f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
                        "(give daq.mains_hz)")
     return out
+
+
+def _ringing_line(xc, fs):
+    """A plate resonance in the contact: (frequency [Hz], amplitude [V], prominence [-]) or None.
+
+    The contact less a quartic (its smooth shape) is Hann-windowed and
+    zero-padded 4x; the largest spectral amplitude between RING_LINE_MIN_HZ
+    and 0.45 fs is a line when it exceeds RING_LINE_PROMINENCE times the median
+    amplitude within a factor 1.6 of its frequency (the smooth contact and the
+    noise have no lines).
+    """
+    n = xc.size
+    if n < MIN_CONTACT_SAMPLES:
+        return None
+    u = np.linspace(-1.0, 1.0, n)
+    r = xc - np.polynomial.polynomial.polyval(u, np.polynomial.polynomial.polyfit(u, xc, 4))
+    w = np.hanning(n)
+    nfft = 4 * n
+    amp = 2.0 * np.abs(np.fft.rfft(r * w, nfft)) / w.sum()
+    f = np.fft.rfftfreq(nfft, 1.0 / fs)
+    band = np.flatnonzero((f > RING_LINE_MIN_HZ) & (f < NYQUIST_MARGIN * fs))
+    if band.size < 10:
+        return None
+    k = int(band[np.argmax(amp[band])])
+    lo, hi = np.searchsorted(f, [f[k] / 1.6, f[k] * 1.6])
+    ref = np.concatenate([amp[lo:max(k - 12, lo)], amp[k + 12:hi]])
+    if ref.size < 8:
+        return None
+    prominence = float(amp[k] / max(np.median(ref), 1e-300))
+    if prominence <= RING_LINE_PROMINENCE:
+        return None
+    return float(f[k]), float(amp[k]), prominence
 
 
 def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, scale: float):
@@ -615,6 +670,7 @@ def _result(x, fit: _BaselineFit, tau, source, contact, n_iter, messages, proble
     """Assemble the ConditionedSignal, back in volts."""
     coef = dict(fit.coef)
     coef["offset_V"] = coef["offset_V"] * scale
+    coef["drift_V_per_s"] = coef["drift_V_per_s"] * scale
     for key in ("hum_cos_V", "hum_sin_V"):
         coef[key] = tuple(c * scale for c in coef[key])
     has_hum = bool(fit.hum_amplitudes)

@@ -52,6 +52,8 @@ PHYSICAL_BOUNDS = {
 }
 #: Session-level kCAL check: excluded when both the robust z-score and the relative
 #: deviation from the session median exceed these.
+#: Mains hum components removed: the fundamental and its harmonics up to the 5th.
+HUM_HARMONICS = 5
 KCAL_MAX_ROBUST_Z = 5.0
 KCAL_MAX_RELATIVE = 0.10
 
@@ -183,7 +185,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
         try:
             cond = condition_voltage(raw, fs, polarity=meta.polarity,
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
-                                     tau_s=meta.time_constant_s, t0_s=trace.t0_s)
+                                     n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
             return res.exclude(f"unusable trace: {exc}")
     res.noise_rms_V = cond.noise_rms_V
