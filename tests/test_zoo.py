@@ -154,7 +154,7 @@ def test_clipped_trace_reaches_the_rail():
 
 @pytest.mark.parametrize("fraction, fault", [(0.02, ""), (0.3, "second contact"), (1.0, "second contact")])
 def test_second_contact_size_and_fault(fraction, fault):
-    tr = ideal(6, second=(0.3, fraction, 12.0), post_s=0.08)
+    tr = ideal(6, second=(0.008, fraction, 12.0), post_s=0.08)
     t = np.arange(tr.voltage_V.size) / tr.sample_rate_hz
     v = tr.voltage_V * tr.rig.polarity * tr.truth.kcal_N_per_V
     later = t > tr.truth.end_s + 0.5e-3

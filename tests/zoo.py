@@ -12,7 +12,7 @@ The sensor chain, in the order a rig applies it
    steps (the paper's exact zero below 2 mm of compression, so the force starts
    with a jump), placed at a random sub-sample instant; optionally a second
    contact (the model's force of a slower impact, scaled to 1-100 % of the main
-   peak) a few to tens of ms later.
+   peak) 1-45 ms after the end of the first.
 2. The plate, as a PHYSICAL second-order mechanical response of the sensed
    force to the applied force, wn^2 / (s^2 + 2 zeta wn s + wn^2) with unit static
    gain: it rings after the jumps of the force, lags a little, and keeps the
@@ -176,7 +176,8 @@ class Rig:
     spikes : tuple
         (time [s], amplitude [V]) of single-sample spikes.
     second : tuple or None
-        Second contact (start-to-start delay [s], peak fraction of the main peak [-],
+        Second contact (gap from the end of the main contact to its start [s], 1-45 ms
+        log-uniform; peak as a fraction of the main peak [-], 1-100 % log-uniform;
         speed whose model force gives its shape [m/s]).
     truncate : str
         "", "start" or "end": the trace starts / ends inside the main contact.
@@ -295,7 +296,7 @@ def _draw(rng, factor):
         return {"spikes": tuple((float(rng.uniform()), float(rng.choice([-1, 1]) * _loguniform(rng, 0.02, 2.0)))
                                 for _ in range(n))}
     if factor == "second_contact":
-        return {"second": (float(rng.uniform(0.0, 1.0)), _loguniform(rng, 0.01, 1.0), float(rng.uniform(5.0, 20.0)))}
+        return {"second": (_loguniform(rng, 1e-3, 45e-3), _loguniform(rng, 0.01, 1.0), float(rng.uniform(5.0, 20.0)))}
     if factor == "truncated":
         return {"truncate": str(rng.choice(["start", "end"])), "truncate_frac": float(rng.uniform(0.1, 0.9))}
     if factor == "clipped":
@@ -454,12 +455,9 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     # Second contact.
     second_knots = None
     if rig.second is not None:
-        where, frac, v2 = rig.second
-        # start-to-start delay: from 1 ms after the main contact's end to 50 ms
-        lo_d = tc + 1.0e-3
-        delay = lo_d + where * (max(0.05, lo_d + 1e-3) - lo_d)
+        gap, frac, v2 = rig.second
         k2t, k2f, sim2, _, _ = model_force(rig.ball, rig.scale, v2)
-        second_knots = (k2t + t_start + delay, k2f * (frac * peak / float(sim2.peak_force_N)))
+        second_knots = (k2t + t_start + tc + gap, k2f * (frac * peak / float(sim2.peak_force_N)))
 
     # Fine grid holding every DAQ instant: t_j = (j0 + j) h, h = 1 / (m fs).
     m = max(1, int(math.ceil(FINE_RATE_HZ / fs)))
@@ -557,6 +555,11 @@ def make_trace(rng: np.random.Generator, mode: str = "random", label: str = "", 
     return render(rig, rng, label)
 
 
+def main_contact_time(rig: Rig) -> float:
+    """TC of the rig's main contact [s] (first to last instant of non-zero force)."""
+    return float(model_force(rig.ball, rig.scale, rig.vin_m_s)[0][-1])
+
+
 def mode_for(index: int) -> str:
     """The draw mode of trace ``index`` of a run: every other trace one factor (in turn), else random."""
     if index % 2 == 0:
@@ -627,7 +630,7 @@ def describe(rig: Rig) -> str:
     if rig.spikes:
         parts.append(f"{len(rig.spikes)} spikes")
     if rig.second is not None:
-        parts.append(f"second frac {rig.second[1]:.3f} at {rig.second[0]:.2f}")
+        parts.append(f"second {100 * rig.second[1]:.1f} % {1e3 * rig.second[0]:.1f} ms after the end")
     if rig.truncate:
         parts.append(f"truncated at {rig.truncate}")
     if rig.clip_factor > 1:
