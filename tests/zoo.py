@@ -729,7 +729,7 @@ def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms"):
 
     own = workdir is None
     base = Path(tempfile.mkdtemp(prefix="zoo-")) if own else Path(workdir)
-    folder = base / f"zoo-{abs(hash(trace.label)) % 10**8}-{np.random.default_rng().integers(10**9)}"
+    folder = Path(tempfile.mkdtemp(prefix="zoo-", dir=base))  # its name is the session id
     try:
         write_session_folder(trace, folder, trace_format=trace_format)
         with warnings.catch_warnings():
