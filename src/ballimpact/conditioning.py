@@ -473,6 +473,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
     trend = _rough_trend(v)
+    # the record before the peak holds no undershoot: its median is the level under the contact
+    k_peak = int(np.argmax(v - trend))
+    if k_peak >= MIN_QUIET_SAMPLES:
+        trend = np.full(v.size, float(np.median(v[:k_peak])))
     rough = detect_contact(v - trend, fs)
     if not rough.found:
         fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
