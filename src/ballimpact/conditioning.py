@@ -42,12 +42,14 @@ before or after the contact not flat at zero, mains frequency not resolved.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
+from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 
@@ -85,6 +87,7 @@ RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end 
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
 RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
+RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
 
@@ -227,17 +230,26 @@ def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
     return pre & ~mask, post & ~mask
 
 
-def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, integral=None,
+def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, with_decay=False,
                   kappa_given=None) -> _BaselineFit:
-    """Robust least-squares offset + hum (- kappa * running integral after the start) on the quiet samples."""
+    """Robust least squares of the baseline model on the quiet samples (see the module docstring).
+
+    Pre-contact quiet samples: ``v = B`` with ``B = sum_j theta_j phi_j`` (offset,
+    drift, hum). Post-contact quiet samples: ``y + kappa * integral y = 0`` with
+    ``y = v - B`` integrated from the contact start, i.e.
+    ``v + kappa * Iv = sum_j theta_j (phi_j + kappa * Phi_j)`` (``Iv``, ``Phi_j``
+    the running integrals of v and phi_j). For a given kappa this is linear in
+    theta; kappa (when not given) minimises the residual sum of squares, found
+    on a grid and refined, with normal equations built once (quadratic in kappa).
+    """
     n = v.size
     if mask is None:
         mask = np.zeros(n, dtype=bool)
     pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
     has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
-    has_post = has_pre and integral is not None and np.count_nonzero(post) >= min_post
-    if integral is None or not has_pre:
+    has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
+    if not with_decay or not has_pre:
         post = post & False if has_pre else post
     quiet = pre | post
     if np.count_nonzero(quiet) < MIN_PRE_SAMPLES:
@@ -245,50 +257,94 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         quiet = ~mask if np.count_nonzero(~mask) >= 3 else np.ones(n, dtype=bool)
         pre, post = quiet, np.zeros(n, dtype=bool)
         has_post = False
+    use_post = has_post and (kappa_given is None or kappa_given > 0)
+    if not has_post and has_pre and with_decay:
+        quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
+        post = np.zeros(n, dtype=bool)
     t = np.arange(n) / fs
-    tq = t[quiet]
+    qi = np.flatnonzero(quiet)
+    tq = t[qi]
     span = tq[-1] - tq[0] if tq.size else 0.0
     freqs = [f for f in frequencies if span * f >= 1.0]  # need a full period of each hum component
-    qi = np.flatnonzero(quiet)
-    y = v[qi].copy()
-    tqi = t[qi]
     t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
-    cols = [np.ones(qi.size), tqi - t_mid]
-    for f in freqs:
-        cols.append(np.cos(2 * np.pi * f * tqi))
-        cols.append(np.sin(2 * np.pi * f * tqi))
-    n_base = len(cols)
-    post_q = post[qi]
-    estimate_kappa = has_post and kappa_given is None
-    if integral is not None and kappa_given is not None:
-        y = y + np.where(post_q, kappa_given * integral[qi], 0.0)
-    if estimate_kappa:
-        cols.append(np.where(post_q, -integral[qi], 0.0))
-    a = np.column_stack(cols)
-    norms = np.sqrt(np.sum(a * a, axis=0))
+
+    trig = _trig(n, fs, tuple(freqs))
+
+    def design(sel):
+        tt = t[sel]
+        return np.column_stack([np.ones(tt.size), tt - t_mid, trig[sel]])
+
+    phi = design(qi)
+    p = phi.shape[1]
+    norms = np.sqrt(np.sum(phi * phi, axis=0))
     norms[norms == 0] = 1.0
-    an = a / norms
+    phi = phi / norms
+    y = v[qi]
+    big_phi = np.zeros_like(phi)
+    iv = np.zeros(qi.size)
+    post_q = post[qi]
+    if use_post and post_q.any():
+        i0 = max(int(math.floor(start_u)) - 1, 0)
+        last = int(qi[post_q][-1])
+        at = qi[post_q] - i0
+        big_phi[post_q] = cumulative_trapezoid(design(slice(i0, last + 1)) / norms, dx=1.0 / fs, axis=0,
+                                               initial=0.0)[at]
+        iv[post_q] = cumulative_trapezoid(v[i0:last + 1], dx=1.0 / fs, initial=0.0)[at]
+
+    def normal(keep):
+        a, b_, y_, i_ = phi[keep], big_phi[keep], y[keep], iv[keep]
+        return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
+                float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
+
+    def solve(ne, k):
+        p0, p1, p2, q0, q1, q2, r0, r1, r2 = ne
+        k = np.atleast_1d(np.asarray(k, dtype=float))[:, None, None]
+        a = p0 + k * p1 + k * k * p2
+        q = (q0 + k[:, :, 0] * q1 + k[:, :, 0] ** 2 * q2)[:, :, None]
+        try:
+            theta = np.linalg.solve(a, q)[:, :, 0]
+        except np.linalg.LinAlgError:
+            theta = (np.linalg.pinv(a, rcond=1e-12, hermitian=True) @ q)[:, :, 0]
+        kk = k[:, 0, 0]
+        rss = np.maximum(r0 + kk * r1 + kk * kk * r2 - np.sum(q[:, :, 0] * theta, axis=1), 0.0)
+        return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
+
+    def best_kappa(ne):
+        if kappa_given is not None or not use_post:
+            return (kappa_given if use_post else 0.0), math.nan
+        k_max = 2.0 / TAU_BOUNDS_S[0]
+        pos = np.geomspace(1e-4, k_max, 48)
+        grid = np.concatenate([-pos[::-1], [0.0], pos])
+        rss = solve(ne, grid)[0]
+        j = int(np.argmin(rss))
+        lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+        res = minimize_scalar(lambda k: solve(ne, k)[0], bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9 * max(abs(grid[j]), 1e-3)})
+        k = float(res.x) if res.fun <= rss[j] else float(grid[j])
+        h = max(1e-3 * abs(k), 1e-5)
+        r3 = solve(ne, np.array([k - h, k, k + h]))[0]
+        curv = (r3[0] - 2.0 * r3[1] + r3[2]) / (h * h)
+        return k, curv
+
     keep = np.ones(qi.size, dtype=bool)
     for _ in range(2):
-        ak, yk = an[keep], y[keep]
-        ata_inv = np.linalg.pinv(ak.T @ ak, rcond=1e-12, hermitian=True)
-        coef_n = ata_inv @ (ak.T @ yk)
-        resid = y - an @ coef_n
+        ne = normal(keep)
+        kappa, curv = best_kappa(ne)
+        rss, theta = solve(ne, kappa)
+        resid = (y + kappa * iv) - (phi + kappa * big_phi) @ theta
         s = robust_noise(resid[keep])
         new_keep = np.abs(resid) <= ROBUST_SIGMA * max(s, 1e-300)
-        if np.count_nonzero(new_keep) < max(0.8 * qi.size, a.shape[1] + 3) or np.array_equal(new_keep, keep):
+        if np.count_nonzero(new_keep) < max(0.8 * qi.size, p + 3) or np.array_equal(new_keep, keep):
             break
         keep = new_keep
-    coef = coef_n / norms
-    rk = resid[keep]
-    dof = max(rk.size - a.shape[1], 1)
-    s2 = float(rk @ rk) / dof
-    baseline = coef[0] + coef[1] * (t - t_mid)
-    for i, f in enumerate(freqs):
-        baseline += coef[2 + 2 * i] * np.cos(2 * np.pi * f * t) + coef[3 + 2 * i] * np.sin(2 * np.pi * f * t)
-    if estimate_kappa:
-        kappa = float(coef[n_base])
-        kappa_se = float(math.sqrt(max(ata_inv[n_base, n_base] * s2, 0.0)) / norms[n_base])
+    n_par = p + (1 if (use_post and kappa_given is None) else 0)
+    n_keep = int(np.count_nonzero(keep))
+    dof = max(n_keep - n_par, 1)
+    s2 = rss / dof
+    coef = theta / norms
+    baseline = coef[0] + coef[1] * (t - t_mid) + trig @ coef[2:]
+    if use_post and kappa_given is None:
+        kappa_se = math.sqrt(2.0 * s2 / curv) if curv > 0 else math.inf
     elif kappa_given is not None:
         kappa, kappa_se = float(kappa_given), 0.0
     else:
@@ -296,8 +352,7 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     pre_q = pre[qi]
     noise_sel = pre_q & keep if np.count_nonzero(pre_q & keep) >= MIN_QUIET_SAMPLES else keep
     noise = robust_noise(resid[noise_sel])
-    rss = max(float(rk @ rk), 1e-300)
-    bic = rk.size * math.log(rss / rk.size) + a.shape[1] * math.log(rk.size) if rk.size else math.inf
+    bic = n_keep * math.log(max(rss, 1e-300) / n_keep) + n_par * math.log(n_keep) if n_keep else math.inf
     amps = tuple(float(math.hypot(coef[2 + 2 * i], coef[3 + 2 * i])) for i in range(len(freqs)))
     coef_dict = {
         "offset_V": float(coef[0] + coef[1] * (t[0] - t_mid)),
@@ -305,11 +360,23 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         "hum_frequencies_hz": tuple(float(f) for f in freqs),
         "hum_cos_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
         "hum_sin_V": tuple(float(coef[3 + 2 * i]) for i in range(len(freqs))),
-        "kappa_per_s": kappa,
-        "kappa_se_per_s": kappa_se,
+        "kappa_per_s": float(kappa),
+        "kappa_se_per_s": float(kappa_se),
     }
-    return _BaselineFit(baseline, coef_dict, kappa, kappa_se, has_post or kappa_given is not None, noise, amps,
-                        bic, quiet, pre, post)
+    return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
+                        noise, amps, bic, quiet, pre, post)
+
+
+@functools.lru_cache(maxsize=4)
+def _trig(n, fs, freqs):
+    """cos and sin of each frequency at the n sample times, one column each [-]."""
+    t = np.arange(n) / fs
+    out = np.empty((n, 2 * len(freqs)))
+    for i, f in enumerate(freqs):
+        out[:, 2 * i] = np.cos(2 * np.pi * f * t)
+        out[:, 2 * i + 1] = np.sin(2 * np.pi * f * t)
+    out.flags.writeable = False
+    return out
 
 
 def _rough_trend(v, n_blocks=20):
@@ -490,7 +557,6 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
     n = v.size
     mask = np.zeros(n, dtype=bool)
-    baseline_prev = trend
     tau = math.nan
     source = "none"
     n_iter = 0
@@ -500,9 +566,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     ambiguous: tuple | None = None
     fit = None
     for n_iter in range(1, MAX_ITERATIONS + 1):
-        integral = _running_integral(v - baseline_prev, fs, start_u)
         if len(candidates) > 1 and n_iter <= 3:
-            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, integral, kappa_given)
+            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
                     for f, fr in candidates.items()}
             mains = min(fits, key=lambda f: fits[f].bic)
             fit = fits[mains]
@@ -513,9 +578,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                 if fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
                     ambiguous = (mains, other, fits[other].baseline)
         else:
-            fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, integral,
+            fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
                                 kappa_given)
-        baseline_prev = fit.baseline
         y = v - fit.baseline
         contact_integral = _integral_to(y, fs, start_u, end_u)
         tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
@@ -576,7 +640,8 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
             out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
                        f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
-    line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs)
+    line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
+                         fit.noise)
     if line is not None:
         f_line, amp_line, prominence = line
         out.append(f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
@@ -593,14 +658,15 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     return out
 
 
-def _ringing_line(xc, fs):
+def _ringing_line(xc, fs, noise):
     """A plate resonance in the contact: (frequency [Hz], amplitude [V], prominence [-]) or None.
 
     The contact less a quartic (its smooth shape) is Hann-windowed and
     zero-padded 4x; the largest spectral amplitude between RING_LINE_MIN_HZ
     and 0.45 fs is a line when it exceeds RING_LINE_PROMINENCE times the median
     amplitude within a factor 1.6 of its frequency (the smooth contact and the
-    noise have no lines).
+    noise have no lines), and RING_LINE_NOISE_FACTOR times the amplitude white
+    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window).
     """
     n = xc.size
     if n < MIN_CONTACT_SAMPLES:
@@ -620,7 +686,7 @@ def _ringing_line(xc, fs):
     if ref.size < 8:
         return None
     prominence = float(amp[k] / max(np.median(ref), 1e-300))
-    if prominence <= RING_LINE_PROMINENCE:
+    if prominence <= RING_LINE_PROMINENCE or amp[k] <= RING_LINE_NOISE_FACTOR * 1.73 * noise / math.sqrt(n):
         return None
     return float(f[k]), float(amp[k]), prominence
 
