@@ -68,6 +68,7 @@ BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the imp
 BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
 MAX_ITERATIONS = 8  # contact window / baseline iterations [-]
 CONVERGED_SAMPLES = 0.01  # window change that ends the iteration [samples]
+UNSTABLE_SAMPLES = 0.5  # still moving by more after MAX_ITERATIONS: a problem [samples]
 NYQUIST_MARGIN = 0.45  # harmonics above this fraction of the sample rate are skipped [-]
 MAINS_CANDIDATES_HZ = (50.0, 60.0)  # mains frequencies tried when not given [Hz]
 MAINS_AMBIGUOUS_BIC = 10.0  # 50 and 60 Hz fits closer than this in BIC are not told apart [-]
@@ -265,7 +266,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     qi = np.flatnonzero(quiet)
     tq = t[qi]
     span = tq[-1] - tq[0] if tq.size else 0.0
-    freqs = [f for f in frequencies if span * f >= 1.0]  # need a full period of each hum component
+    # a full period of the fundamental is needed, or no hum is fitted at all
+    freqs = list(frequencies) if frequencies and span * min(frequencies) >= 1.0 else []
     t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
 
     trig = _trig(n, fs, tuple(freqs))
@@ -575,7 +577,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             ambiguous = None
             if mains > 0 and fits[mains].hum_amplitudes:
                 other = [f for f in hum if f != mains][0]
-                if fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
+                if not fits[other].hum_amplitudes:
+                    ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
+                elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
                     ambiguous = (mains, other, fits[other].baseline)
         else:
             fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
@@ -595,6 +599,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         start_u, end_u, mask = new_start, new_end, new_mask
         if moved < CONVERGED_SAMPLES and same_mask and not (len(candidates) > 1 and n_iter < 2):
             break
+    else:
+        if c.found and moved > UNSTABLE_SAMPLES:
+            problems.append(f"contact window not stable under the baseline fit: its ends still move by "
+                            f"{moved:.2g} samples after {MAX_ITERATIONS} iterations")
     for msg in pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
@@ -628,6 +636,21 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         if abs(level) > FLAT_FRACTION * peak and abs(level) > FLAT_SIGMA * se:
             out.append(f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
                        f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed")
+    # the residual of the quiet samples must be white noise: compare its rms with the noise of
+    # sample-to-sample differences (blind to hum and drift)
+    qi = np.flatnonzero(fit.quiet)
+    if qi.size >= 2 * MIN_QUIET_SAMPLES:
+        y = x[qi]
+        pairs = np.flatnonzero(np.diff(qi) == 1)
+        if pairs.size >= MIN_QUIET_SAMPLES:
+            white = robust_noise(y[pairs + 1] - y[pairs]) / math.sqrt(2.0)
+            resid = y - np.median(y)
+            clipped = np.clip(resid, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else resid
+            excess = math.sqrt(max(float(np.mean(clipped ** 2)) - white ** 2, 0.0))
+            if excess > FLAT_FRACTION * peak and excess > white:
+                out.append(f"quiet baseline not explained by offset, drift, hum and decay: {excess * scale * 1e3:.3g} mV "
+                           f"rms above the white noise ({100 * excess / peak:.2g} % of the peak; hum or drift "
+                           "not resolved?)")
     n_contact = (contact.end_s - contact.start_s) * fs
     if n_contact < MIN_CONTACT_SAMPLES:
         out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
@@ -650,8 +673,15 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     if ambiguous is not None:
         mains, other, other_baseline = ambiguous
         a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
-        diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a else 0.0
-        if diff > MAINS_AMBIGUOUS_FRACTION * peak:
+        hum = float(np.sum(fit.hum_amplitudes))
+        if other_baseline is None and hum > MAINS_AMBIGUOUS_FRACTION * peak:
+            tq = np.flatnonzero(fit.quiet) / fs
+            out.append(f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} ms, "
+                       f"too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
+                       "(give daq.mains_hz)")
+        diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a and other_baseline is not None \
+            else 0.0
+        if other_baseline is not None and diff > MAINS_AMBIGUOUS_FRACTION * peak:
             out.append(f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
                        f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
                        "(give daq.mains_hz)")
