@@ -68,11 +68,16 @@ FAULT_WORDS = {
 }
 
 
+#: Regression cases the processing does not fix yet (strict xfail); every case of REGRESSION is fixed
+#: on the robust branch (events before baseline, exact decay model, mains detection, ringing check).
+STILL_FAILING: set[str] = set()
+
+
 def _regression_params():
     params = []
     for name, seed, mode, overrides, what, fails_today in REGRESSION:
         marks = ([pytest.mark.xfail(strict=True, raises=AssertionError, reason=f"issue 9, fails on main: {what}")]
-                 if fails_today else [])
+                 if fails_today and name in STILL_FAILING else [])
         params.append(pytest.param(name, seed, mode, overrides, what, id=name, marks=marks))
     return params
 
@@ -143,7 +148,6 @@ def test_never_ok_and_wrong(seed, mode):
     assert judgement.category != "ok_wrong", (judgement.errors, zoo.describe(trace.rig))
 
 
-@pytest.mark.xfail(strict=False, raises=AssertionError, reason="issue 9: faulty zoo traces (second contact, truncated) pass as ok on main")
 @settings(max_examples=N_EXAMPLES, **PROPERTY)
 @given(seed=SEEDS, mode=st.sampled_from(("second_contact", "truncated", "clipped", "random")),
        fraction=st.floats(0.06, 1.0), gap_s=st.floats(1e-3, 40e-3))
