@@ -12,17 +12,21 @@ its exponential recovery, for any tau (0.01 s, where the signal decays visibly
 during the contact, as well as 100 s). The baseline model is therefore linear in
 ``kappa = 1 / tau``:
 
-* every quiet sample: offset + linear drift + sin/cos at the mains frequency and
-  its harmonics (one phase-continuous model for the whole trace);
-* quiet samples after the contact start: ``- kappa * I(t)``, with ``I`` the
-  running integral of the offset- and hum-free signal from the contact start
-  (taken from the previous iteration).
+* every quiet sample: ``V = B`` with B = offset + linear drift + sin/cos at the
+  mains frequency and its harmonics (one phase-continuous model for the whole
+  trace);
+* quiet samples after the contact: ``(V - B) + kappa * integral_{start}^{t} (V - B) dt' = 0``,
+  i.e. ``V + kappa * I_V = sum_j theta_j (phi_j + kappa * I_phi_j)`` with the
+  running integrals of V and of each model column phi_j.
 
-It is fitted by least squares, with one robust pass that drops outliers, to the
-quiet samples only: up to 100 ms of pre-trigger and up to 50 ms after a guard
-for plate ringing, minus every event found in the record (second contacts,
-with guards). Single-sample spikes are replaced by the mean of their neighbours
-first. When ``kappa`` is known (``tau_s`` given) it is used exactly.
+For a given kappa this is linear in the model coefficients theta; kappa (when
+``tau_s`` is not given) is the value that minimises the residual sum of squares,
+found on a grid and refined, from normal equations that are quadratic in kappa
+and built once per fit. The fit uses the quiet samples only: up to 100 ms of
+pre-trigger and up to 50 ms after a guard for plate ringing, minus every event
+found in the record (second contacts, with guards), with one robust pass that
+drops outliers. Single-sample spikes are replaced by the mean of their
+neighbours first. When ``tau_s`` is given it is used exactly.
 
 Events before baseline: each iteration decay-corrects the whole record and
 marks every run that stands out of the noise (above 6 noise deviations and 1 %
@@ -37,7 +41,10 @@ hum differs under the contact, the impact is flagged as a problem.
 
 Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
-before or after the contact not flat at zero, mains frequency not resolved.
+before or after the contact not flat at zero, mains frequency not resolved, a
+quiet residual that is more than white noise, plate ringing during the contact
+(a spectral line) or after it, too few samples across the contact, a contact
+window that does not settle.
 """
 
 from __future__ import annotations
