@@ -295,3 +295,20 @@ def test_clean_traces_have_no_problems():
     for seed in range(4):
         v, fs, _ = make_trace(seed=seed, tau_s=[0.3, 1.0, 5.0, None][seed], **CHAIN)
         assert condition_voltage(v, fs).problems == ()
+
+
+def test_contact_end_in_the_noise_is_a_problem():
+    # zoo trace 0:1021 (tests/zoo.py, ideal plate, punctured ball): the end's hinge fit walks
+    # 25 samples into the noise after the low force tail (TC +13 %); the samples inside
+    # that end hold no force, and the check names it
+    import zoo
+
+    tr = zoo.trace_for(0, 1021)
+    fs = tr.rig.sample_rate_hz
+    c = condition_voltage(tr.voltage_V, fs, polarity=tr.rig.polarity, n_harmonics=5, tau_s=tr.rig.tau_s,
+                          mains_hz=tr.rig.mains_hz)
+    assert c.contact.end_s > tr.truth.end_s + 10 / fs
+    assert any(p.startswith("contact end not determined") for p in c.problems)
+    # a clean trace of the same chain with a well-found end has no such problem
+    v, fs, _ = make_trace(seed=3, **CHAIN)
+    assert not any("not determined" in p for p in condition_voltage(v, fs).problems)

@@ -91,6 +91,8 @@ FLAT_WINDOW_S = 2.0e-3  # stretches of the corrected signal checked for a level 
 FLAT_FRACTION = 2.0e-3  # a level above this fraction of the peak ... [-]
 FLAT_SIGMA = 5.0  # ... and this many standard errors is a problem [-]
 MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
+END_CHECK_S = 0.2e-3  # the samples this long inside each end of the contact ... [s]
+END_CHECK_SIGMA = 3.0  # ... must average above this many standard errors [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
@@ -658,6 +660,17 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
                 out.append(f"quiet baseline not explained by offset, drift, hum and decay: {excess * scale * 1e3:.3g} mV "
                            f"rms above the white noise ({100 * excess / peak:.2g} % of the peak; hum or drift "
                            "not resolved?)")
+    # each end must be where force begins / ends: the samples just inside it hold force
+    k_end = max(int(round(END_CHECK_S * fs)), 3)
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    for where, sel in (("start", np.arange(int(math.ceil(s_u)), int(math.ceil(s_u)) + k_end)),
+                       ("end", np.arange(int(math.floor(e_u)) - k_end + 1, int(math.floor(e_u)) + 1))):
+        sel = sel[(sel >= 0) & (sel < x.size)]
+        if sel.size >= 3:
+            level = float(np.mean(x[sel]))
+            if level < END_CHECK_SIGMA * fit.noise / math.sqrt(sel.size):
+                out.append(f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold no "
+                           f"force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)")
     n_contact = (contact.end_s - contact.start_s) * fs
     if n_contact < MIN_CONTACT_SAMPLES:
         out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
