@@ -101,7 +101,8 @@ RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in
 PLATE_MARGIN_S = 10e-3  # the plate is undone over the contact and this much around it [s]
 PLATE_ZETAS = (0.003, 0.006, 0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28)  # damping ratios tried [-]
 PLATE_BANDS = ((1.3, 2.0), (2.0, 3.5))  # raised-cosine low-pass after the inverse, in resonances [-]
-PLATE_TC_AGREEMENT = 3e-3  # TC with the two low-passes must agree within this fraction [-]
+PLATE_MAX_NYQUIST = 0.6  # a resonance above this fraction of the Nyquist frequency is not undone [-]
+PLATE_TC_AGREEMENT = 1.5e-3  # TC with the two low-passes must agree within this fraction [-]
 PLATE_PEAK_AGREEMENT = 1e-2  # ... and the peak within this fraction [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
@@ -788,6 +789,8 @@ def _undo_plate(x, fs, contact: ContactResult, noise, f_line, t0_s):
     different low-passes agrees (TC within PLATE_TC_AGREEMENT, peak within
     PLATE_PEAK_AGREEMENT), is a single impact, and no line is left.
     """
+    if f_line > PLATE_MAX_NYQUIST * 0.5 * fs:
+        return None, None, f"resonance above {PLATE_MAX_NYQUIST:g} of the Nyquist frequency (aliased?)"
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     w0 = max(int(s_u - PLATE_MARGIN_S * fs), 0)
     w1 = min(int(e_u + PLATE_MARGIN_S * fs) + 1, x.size)
