@@ -312,22 +312,3 @@ def test_contact_end_in_the_noise_is_a_problem():
     # a clean trace of the same chain with a well-found end has no such problem
     v, fs, _ = make_trace(seed=3, **CHAIN)
     assert not any("not determined" in p for p in condition_voltage(v, fs).problems)
-
-
-@pytest.mark.parametrize("index", [22, 230])
-def test_plate_resonance_undone(index):
-    # zoo traces 0:22 (11.7 kHz, damping 0.054) and 0:230 (18.5 kHz, 0.018): a physical second-order
-    # plate response (tests/zoo.py); the ringing put 23 % and 17 % on the peak before it was undone
-    import zoo
-
-    tr = zoo.trace_for(0, index)
-    fs, truth = tr.rig.sample_rate_hz, tr.truth
-    c = condition_voltage(tr.voltage_V, fs, polarity=tr.rig.polarity, n_harmonics=5,
-                          tau_s=tr.rig.tau_s if tr.rig.tau_known else None,
-                          mains_hz=tr.rig.mains_hz if tr.rig.mains_known else "auto")
-    assert c.problems == () and any("undone by inverting" in w for w in c.warnings)
-    t = np.arange(tr.voltage_V.size) / fs
-    impulse_true = truth.mass_kg * (truth.vin_m_s + truth.vout_m_s) / truth.kcal_N_per_V
-    assert_allclose(voltage_impulse(t, c.voltage_V, c.contact.start_s, c.contact.end_s), impulse_true, rtol=0.01)
-    assert_allclose(c.contact.contact_time_s, truth.tc_s, rtol=0.01)
-    assert_allclose(c.contact.peak_V, truth.peak_N / truth.kcal_N_per_V, rtol=0.03)

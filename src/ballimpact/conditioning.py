@@ -98,12 +98,6 @@ RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
 RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
 RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
-PLATE_MARGIN_S = 10e-3  # the plate is undone over the contact and this much around it [s]
-PLATE_ZETAS = (0.003, 0.006, 0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.14, 0.2, 0.28)  # damping ratios tried [-]
-PLATE_BANDS = ((1.3, 2.0), (2.0, 3.5))  # raised-cosine low-pass after the inverse, in resonances [-]
-PLATE_MAX_NYQUIST = 0.6  # a resonance above this fraction of the Nyquist frequency is not undone [-]
-PLATE_TC_AGREEMENT = 1.5e-3  # TC with the two low-passes must agree within this fraction [-]
-PLATE_PEAK_AGREEMENT = 1e-2  # ... and the peak within this fraction [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
 
@@ -624,19 +618,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     problems.extend(tau_problems)
     contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise)
     if contact.found:
-        found = _integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u)
-        ringing = [p for p in found if p.startswith("plate ringing at")]
-        if ringing and not any(p.startswith("plate ringing outlasts") for p in found):
-            f_line = float(ringing[0].split()[3]) * 1e3
-            x_new, c_new, note = _undo_plate(x, fs, contact, fit.noise, f_line, t0_s)
-            if x_new is not None:
-                x, contact = x_new, c_new
-                messages.append(note)
-                found = [p for p in found if not p.startswith("plate ringing at")]
-            else:
-                found = [p + f" (undoing it failed: {note})" if p.startswith("plate ringing at") else p
-                         for p in found]
-        problems.extend(found)
+        problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
     return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
                    mains_source, contact_integral)
 
@@ -757,77 +739,6 @@ def _ringing_line(xc, fs, noise):
     if prominence <= RING_LINE_PROMINENCE or amp[k] <= RING_LINE_NOISE_FACTOR * 1.73 * noise / math.sqrt(n):
         return None
     return float(f[k]), float(amp[k]), prominence
-
-
-def _plate_inverse(x, fs, f_r, zeta, band):
-    """x through the inverse of the plate's resonance, 1 - (f/f_r)^2 + 2j zeta f/f_r, then a raised-cosine low-pass."""
-    n = x.size
-    nfft = 1 << int(math.ceil(math.log2(2 * n)))
-    f = np.fft.rfftfreq(nfft, 1.0 / fs)
-    r = f / f_r
-    f1, f2 = min(band[0] * f_r, 0.35 * fs), min(band[1] * f_r, 0.5 * fs)
-    low = np.where(f < f1, 1.0, np.where(f > f2, 0.0, 0.5 * (1.0 + np.cos(np.pi * (f - f1) / max(f2 - f1, 1e-9)))))
-    return np.fft.irfft(np.fft.rfft(x, nfft) * (1.0 - r * r + 2j * zeta * r) * low, nfft)[:n]
-
-
-def _band_energy(y, fs, f_r):
-    w = np.hanning(y.size)
-    spec = np.abs(np.fft.rfft(y * w, 4 * y.size))
-    f = np.fft.rfftfreq(4 * y.size, 1.0 / fs)
-    return float(np.sum(spec[(f > 0.8 * f_r) & (f < 1.25 * f_r)] ** 2))
-
-
-def _undo_plate(x, fs, contact: ContactResult, noise, f_line, t0_s):
-    """Undo a plate resonance found as a spectral line: (corrected x, contact, note) or (None, None, why not).
-
-    The plate is a second-order mechanical response with unit static gain,
-    ``wn^2 / (s^2 + 2 zeta wn s + wn^2)``: it keeps the impulse. Its inverse is
-    applied in the frequency domain around the contact, with the resonance
-    (within 3 % of the line) and the damping ratio that leave the least
-    ringing, and a raised-cosine low-pass above the resonance (the inverse
-    amplifies the noise as f^2). Accepted only when the contact found with two
-    different low-passes agrees (TC within PLATE_TC_AGREEMENT, peak within
-    PLATE_PEAK_AGREEMENT), is a single impact, and no line is left.
-    """
-    if f_line > PLATE_MAX_NYQUIST * 0.5 * fs:
-        return None, None, f"resonance above {PLATE_MAX_NYQUIST:g} of the Nyquist frequency (aliased?)"
-    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    w0 = max(int(s_u - PLATE_MARGIN_S * fs), 0)
-    w1 = min(int(e_u + PLATE_MARGIN_S * fs) + 1, x.size)
-    xs = x[w0:w1]
-    a, b = int(math.ceil(s_u)) - w0, min(int(math.floor(e_u + 2e-3 * fs)), w1 - 1) - w0
-    if b - a < MIN_CONTACT_SAMPLES:
-        return None, None, "contact too short"
-    best = None
-    for f_r in f_line * np.array([0.97, 0.985, 1.0, 1.015, 1.03]):
-        for zeta in PLATE_ZETAS:
-            e = _band_energy(_plate_inverse(xs, fs, f_r, zeta, PLATE_BANDS[0])[a:b], fs, f_line)
-            if best is None or e < best[0]:
-                best = (e, f_r, zeta)
-    _, f_r, zeta = best
-    found = []
-    for band in PLATE_BANDS:
-        y = _plate_inverse(xs, fs, f_r, zeta, band)
-        pre = y[:max(a - int(PRE_GUARD_S * fs), 0)]
-        sigma = robust_noise(pre) if pre.size >= MIN_QUIET_SAMPLES else noise
-        c = detect_contact(y, fs, t0_s=t0_s + w0 / fs, noise_rms_V=max(sigma, noise))
-        if not c.found or c.n_impacts != 1 or "contact_at_trace_start" in c.flags or "contact_at_trace_end" in c.flags:
-            return None, None, "no single contact after undoing it"
-        found.append((y, c, sigma))
-    (_, c1, _), (y2, c2, sigma2) = found
-    tc1, tc2 = c1.contact_time_s, c2.contact_time_s
-    if abs(tc1 - tc2) > PLATE_TC_AGREEMENT * tc2 or abs(c1.peak_V - c2.peak_V) > PLATE_PEAK_AGREEMENT * c2.peak_V:
-        return None, None, (f"TC {tc1 * 1e3:.4g} / {tc2 * 1e3:.4g} ms and peak {c1.peak_V:.4g} / {c2.peak_V:.4g} "
-                            "with two low-passes")
-    i0, i1 = c2.start_index - w0, c2.end_index - w0
-    if _ringing_line(y2[max(i0, 0):i1 + 1], fs, sigma2) is not None:
-        return None, None, "a line is left"
-    out = x.copy()
-    out[w0:w1] = y2
-    c = detect_contact(out, fs, t0_s=t0_s, noise_rms_V=max(sigma2, noise))
-    note = (f"plate ringing at {f_r / 1e3:.3g} kHz (damping ratio {zeta:g}) undone by inverting the plate's "
-            "resonance")
-    return out, c, note
 
 
 def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, scale: float):
