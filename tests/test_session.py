@@ -123,7 +123,8 @@ def test_read_good_session(tmp_path):
     assert meta.adc_range_v == (-10.0, 10.0)
     assert meta.gate_spacing_m == pytest.approx(0.1, rel=1e-12)
     assert meta.gate_resolution_s == pytest.approx(1e-6, rel=1e-12)
-    assert meta.mains_hz == 50.0
+    assert meta.mains_hz is None  # v1.1: absent = find it in each trace
+    assert meta.time_constant_s is None
     assert meta.synthetic is False
     assert list(meta.balls) == ["pressurised", "pressureless"]
     ball = meta.balls["pressurised"]
@@ -153,11 +154,13 @@ def test_read_good_session(tmp_path):
 def test_optional_keys_and_unknown_keys_kept(tmp_path):
     meta = copy.deepcopy(BASE_META)
     meta["daq"]["mains_hz"] = 60
+    meta["plate"]["time_constant_s"] = 0.02
     meta["synthetic"] = True
     meta["rig"] = {"plate": "Kistler 9281", "notes": [1, 2]}
     with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'rig\.plate', 'rig\.notes'"):  # rig: v1.1 section
         session = read_session(make_session(tmp_path, meta=meta))
     assert session.meta.mains_hz == 60.0
+    assert session.meta.time_constant_s == 0.02
     assert session.meta.synthetic is True
     assert session.meta.raw["rig"] == {"plate": "Kistler 9281", "notes": [1, 2]}
 

@@ -6,48 +6,99 @@ The charge amplifier acts as a first-order high-pass with time constant tau:
 
     V_true(t) = V_meas(t) + (1 / tau) * integral_{start}^{t} V_meas dt'
 
-After the contact V_true = 0, so the measured signal sits at the undershoot
-``-U = -(1 / tau) * integral over the contact of V_meas``, which gives
-``tau = integral / U``. U is measured as the step of the post-contact baseline
-relative to the pre-contact baseline at the contact end.
+After the contact V_true = 0, so there the measured signal obeys
+``V_meas(t) = -(1 / tau) * integral_{start}^{t} V_meas dt'``: the undershoot and
+its exponential recovery, for any tau (0.01 s, where the signal decays visibly
+during the contact, as well as 100 s). The baseline model is therefore linear in
+``kappa = 1 / tau``:
 
-The baseline model, fitted by linear least squares to the quiet samples only
-(up to 100 ms of pre-trigger, and up to 50 ms of the post-contact stretch
-after a guard for plate ringing):
-offset + sin/cos at the mains frequency and its harmonics (one phase-continuous
-model for the whole trace) + on the post-contact stretch a step and a slope
-(the undershoot and its slow recovery). Offset and hum are subtracted
-everywhere; the step is not subtracted but removed by the decay correction.
-Contact detection (:func:`ballimpact.contact.detect_contact`) and this fit are
-iterated: a rough window from the offset-removed raw trace first, then the
-window found on the corrected signal until it no longer moves.
+* every quiet sample: ``V = B`` with B = offset + linear drift + sin/cos at the
+  mains frequency and its harmonics (one phase-continuous model for the whole
+  trace);
+* quiet samples after the contact: ``(V - B) + kappa * integral_{start}^{t} (V - B) dt' = 0``,
+  i.e. ``V + kappa * I_V = sum_j theta_j (phi_j + kappa * I_phi_j)`` with the
+  running integrals of V and of each model column phi_j.
+
+For a given kappa this is linear in the model coefficients theta; kappa (when
+``tau_s`` is not given) is the value that minimises the residual sum of squares,
+found on a grid and refined, from normal equations that are quadratic in kappa
+and built once per fit. The fit uses the quiet samples only: up to 100 ms of
+pre-trigger and up to 50 ms after a guard for plate ringing, minus every event
+found in the record (second contacts, with guards), with one robust pass that
+drops outliers. Single-sample spikes are replaced by the mean of their
+neighbours first. When ``tau_s`` is given it is used exactly.
+
+Events before baseline: each iteration decay-corrects the whole record and
+marks every run that stands out of the noise (above 6 noise deviations and 1 %
+of the peak) besides the main contact; the next fit leaves them out, so a second
+contact can never bend the baseline. The contact window and the event mask are
+iterated until they no longer move.
+
+Mains: when ``mains_hz="auto"``, the fit is done without hum, with 50 Hz and
+with 60 Hz harmonics on the same quiet samples and the smallest Bayesian
+information criterion wins; when 50 and 60 Hz fit about equally well and their
+hum differs under the contact, the impact is flagged as a problem.
+
+Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
+the impact): decay not measurable or not an amplifier decay, corrected signal
+before or after the contact not flat at zero, mains frequency not resolved, a
+quiet residual that is more than white noise, plate ringing during the contact
+(a spectral line) or after it, too few samples across the contact, a contact
+window that does not settle.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
+from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 
-__all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage"]
+__all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
 
 PRE_GUARD_S = 0.5e-3  # quiet pre-trigger ends this long before the contact start [s]
 POST_GUARD_S = 2.0e-3  # quiet post stretch begins this long after the contact end (plate ringing) [s]
 PRE_WINDOW_S = 0.1  # longest pre-contact stretch used for the baseline fit [s]
-POST_WINDOW_S = 0.05  # longest post-contact stretch: the decay is close to a straight line over it [s]
+POST_WINDOW_S = 0.05  # longest post-contact stretch used for the baseline fit [s]
 MIN_QUIET_SAMPLES = 20  # fewest samples for a pre or post baseline [samples]
-MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the undershoot step [s]
-UNDERSHOOT_SIGNIFICANCE = 5.0  # undershoot must exceed this many standard errors [-]
-TAU_BOUNDS_S = (0.01, 1.0e4)  # plausible charge-amplifier time constants [s]
+MIN_PRE_SAMPLES = 8  # fewest pre-contact samples for an offset at all [samples]
+MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the decay [s]
+UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
+TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
-MAX_ITERATIONS = 6  # contact window / baseline iterations [-]
+BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
+MAX_ITERATIONS = 8  # contact window / baseline iterations [-]
 CONVERGED_SAMPLES = 0.01  # window change that ends the iteration [samples]
+UNSTABLE_SAMPLES = 0.5  # still moving by more after MAX_ITERATIONS: a problem [samples]
 NYQUIST_MARGIN = 0.45  # harmonics above this fraction of the sample rate are skipped [-]
+MAINS_CANDIDATES_HZ = (50.0, 60.0)  # mains frequencies tried when not given [Hz]
+MAINS_AMBIGUOUS_BIC = 10.0  # 50 and 60 Hz fits closer than this in BIC are not told apart [-]
+MAINS_AMBIGUOUS_FRACTION = 1.0e-3  # ... and matter when their hum differs by more under the contact [-]
+ROBUST_SIGMA = 5.0  # quiet samples off the first fit by more noise deviations are dropped [-]
+EVENT_SIGMA = 6.0  # an event stands this many noise deviations out of the corrected record [-]
+EVENT_FRACTION = 0.01  # ... and reaches this fraction of the main peak [-]
+EVENT_GUARD_BEFORE_S = 0.5e-3  # samples this long before an event are left out of the fit [s]
+EVENT_GUARD_AFTER_S = 2.0e-3  # ... and this long after it (ringing) [s]
+SPIKE_SIGMA = 12.0  # a spike's second difference exceeds this many noise deviations [-]
+SPIKE_SHAPE_TOLERANCE = 0.15  # neighbours' second differences within this fraction of h of -h/2 (0 two and three away) [-]
+FLAT_WINDOW_S = 2.0e-3  # stretches of the corrected signal checked for a level off zero [s]
+FLAT_FRACTION = 2.0e-3  # a level above this fraction of the peak ... [-]
+FLAT_SIGMA = 5.0  # ... and this many standard errors is a problem [-]
+MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
+END_CHECK_S = 0.2e-3  # the samples this long inside each end of the contact ... [s]
+END_CHECK_SIGMA = 3.0  # ... must average above this many standard errors [-]
+RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end [s]
+RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
+RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
+RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
+RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
+RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 
 
 class ConditioningWarning(UserWarning):
@@ -75,7 +126,8 @@ class ConditionedSignal:
     tau_source : str
         ``"estimated"``, ``"given"`` or ``"none"``.
     undershoot_V : float
-        Step of the baseline at the contact end, positive downwards [V].
+        Step of the baseline just after the contact, positive downwards
+        (``kappa`` times the contact's integral) [V].
     undershoot_se_V : float
         Standard error of undershoot_V [V].
     offset_V : float
@@ -84,14 +136,20 @@ class ConditionedSignal:
         Offset + hum model subtracted from every sample (polarity applied) [V].
     baseline_coefficients : dict
         The fitted model: ``offset_V``, ``hum_cos_V`` and ``hum_sin_V`` (one per
-        harmonic), ``hum_frequencies_hz``, ``post_step_V``, ``post_slope_V_per_s``,
-        ``post_anchor_s`` (time of the step, on the trace's time axis).
+        harmonic), ``hum_frequencies_hz``, ``kappa_per_s`` (1 / tau),
+        ``kappa_se_per_s``, ``mains_hz`` (the mains frequency used, 0 for
+        none), ``mains_source`` (``"given"``, ``"detected"`` or ``"none"``).
     contact : ContactResult
         Contact found on the corrected voltage.
     n_iterations : int
         Window/baseline iterations done [-].
     warnings : tuple of str
         Messages of the ConditioningWarnings issued.
+    problems : tuple of str
+        Reasons the impact cannot be trusted (each names what was seen);
+        empty when the conditioning passed every integrity check.
+    spike_indices : tuple of int
+        Samples replaced as single-sample spikes [-].
     """
 
     voltage_V: np.ndarray
@@ -108,86 +166,258 @@ class ConditionedSignal:
     contact: ContactResult = field(repr=False)
     n_iterations: int = 0
     warnings: tuple[str, ...] = ()
+    problems: tuple[str, ...] = ()
+    spike_indices: tuple[int, ...] = ()
 
 
 @dataclass
 class _BaselineFit:
     baseline: np.ndarray  # offset + hum at every sample [V]
     coef: dict
-    step: float  # post step at the anchor [V]
-    step_se: float  # its standard error [V]
-    has_step: bool
+    kappa: float  # 1 / tau [1/s] (the given one, or the estimate; NaN when not estimable)
+    kappa_se: float  # its standard error [1/s]
+    has_post: bool  # kappa could be estimated
     noise: float  # robust noise of the quiet residuals [V]
     hum_amplitudes: tuple[float, ...]
+    bic: float  # Bayesian information criterion of the fit [-]
+    quiet: np.ndarray  # samples used [bool]
+    pre: np.ndarray  # pre-contact quiet samples [bool]
+    post: np.ndarray  # post-contact quiet samples [bool]
 
 
-def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard) -> _BaselineFit:
-    """Least-squares offset + hum (+ post step and slope) on the quiet samples."""
-    n = v.size
+def remove_spikes(voltage_V, noise_rms_V: float | None = None):
+    """Replace isolated single-sample spikes by the mean of their two neighbours.
+
+    A spike of height h at sample k has second differences ``h`` at k, ``-h/2``
+    at k-1 and k+1 and about 0 at k-2, k+2, k-3 and k+3; a contact, ringing or a step has
+    not. Spikes are those with ``|h|`` above SPIKE_SIGMA noise deviations of the
+    second difference and that shape.
+
+    Parameters
+    ----------
+    voltage_V : array_like
+        Voltage [V].
+    noise_rms_V : float, optional
+        Noise of the second difference [V]; robust estimate when omitted.
+
+    Returns
+    -------
+    voltage_V : numpy.ndarray
+        Copy with the spikes replaced [V].
+    indices : numpy.ndarray
+        Replaced samples [-].
+    """
+    v = np.array(voltage_V, dtype=float).ravel()
+    if v.size < 7:
+        return v, np.zeros(0, dtype=int)
+    d2 = np.zeros(v.size)
+    d2[1:-1] = v[1:-1] - 0.5 * (v[:-2] + v[2:])
+    s = robust_noise(d2[1:-1]) if noise_rms_V is None else float(noise_rms_V)
+    if not (s > 0):
+        s = float(np.min(np.diff(np.unique(v)))) if np.unique(v).size > 1 else 0.0
+        if not (s > 0):
+            return v, np.zeros(0, dtype=int)
+    cand = np.flatnonzero(np.abs(d2[3:-3]) > SPIKE_SIGMA * s) + 3
+    if cand.size == 0:
+        return v, cand
+    h = d2[cand]
+    tol = SPIKE_SHAPE_TOLERANCE * np.abs(h)
+    shape = (np.abs(d2[cand - 1] + 0.5 * h) < tol) & (np.abs(d2[cand + 1] + 0.5 * h) < tol)
+    shape &= (np.abs(d2[cand - 2]) < tol) & (np.abs(d2[cand + 2]) < tol)
+    shape &= (np.abs(d2[cand - 3]) < tol) & (np.abs(d2[cand + 3]) < tol)
+    idx = cand[shape]
+    v[idx] = 0.5 * (v[idx - 1] + v[idx + 1])
+    return v, idx
+
+
+def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
     idx = np.arange(n)
     pre = (idx < start_u - pre_guard) & (idx >= start_u - pre_guard - PRE_WINDOW_S * fs)
+    if np.count_nonzero(pre & ~mask) < MIN_PRE_SAMPLES and math.isfinite(start_u):
+        # a short pre-trigger: come closer to the contact (the cloth foot is < 0.2 ms)
+        pre = (idx < start_u - min(pre_guard, 0.2e-3 * fs)) & (idx >= start_u - PRE_WINDOW_S * fs)
     post = (idx > end_u + post_guard) & (idx <= end_u + post_guard + POST_WINDOW_S * fs)
+    return pre & ~mask, post & ~mask
+
+
+def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, with_decay=False,
+                  kappa_given=None) -> _BaselineFit:
+    """Robust least squares of the baseline model on the quiet samples (see the module docstring).
+
+    Pre-contact quiet samples: ``v = B`` with ``B = sum_j theta_j phi_j`` (offset,
+    drift, hum). Post-contact quiet samples: ``y + kappa * integral y = 0`` with
+    ``y = v - B`` integrated from the contact start, i.e.
+    ``v + kappa * Iv = sum_j theta_j (phi_j + kappa * Phi_j)`` (``Iv``, ``Phi_j``
+    the running integrals of v and phi_j). For a given kappa this is linear in
+    theta; kappa (when not given) minimises the residual sum of squares, found
+    on a grid and refined, with normal equations built once (quadratic in kappa).
+    """
+    n = v.size
+    if mask is None:
+        mask = np.zeros(n, dtype=bool)
+    pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
-    has_pre = np.count_nonzero(pre) >= MIN_QUIET_SAMPLES
-    has_step = has_pre and np.count_nonzero(post) >= min_post
+    has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
+    has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
+    if not with_decay or not has_pre:
+        post = post & False if has_pre else post
     quiet = pre | post
-    if np.count_nonzero(quiet) < MIN_QUIET_SAMPLES:
+    if np.count_nonzero(quiet) < MIN_PRE_SAMPLES:
         # no quiet stretch at all: a median offset is the best there is
-        quiet = np.ones(n, dtype=bool)
-        has_step = False
-    t = idx / fs
-    tq = t[quiet]
+        quiet = ~mask if np.count_nonzero(~mask) >= 3 else np.ones(n, dtype=bool)
+        pre, post = quiet, np.zeros(n, dtype=bool)
+        has_post = False
+    use_post = has_post and (kappa_given is None or kappa_given > 0)
+    if not has_post and has_pre and with_decay:
+        quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
+        post = np.zeros(n, dtype=bool)
+    t = np.arange(n) / fs
+    qi = np.flatnonzero(quiet)
+    tq = t[qi]
     span = tq[-1] - tq[0] if tq.size else 0.0
-    freqs = [f for f in frequencies if span * f >= 1.0]  # need a full period of each hum component
-    cols = [np.ones(n)]
-    for f in freqs:
-        cols.append(np.cos(2 * np.pi * f * t))
-        cols.append(np.sin(2 * np.pi * f * t))
-    n_base = len(cols)
-    anchor_s = end_u / fs
-    if has_step:
-        cols.append(post.astype(float))
-        cols.append(np.where(post, t - anchor_s, 0.0))
-    a_full = np.column_stack(cols)
-    a = a_full[quiet]
-    y = v[quiet]
-    norms = np.sqrt(np.sum(a * a, axis=0))
+    # a full period of the fundamental is needed, or no hum is fitted at all
+    freqs = list(frequencies) if frequencies and span * min(frequencies) >= 1.0 else []
+    t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
+
+    trig = _trig(n, fs, tuple(freqs))
+
+    def design(sel):
+        tt = t[sel]
+        return np.column_stack([np.ones(tt.size), tt - t_mid, trig[sel]])
+
+    phi = design(qi)
+    p = phi.shape[1]
+    norms = np.sqrt(np.sum(phi * phi, axis=0))
     norms[norms == 0] = 1.0
-    an = a / norms
-    # normal equations of the column-normalised design: a few columns, many rows
-    ata_inv = np.linalg.pinv(an.T @ an, rcond=1e-12, hermitian=True)
-    coef = (ata_inv @ (an.T @ y)) / norms
-    resid = y - a @ coef
-    dof = max(y.size - a.shape[1], 1)
-    s2 = float(resid @ resid) / dof
-    baseline = a_full[:, :n_base] @ coef[:n_base]
-    step = step_se = 0.0
-    if has_step:
-        cov_n = ata_inv * s2
-        step = float(coef[n_base])
-        step_se = float(math.sqrt(max(cov_n[n_base, n_base], 0.0)) / norms[n_base])
-    resid_all = v - a_full @ coef
-    noise_region = pre if has_pre else quiet
-    noise = robust_noise(resid_all[noise_region])
-    amps = tuple(float(math.hypot(coef[1 + 2 * i], coef[2 + 2 * i])) for i in range(len(freqs)))
+    phi = phi / norms
+    y = v[qi]
+    big_phi = np.zeros_like(phi)
+    iv = np.zeros(qi.size)
+    post_q = post[qi]
+    if use_post and post_q.any():
+        i0 = max(int(math.floor(start_u)) - 1, 0)
+        last = int(qi[post_q][-1])
+        at = qi[post_q] - i0
+        big_phi[post_q] = cumulative_trapezoid(design(slice(i0, last + 1)) / norms, dx=1.0 / fs, axis=0,
+                                               initial=0.0)[at]
+        iv[post_q] = cumulative_trapezoid(v[i0:last + 1], dx=1.0 / fs, initial=0.0)[at]
+
+    def normal(keep):
+        a, b_, y_, i_ = phi[keep], big_phi[keep], y[keep], iv[keep]
+        return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
+                float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
+
+    def solve(ne, k):
+        p0, p1, p2, q0, q1, q2, r0, r1, r2 = ne
+        k = np.atleast_1d(np.asarray(k, dtype=float))[:, None, None]
+        a = p0 + k * p1 + k * k * p2
+        q = (q0 + k[:, :, 0] * q1 + k[:, :, 0] ** 2 * q2)[:, :, None]
+        try:
+            theta = np.linalg.solve(a, q)[:, :, 0]
+        except np.linalg.LinAlgError:
+            theta = (np.linalg.pinv(a, rcond=1e-12, hermitian=True) @ q)[:, :, 0]
+        kk = k[:, 0, 0]
+        rss = np.maximum(r0 + kk * r1 + kk * kk * r2 - np.sum(q[:, :, 0] * theta, axis=1), 0.0)
+        return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
+
+    def best_kappa(ne):
+        if kappa_given is not None or not use_post:
+            return (kappa_given if use_post else 0.0), math.nan
+        k_max = 2.0 / TAU_BOUNDS_S[0]
+        pos = np.geomspace(1e-4, k_max, 48)
+        grid = np.concatenate([-pos[::-1], [0.0], pos])
+        rss = solve(ne, grid)[0]
+        j = int(np.argmin(rss))
+        lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+        res = minimize_scalar(lambda k: solve(ne, k)[0], bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9 * max(abs(grid[j]), 1e-3)})
+        k = float(res.x) if res.fun <= rss[j] else float(grid[j])
+        h = max(1e-3 * abs(k), 1e-5)
+        r3 = solve(ne, np.array([k - h, k, k + h]))[0]
+        curv = (r3[0] - 2.0 * r3[1] + r3[2]) / (h * h)
+        return k, curv
+
+    keep = np.ones(qi.size, dtype=bool)
+    for _ in range(2):
+        ne = normal(keep)
+        kappa, curv = best_kappa(ne)
+        rss, theta = solve(ne, kappa)
+        resid = (y + kappa * iv) - (phi + kappa * big_phi) @ theta
+        s = robust_noise(resid[keep])
+        new_keep = np.abs(resid) <= ROBUST_SIGMA * max(s, 1e-300)
+        if np.count_nonzero(new_keep) < max(0.8 * qi.size, p + 3) or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    n_par = p + (1 if (use_post and kappa_given is None) else 0)
+    n_keep = int(np.count_nonzero(keep))
+    dof = max(n_keep - n_par, 1)
+    s2 = rss / dof
+    coef = theta / norms
+    baseline = coef[0] + coef[1] * (t - t_mid) + trig @ coef[2:]
+    if use_post and kappa_given is None:
+        kappa_se = math.sqrt(2.0 * s2 / curv) if curv > 0 else math.inf
+    elif kappa_given is not None:
+        kappa, kappa_se = float(kappa_given), 0.0
+    else:
+        kappa, kappa_se = math.nan, math.nan
+    pre_q = pre[qi]
+    noise_sel = pre_q & keep if np.count_nonzero(pre_q & keep) >= MIN_QUIET_SAMPLES else keep
+    noise = robust_noise(resid[noise_sel])
+    bic = n_keep * math.log(max(rss, 1e-300) / n_keep) + n_par * math.log(n_keep) if n_keep else math.inf
+    amps = tuple(float(math.hypot(coef[2 + 2 * i], coef[3 + 2 * i])) for i in range(len(freqs)))
     coef_dict = {
-        "offset_V": float(coef[0]),
+        "offset_V": float(coef[0] + coef[1] * (t[0] - t_mid)),
+        "drift_V_per_s": float(coef[1]),
         "hum_frequencies_hz": tuple(float(f) for f in freqs),
-        "hum_cos_V": tuple(float(coef[1 + 2 * i]) for i in range(len(freqs))),
-        "hum_sin_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
-        "post_step_V": step if has_step else math.nan,
-        "post_slope_V_per_s": float(coef[n_base + 1]) if has_step else math.nan,
+        "hum_cos_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
+        "hum_sin_V": tuple(float(coef[3 + 2 * i]) for i in range(len(freqs))),
+        "kappa_per_s": float(kappa),
+        "kappa_se_per_s": float(kappa_se),
     }
-    return _BaselineFit(baseline, coef_dict, step, step_se, has_step, noise, amps)
+    return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
+                        noise, amps, bic, quiet, pre, post)
+
+
+@functools.lru_cache(maxsize=4)
+def _trig(n, fs, freqs):
+    """cos and sin of each frequency at the n sample times, one column each [-]."""
+    t = np.arange(n) / fs
+    out = np.empty((n, 2 * len(freqs)))
+    for i, f in enumerate(freqs):
+        out[:, 2 * i] = np.cos(2 * np.pi * f * t)
+        out[:, 2 * i + 1] = np.sin(2 * np.pi * f * t)
+    out.flags.writeable = False
+    return out
+
+
+def _rough_trend(v, n_blocks=20):
+    """A robust straight line through the record (Theil-Sen on block medians) [V]."""
+    n = v.size
+    if n < 4 * n_blocks:
+        return np.full(n, np.median(v))
+    edges = np.linspace(0, n, n_blocks + 1).astype(int)
+    centres = 0.5 * (edges[:-1] + edges[1:] - 1)
+    meds = np.array([np.median(v[a:b]) for a, b in zip(edges[:-1], edges[1:])])
+    i, j = np.triu_indices(n_blocks, 1)
+    slope = float(np.median((meds[j] - meds[i]) / (centres[j] - centres[i])))
+    icpt = float(np.median(meds - slope * centres))
+    return icpt + slope * np.arange(n)
+
+
+def _running_integral(y, fs, start_u):
+    """Trapezium integral of y from the sample before start, 0 before it [V s]."""
+    i0 = max(int(math.floor(start_u)) - 1, 0)
+    out = np.zeros(y.size)
+    if i0 < y.size - 1:
+        out[i0:] = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
+    return out
 
 
 def _decay_correct(y, fs, start_u, tau):
     """Inverse first-order high-pass from the contact start: y + cumulative integral / tau."""
-    i0 = max(int(math.floor(start_u)) - 1, 0)
     x = y.copy()
-    if math.isfinite(tau) and i0 < y.size - 1:
-        c = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
-        x[i0:] += c / tau
+    if math.isfinite(tau):
+        x += _running_integral(y, fs, start_u) / tau
     return x
 
 
@@ -198,7 +428,32 @@ def _integral_to(y, fs, start_u, end_u) -> float:
     return float(np.interp(end_u - i0, np.arange(c.size), c))
 
 
-def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | None = 50.0,
+def _mains_frequencies(mains_hz, n_harmonics, fs):
+    return [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
+
+
+def _event_mask(x, fs, noise, contact: ContactResult, pre_guard, post_guard):
+    """Samples of every event other than the main contact (runs standing out of the noise), with guards."""
+    n = x.size
+    peak = max(float(x[contact.peak_index]), 0.0) if contact.found else float(np.max(x))
+    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
+    above = x > thr
+    if contact.found:
+        a = max(int(math.floor((contact.start_s - 0.0) * fs - pre_guard)), 0)
+        b = min(int(math.ceil(contact.end_s * fs + post_guard)) + 1, n)
+        above[a:b] = False
+    mask = np.zeros(n, dtype=bool)
+    if not above.any():
+        return mask
+    d = np.diff(np.concatenate([[0], above.view(np.int8), [0]]))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    gb, ga = int(round(EVENT_GUARD_BEFORE_S * fs)), int(round(EVENT_GUARD_AFTER_S * fs))
+    for s, e in zip(starts, ends):
+        mask[max(s - gb, 0):min(e + ga, n)] = True
+    return mask
+
+
+def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
@@ -217,16 +472,18 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         Sample rate [Hz].
     polarity : int
         +1 when compressive force gives positive voltage, -1 otherwise [-].
-    mains_hz : float or None
-        Mains frequency [Hz]; None or 0 fits no hum.
+    mains_hz : float, "auto" or None
+        Mains frequency [Hz], used exactly; ``"auto"`` (default) detects 50 Hz,
+        60 Hz or no hum from the quiet samples; None or 0 fits no hum.
     n_harmonics : int
         Hum components fitted: the fundamental and its harmonics up to
         ``n_harmonics * mains_hz`` [-].
     t0_s : float
         Time of the first sample [s] (only for the times reported).
     tau_s : float, optional
-        Known amplifier time constant [s]; ``math.inf`` for a DC-coupled
-        amplifier. Estimated from the undershoot when omitted.
+        Known amplifier time constant [s], undone exactly; ``math.inf`` for a
+        DC-coupled amplifier. Estimated from the post-contact baseline when
+        omitted.
     pre_guard_s, post_guard_s : float
         Samples closer than this to the contact are left out of the baseline
         fit [s].
@@ -235,14 +492,15 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     -------
     ConditionedSignal
         Corrected voltage [V] with the noise [V], hum [V], tau [s], baseline
-        model and the contact found on it. When no contact is found, only
-        offset and hum are removed and ``contact.found`` is False.
+        model, the contact found on it and the integrity problems found. When
+        no contact is found, only offset and hum are removed and
+        ``contact.found`` is False.
 
     Raises
     ------
     ValueError
         For non-finite samples, fewer than 3 samples, a non-positive sample rate,
-        a polarity other than +1/-1 or a non-positive tau_s.
+        a polarity other than +1/-1, a negative mains_hz or a non-positive tau_s.
 
     Warns
     -----
@@ -256,7 +514,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
     if polarity not in (1, -1):
         raise ValueError(f"polarity must be 1 or -1, got {polarity!r}")
-    if mains_hz is not None and (not math.isfinite(mains_hz) or mains_hz < 0):
+    auto_mains = isinstance(mains_hz, str)
+    if auto_mains and mains_hz != "auto":
+        raise ValueError(f"mains_hz must be a number of Hz, 'auto' or None, got {mains_hz!r}")
+    if not auto_mains and mains_hz is not None and (not math.isfinite(mains_hz) or mains_hz < 0):
         raise ValueError(f"mains_hz must be non-negative and finite, got {mains_hz!r}")
     if n_harmonics < 0:
         raise ValueError(f"n_harmonics must be non-negative, got {n_harmonics}")
@@ -276,104 +537,270 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if not (scale > 0 and math.isfinite(scale)):
         scale = 1.0
     v = polarity * (raw / scale)
-    frequencies = []
-    if mains_hz:
-        frequencies = [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
+    v, spikes = remove_spikes(v)
+    if auto_mains:
+        candidates = {0.0: []}
+        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
+    else:
+        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
+    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
     pre_guard = pre_guard_s * fs
     post_guard = post_guard_s * fs
     messages: list[str] = []
+    problems: list[str] = []
+    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
-    rough = detect_contact(v - np.median(v), fs)
+    trend = _rough_trend(v)
+    # the record before the peak holds no undershoot: its median is the level under the contact
+    k_peak = int(np.argmax(v - trend))
+    if k_peak >= MIN_QUIET_SAMPLES:
+        trend = np.full(v.size, float(np.median(v[:k_peak])))
+    rough = detect_contact(v - trend, fs)
     if not rough.found:
-        fit = _fit_baseline(v, fs, frequencies, -math.inf, -math.inf, 0.0, 0.0)
+        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
+        mains = min(fits, key=lambda f: fits[f].bic)
+        fit = fits[mains]
         y = v - fit.baseline
         contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-        return _result(y, fit, math.nan, "none", math.nan, contact, 0, messages, t0_s, math.nan, scale)
+        return _result(y, fit, math.nan, "none", contact, 0, messages, problems, t0_s, scale, spikes, mains,
+                       mains_source)
 
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
+    n = v.size
+    mask = np.zeros(n, dtype=bool)
     tau = math.nan
     source = "none"
     n_iter = 0
     pending: list[str] = []
+    tau_problems: list[str] = []
+    mains = next(iter(candidates))
+    ambiguous: tuple | None = None
+    fit = None
     for n_iter in range(1, MAX_ITERATIONS + 1):
-        fit = _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard)
+        if len(candidates) > 1 and n_iter <= 3:
+            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
+                    for f, fr in candidates.items()}
+            mains = min(fits, key=lambda f: fits[f].bic)
+            fit = fits[mains]
+            hum = [f for f in fits if f > 0]
+            ambiguous = None
+            if mains > 0 and fits[mains].hum_amplitudes:
+                other = [f for f in hum if f != mains][0]
+                if not fits[other].hum_amplitudes:
+                    ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
+                elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
+                    ambiguous = (mains, other, fits[other].baseline)
+        else:
+            fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
+                                kappa_given)
         y = v - fit.baseline
-        integral = _integral_to(y, fs, start_u, end_u)
-        tau, source, pending = _choose_tau(tau_s, fit, integral, (end_u - start_u) / fs, scale)
+        contact_integral = _integral_to(y, fs, start_u, end_u)
+        tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
+                                                         scale)
         x = _decay_correct(y, fs, start_u, tau)
         c = detect_contact(x, fs, noise_rms_V=fit.noise)
         if not c.found:
             break
+        new_mask = _event_mask(x, fs, fit.noise, c, pre_guard, post_guard)
         new_start, new_end = c.start_s * fs, c.end_s * fs
         moved = max(abs(new_start - start_u), abs(new_end - end_u))
-        start_u, end_u = new_start, new_end
-        if moved < CONVERGED_SAMPLES:
+        same_mask = np.array_equal(new_mask, mask)
+        start_u, end_u, mask = new_start, new_end, new_mask
+        if moved < CONVERGED_SAMPLES and same_mask and not (len(candidates) > 1 and n_iter < 2):
             break
+    else:
+        if c.found and moved > UNSTABLE_SAMPLES:
+            problems.append(f"contact window not stable under the baseline fit: its ends still move by "
+                            f"{moved:.2g} samples after {MAX_ITERATIONS} iterations")
     for msg in pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
+    problems.extend(tau_problems)
     contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-    undershoot = -fit.step if fit.has_step else math.nan
-    return _result(x, fit, tau, source, undershoot, contact, n_iter, messages, t0_s, end_u / fs, scale)
+    if contact.found:
+        problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
+    return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
+                   mains_source, contact_integral)
+
+
+def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u):
+    """Problems of the corrected signal: a level off zero before or after the contact, unresolved mains."""
+    out = []
+    peak = float(contact.peak_V)
+    if not peak > 0:
+        return out
+    w = max(int(round(FLAT_WINDOW_S * fs)), MIN_QUIET_SAMPLES)
+    pre_idx = np.flatnonzero(fit.pre)
+    post_idx = np.flatnonzero(fit.post)
+    stretches = []
+    if pre_idx.size >= MIN_PRE_SAMPLES:
+        stretches.append(("before", pre_idx[-w:]))
+    if post_idx.size >= 2 * MIN_QUIET_SAMPLES:
+        stretches.append(("just after", post_idx[:w]))
+        if post_idx.size > 2 * w:
+            stretches.append(("later after", post_idx[-w:]))
+    for where, sel in stretches:
+        level = float(np.mean(x[sel]))
+        se = fit.noise / math.sqrt(sel.size)
+        if abs(level) > FLAT_FRACTION * peak and abs(level) > FLAT_SIGMA * se:
+            out.append(f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
+                       f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed")
+    # the residual of the quiet samples must be white noise: compare its rms with the noise of
+    # sample-to-sample differences (blind to hum and drift)
+    qi = np.flatnonzero(fit.quiet)
+    if qi.size >= 2 * MIN_QUIET_SAMPLES:
+        y = x[qi]
+        pairs = np.flatnonzero(np.diff(qi) == 1)
+        if pairs.size >= MIN_QUIET_SAMPLES:
+            white = robust_noise(y[pairs + 1] - y[pairs]) / math.sqrt(2.0)
+            resid = y - np.median(y)
+            clipped = np.clip(resid, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else resid
+            excess = math.sqrt(max(float(np.mean(clipped ** 2)) - white ** 2, 0.0))
+            if excess > FLAT_FRACTION * peak and excess > white:
+                out.append(f"quiet baseline not explained by offset, drift, hum and decay: {excess * scale * 1e3:.3g} mV "
+                           f"rms above the white noise ({100 * excess / peak:.2g} % of the peak; hum or drift "
+                           "not resolved?)")
+    # each end must be where force begins / ends: the samples just inside it hold force
+    k_end = max(int(round(END_CHECK_S * fs)), 3)
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    for where, sel in (("start", np.arange(int(math.ceil(s_u)), int(math.ceil(s_u)) + k_end)),
+                       ("end", np.arange(int(math.floor(e_u)) - k_end + 1, int(math.floor(e_u)) + 1))):
+        sel = sel[(sel >= 0) & (sel < x.size)]
+        if sel.size >= 3:
+            level = float(np.mean(x[sel]))
+            if level < END_CHECK_SIGMA * fit.noise / math.sqrt(sel.size):
+                out.append(f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold no "
+                           f"force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)")
+    n_contact = (contact.end_s - contact.start_s) * fs
+    if n_contact < MIN_CONTACT_SAMPLES:
+        out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
+                   "sample rate too low for the contact time")
+    end_u_c = (contact.end_s - t0_s) * fs
+    a = int(math.ceil(end_u_c + RING_GAP_S * fs))
+    b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
+    if b - a >= 3:
+        ring = float(np.sqrt(np.mean(x[a:b] ** 2)))
+        if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
+            out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
+                       f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
+    line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
+                         fit.noise)
+    if line is not None:
+        f_line, amp_line, prominence = line
+        out.append(f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
+                   f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
+                   "force and plate ringing not separable")
+    if ambiguous is not None:
+        mains, other, other_baseline = ambiguous
+        a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
+        hum = float(np.sum(fit.hum_amplitudes))
+        if other_baseline is None and hum > MAINS_AMBIGUOUS_FRACTION * peak:
+            tq = np.flatnonzero(fit.quiet) / fs
+            out.append(f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} ms, "
+                       f"too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
+                       "(give daq.mains_hz)")
+        diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a and other_baseline is not None \
+            else 0.0
+        if other_baseline is not None and diff > MAINS_AMBIGUOUS_FRACTION * peak:
+            out.append(f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
+                       f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
+                       "(give daq.mains_hz)")
+    return out
+
+
+def _ringing_line(xc, fs, noise):
+    """A plate resonance in the contact: (frequency [Hz], amplitude [V], prominence [-]) or None.
+
+    The contact less a quartic (its smooth shape) is Hann-windowed and
+    zero-padded 4x; the largest spectral amplitude between RING_LINE_MIN_HZ
+    and 0.45 fs is a line when it exceeds RING_LINE_PROMINENCE times the median
+    amplitude within a factor 1.6 of its frequency (the smooth contact and the
+    noise have no lines), and RING_LINE_NOISE_FACTOR times the amplitude white
+    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window).
+    """
+    n = xc.size
+    if n < MIN_CONTACT_SAMPLES:
+        return None
+    u = np.linspace(-1.0, 1.0, n)
+    r = xc - np.polynomial.polynomial.polyval(u, np.polynomial.polynomial.polyfit(u, xc, 4))
+    w = np.hanning(n)
+    nfft = 4 * n
+    amp = 2.0 * np.abs(np.fft.rfft(r * w, nfft)) / w.sum()
+    f = np.fft.rfftfreq(nfft, 1.0 / fs)
+    band = np.flatnonzero((f > RING_LINE_MIN_HZ) & (f < NYQUIST_MARGIN * fs))
+    if band.size < 10:
+        return None
+    k = int(band[np.argmax(amp[band])])
+    lo, hi = np.searchsorted(f, [f[k] / 1.6, f[k] * 1.6])
+    ref = np.concatenate([amp[lo:max(k - 12, lo)], amp[k + 12:hi]])
+    if ref.size < 8:
+        return None
+    prominence = float(amp[k] / max(np.median(ref), 1e-300))
+    if prominence <= RING_LINE_PROMINENCE or amp[k] <= RING_LINE_NOISE_FACTOR * 1.73 * noise / math.sqrt(n):
+        return None
+    return float(f[k]), float(amp[k]), prominence
 
 
 def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, scale: float):
-    """Time constant for the decay correction, its source and the warnings to give.
+    """Time constant for the decay correction, its source, the warnings to give and the problems found.
 
-    A positive undershoot always gives tau = integral / undershoot (applying a
-    noisy tau is unbiased; skipping it is not). A warning is given when the
-    undershoot is not measurable (below UNDERSHOOT_SIGNIFICANCE standard
-    errors) and the impulse could then be off by more than BIAS_WARN_FRACTION.
+    A significant positive kappa gives tau = 1 / kappa (applying a noisy tau is
+    unbiased; skipping it is not). A kappa that is not measurable is applied as
+    found when positive (0 otherwise); the impact is a problem when the decay
+    hidden in the noise could bias the impulse by more than
+    BIAS_EXCLUDE_FRACTION, and a warning is given above BIAS_WARN_FRACTION.
     """
     if tau_s is not None:
-        return float(tau_s), "given", []
-    if not fit.has_step:
-        return math.inf, "none", [
-            "charge-amplifier decay not corrected: no quiet baseline both before and at least "
-            f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot"
-        ]
-    undershoot = -fit.step
-    se = fit.step_se
-    messages = []
-    if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(undershoot):
-        # how much could an undershoot hidden in the noise change the impulse?
-        bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / (2.0 * integral)
+        return float(tau_s), "given", [], []
+    if not fit.has_post:
+        msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
+               f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
+        return math.inf, "none", [msg], [msg + " (give plate.time_constant_s)"]
+    kappa, se = fit.kappa, fit.kappa_se
+    undershoot = kappa * integral
+    messages, problems = [], []
+    if kappa < -UNDERSHOOT_SIGNIFICANCE * se:
+        msg = (f"charge-amplifier decay not corrected: the baseline after the contact is "
+               f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)")
+        return math.inf, "none", [msg], [msg]
+    if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(kappa):
+        # how much could a decay hidden in the noise change the impulse?
+        bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / 2.0
         if bias > BIAS_WARN_FRACTION:
-            messages.append(
-                f"charge-amplifier undershoot not measurable ({undershoot * scale * 1e3:.3g} "
-                f"+/- {se * scale * 1e3:.2g} mV): "
-                f"the impulse may be off by up to {bias * 100:.2g} %"
-            )
-    if not integral > 0:
-        return math.inf, "none", messages
-    if undershoot < -UNDERSHOOT_SIGNIFICANCE * se:
-        return math.inf, "none", [
-            f"charge-amplifier decay not corrected: the baseline after the contact is "
-            f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)"
-        ]
-    if undershoot <= 0:
-        return math.inf, "none", messages
-    tau = integral / undershoot
+            msg = (f"charge-amplifier undershoot not measurable ({undershoot * scale * 1e3:.3g} "
+                   f"+/- {se * integral * scale * 1e3:.2g} mV): "
+                   f"the impulse may be off by up to {bias * 100:.2g} %")
+            messages.append(msg)
+            if bias > BIAS_EXCLUDE_FRACTION:
+                problems.append(msg)
+    if not (integral > 0 and kappa > 0):
+        return math.inf, "none", messages, problems
+    tau = 1.0 / kappa
     if tau > TAU_BOUNDS_S[1]:
-        return math.inf, "none", messages  # DC-coupled in effect: the correction is negligible
+        return math.inf, "none", messages, problems  # DC-coupled in effect: the correction is negligible
     if tau < TAU_BOUNDS_S[0]:
-        return math.inf, "none", messages + [
-            f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
-            f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)"
-        ]
-    return tau, "estimated", messages
+        msg = (f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
+               f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)")
+        return math.inf, "none", messages + [msg], problems + [msg]
+    return tau, "estimated", messages, problems
 
 
-def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, messages, t0_s, anchor_s, scale):
+def _result(x, fit: _BaselineFit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
+            mains_source, contact_integral=math.nan):
     """Assemble the ConditionedSignal, back in volts."""
     coef = dict(fit.coef)
-    for key in ("offset_V", "post_step_V", "post_slope_V_per_s"):
-        coef[key] = coef[key] * scale
+    coef["offset_V"] = coef["offset_V"] * scale
+    coef["drift_V_per_s"] = coef["drift_V_per_s"] * scale
     for key in ("hum_cos_V", "hum_sin_V"):
         coef[key] = tuple(c * scale for c in coef[key])
-    coef["post_anchor_s"] = t0_s + anchor_s if math.isfinite(anchor_s) else math.nan
+    has_hum = bool(fit.hum_amplitudes)
+    coef["mains_hz"] = float(mains) if has_hum else 0.0
+    coef["mains_source"] = mains_source if has_hum or mains_source == "given" else "none"
     contact = replace(contact, peak_V=contact.peak_V * scale, noise_rms_V=contact.noise_rms_V * scale,
                       threshold_V=contact.threshold_V * scale)
+    estimated = fit.has_post and math.isfinite(fit.kappa) and math.isfinite(contact_integral)
+    undershoot = fit.kappa * contact_integral * scale if estimated else math.nan
+    undershoot_se = fit.kappa_se * abs(contact_integral) * scale if estimated else math.nan
     with np.errstate(over="ignore"):
         return ConditionedSignal(
             voltage_V=x * scale,
@@ -382,12 +809,14 @@ def _result(x, fit: _BaselineFit, tau, source, undershoot, contact, n_iter, mess
             hum_harmonic_amplitudes_V=tuple(a * scale for a in fit.hum_amplitudes),
             tau_s=float(tau),
             tau_source=source,
-            undershoot_V=float(undershoot * scale),
-            undershoot_se_V=float(fit.step_se * scale) if fit.has_step else math.nan,
+            undershoot_V=float(undershoot),
+            undershoot_se_V=float(undershoot_se),
             offset_V=float(coef["offset_V"]),
             baseline_V=fit.baseline * scale,
             baseline_coefficients=coef,
             contact=contact,
             n_iterations=int(n_iter),
             warnings=tuple(messages),
+            problems=tuple(dict.fromkeys(problems)),
+            spike_indices=tuple(int(i) for i in spikes),
         )

@@ -118,6 +118,10 @@ class ContactResult:
         ``"short_pretrigger"``, ``"cloth_foot"`` (start more than a sample
         before the steep edge), ``"end_tail"`` (end more than a sample after
         it), ``"ringing_after_contact"``, ``"edge_fallback"``.
+    other_impacts : tuple of (float, float)
+        Every other impact counted in n_impacts: its start relative to the main
+        contact's start [s] (negative before it) and its peak as a fraction of
+        the main peak [-].
     """
 
     found: bool
@@ -134,6 +138,7 @@ class ContactResult:
     threshold_V: float
     clipped: bool
     flags: tuple[str, ...]
+    other_impacts: tuple[tuple[float, float], ...] = ()
 
     @property
     def contact_time_s(self) -> float:
@@ -520,6 +525,7 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
 
     # --- impact counting
     n_impacts = 1
+    others_found: list[tuple[int, float]] = []
     if starts.size > 1:
         others = np.arange(starts.size) != k
         long_enough = (ends - starts + 1) / fs > SECOND_IMPACT_MIN_S
@@ -527,7 +533,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         bounds[0::2], bounds[1::2] = starts, ends + 1
         run_max = np.maximum.reduceat(np.concatenate([xs, [-np.inf]]), bounds)[0::2]
         high_enough = run_max > SECOND_IMPACT_FRACTION * peak
-        n_impacts += int(np.count_nonzero(others & long_enough & high_enough))
+        counted = others & long_enough & high_enough
+        n_impacts += int(np.count_nonzero(counted))
+        others_found = [(int(starts[j]), float(run_max[j] / peak)) for j in np.flatnonzero(counted)]
     if n_impacts > 1:
         flags.append("multiple_impacts")
 
@@ -589,4 +597,5 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         threshold_V=thr * scale,
         clipped=clipped,
         flags=tuple(flags),
+        other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
     )

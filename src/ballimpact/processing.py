@@ -54,6 +54,8 @@ PHYSICAL_BOUNDS = {
 }
 #: Session-level kCAL check: excluded when both the robust z-score and the relative
 #: deviation from the session median exceed these.
+#: Mains hum components removed: the fundamental and its harmonics up to the 5th.
+HUM_HARMONICS = 5
 KCAL_MAX_ROBUST_Z = 5.0
 KCAL_MAX_RELATIVE = 0.10
 
@@ -116,24 +118,27 @@ def _out_of_bounds(name, value):
     return not (lo <= value <= hi)
 
 
-def _opposite_pulse_reason(raw, sample_rate_hz: float, meta, t0_s: float) -> str | None:
-    """Why no contact was found when it is the polarity: the pulse has the other sign.
+#: The pulse is taken as of the other sign than plate.polarity when its largest excursion
+#: that way is more than this many times the largest the declared way [-] (the amplifier's
+#: undershoot after a contact stays well below the pulse for any time constant >= 0.01 s).
+OPPOSITE_PULSE_RATIO = 2.0
 
-    Conditions the trace [V] again with the opposite of ``plate.polarity`` (sample rate
-    [Hz], start time [s]); when a contact is found that way, returns the reason
-    "pulse is negative: plate.polarity is +1" (or the converse), else None.
+
+def _opposite_pulse_reason(raw, polarity: int) -> str | None:
+    """Why a trace cannot be processed when it is the polarity: the pulse has the other sign.
+
+    Compares the largest excursion of the voltage [V] from its median in the declared
+    direction (``plate.polarity`` [-]) and in the other, after a 3-sample running median
+    so that a single-sample spike counts for nothing. Returns the reason "pulse is
+    negative: plate.polarity is +1" (or the converse), else None.
     """
-    with warnings.catch_warnings(record=True):
-        warnings.simplefilter("always")
-        try:
-            flipped = condition_voltage(raw, sample_rate_hz, polarity=-meta.polarity, mains_hz=meta.mains_hz,
-                                        t0_s=t0_s)
-        except ValueError:
-            return None
-    if not flipped.contact.found:
+    v = polarity * (np.asarray(raw, dtype=float) - np.median(raw))
+    if v.size >= 3:
+        v = np.median(np.stack([v[:-2], v[1:-1], v[2:]]), axis=0)
+    if v.size == 0 or not np.max(-v) > OPPOSITE_PULSE_RATIO * max(np.max(v), 0.0):
         return None
-    sign = "negative" if meta.polarity == 1 else "positive"
-    return f"pulse is {sign}: plate.polarity is {meta.polarity:+d}"
+    sign = "negative" if polarity == 1 else "positive"
+    return f"pulse is {sign}: plate.polarity is {polarity:+d}"
 
 
 def _speeds_at_plate(vin_gate, vout_gate, row: ImpactRow, session: Session):
@@ -147,6 +152,16 @@ def _speeds_at_plate(vin_gate, vout_gate, row: ImpactRow, session: Session):
     k = drag_constant(mass, diameter, meta.air_density_kg_m3)
     return plate_speeds(vin_gate, vout_gate, meta.gate_spacing_m, meta.distance_to_plate_m, k,
                         orientation=meta.rig_orientation, diameter_m=diameter)
+
+
+def _touches_rail(raw, adc_range_V, spike_indices, tolerance_lsb: float = 1.5, adc_bits: int = 16) -> bool:
+    """Whether any sample other than a replaced single-sample spike is within tolerance of an ADC rail."""
+    lo, hi = (float(r) for r in adc_range_V)
+    lsb = (hi - lo) / 2**adc_bits
+    at_rail = (raw >= hi - tolerance_lsb * lsb) | (raw <= lo + tolerance_lsb * lsb)
+    if spike_indices:
+        at_rail[np.asarray(spike_indices, dtype=int)] = False
+    return bool(at_rail.any())
 
 
 def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
@@ -221,20 +236,31 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         try:
-            cond = condition_voltage(raw, fs, polarity=meta.polarity, mains_hz=meta.mains_hz, t0_s=trace.t0_s)
+            cond = condition_voltage(raw, fs, polarity=meta.polarity,
+                                     mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
+                                     n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
             return res.exclude(f"unusable trace: {exc}")
+    if "clipping" not in res.reason and _touches_rail(raw, meta.adc_range_v, cond.spike_indices):
+        res.exclude("clipping at the ADC rails (a sample at a rail that is not a single-sample spike)")
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
     res.tau_s = cond.tau_s
     contact = cond.contact
+    wrong_sign = _opposite_pulse_reason(raw, meta.polarity)
+    if wrong_sign is not None:
+        return res.exclude(wrong_sign)
     if not contact.found:
-        return res.exclude(_opposite_pulse_reason(raw, fs, meta, trace.t0_s) or "no contact found")
+        return res.exclude("no contact found")
     res.raw_time_s = t - contact.start_s
     if contact.n_impacts > 1:
-        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found)")
+        seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
+                         f"{100 * frac:.0f} % of the peak" for k, (dt, frac) in enumerate(contact.other_impacts))
+        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found: {seen})")
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
         res.exclude("contact not entirely inside the trace (truncated trace?)")
+    for problem in cond.problems:
+        res.exclude(problem)
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):

@@ -45,7 +45,7 @@ MASS_MIN_G = 1.0  # [g] exclusive lower bound of a plausible ball mass
 MASS_MAX_G = 1000.0  # [g] exclusive upper bound of a plausible ball mass
 MASS_TYPICAL_MIN_G = 40.0  # [g] below this a warning (tennis balls are 56-59.4 g)
 MASS_TYPICAL_MAX_G = 70.0  # [g] above this a warning
-DEFAULT_MAINS_HZ = 50.0  # [Hz] default `daq.mains_hz`
+DEFAULT_MAINS_HZ = None  # `daq.mains_hz` absent: found in each trace (v1.1)
 FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the timer sanity bound
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
@@ -141,13 +141,14 @@ class SessionMeta:
     gate_spacing_m: float  # [m] distance between gate 1 and gate 2
     gate_resolution_s: float  # [s] timer resolution
     balls: dict[str, BallType]
-    mains_hz: float  # [Hz] mains frequency, optional `daq.mains_hz`, default 50
+    mains_hz: float | None  # [Hz] mains frequency, optional `daq.mains_hz`; None = find it in each trace
     synthetic: bool  # optional top-level `synthetic`, default False
     raw: dict  # the parsed YAML, for the archive
     kcal_range_N_per_V: tuple[float, float] | None = None  # [N/V] optional `plate.kcal_range_N_per_V`
     distance_to_plate_m: float | None = None  # [m] optional `gates.distance_to_plate_m` (v1.1): gate 2 to plate
     rig_orientation: str = "horizontal"  # optional `rig.orientation` (v1.1): horizontal or vertical
     air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
+    time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
 
 
 @dataclass
@@ -443,7 +444,7 @@ def _parse_date(data: dict, file: str) -> str:
     return date
 
 
-def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None]:
+def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None, float | None]:
     plate = _section(data, "plate", file)
     polarity_value = _require(plate, "polarity", "plate.polarity", file)
     polarity_number = _to_float(polarity_value)
@@ -459,11 +460,14 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
                 f"got {value!r}"
             )
         kcal_range = (bounds[0], bounds[1])
+    time_constant_s = None
+    if plate.get("time_constant_s") is not None:
+        time_constant_s = _number(plate["time_constant_s"], "plate.time_constant_s", file, positive=True)
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
-    return int(polarity_number), kcal_range
+    return int(polarity_number), kcal_range, time_constant_s
 
 
-def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float]:
+def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None]:
     daq = _section(data, "daq", file)
     sample_rate_hz = _number(
         _require(daq, "sample_rate_hz", "daq.sample_rate_hz", file), "daq.sample_rate_hz", file, positive=True
@@ -617,7 +621,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         if own:
             _raise_collected(collect.problems)
         return None
-    polarity, kcal_range = plate
+    polarity, kcal_range, time_constant_s = plate
     sample_rate_hz, adc, mains_hz = daq
     spacing_m, resolution_s, distance_to_plate_m = gates
     orientation, air_density = rig
@@ -639,6 +643,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         distance_to_plate_m=distance_to_plate_m,
         rig_orientation=orientation,
         air_density_kg_m3=air_density,
+        time_constant_s=time_constant_s,
     )
 
 
