@@ -89,9 +89,13 @@ def test_editing_one_raw_file_reruns_exactly_its_session(state, what):
     _edit(path)
     jobs = planned(state)
     assert jobs, f"editing {path.name} planned nothing"
-    assert {s for sessions in jobs.values() for s in sessions} == {"beta"}
-    # the whole chain of that session, down to its report
-    assert {"validate_session", "process_chunk", "collect_impacts", "fit_ball", "archive", "report"} <= set(jobs)
+    # the jobs of that session, and the catalogue across sessions (no session wildcard)
+    assert {s for sessions in jobs.values() for s in sessions} == {"beta", ""}
+    assert {rule for rule, sessions in jobs.items() if "" in sessions} == {"catalogue"}
+    # the whole chain of that session, down to its report (a small session fits all its
+    # ball types in one fit_session job, a large one in fit_ball jobs)
+    assert {"validate_session", "process_chunk", "collect_impacts", "archive", "report"} <= set(jobs)
+    assert {"fit_session", "fit_ball"} & set(jobs)
 
 
 def test_changed_mains_reruns_processing_of_every_session(state):
@@ -103,5 +107,5 @@ def test_changed_mains_reruns_processing_of_every_session(state):
 @pytest.mark.parametrize("key", ["bootstrap=12", "seed=3"])
 def test_changed_fit_setting_reruns_fits_not_processing(state, key):
     jobs = planned(state, key)
-    assert jobs["fit_ball"] == set(SESSIONS)
+    assert jobs.get("fit_session", set()) | jobs.get("fit_ball", set()) == set(SESSIONS)
     assert "process_chunk" not in jobs and "collect_impacts" not in jobs and "validate_session" not in jobs

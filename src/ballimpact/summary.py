@@ -220,6 +220,7 @@ def _reason_kind(reason: str) -> str:
     first = str(reason).split("; ")[0].strip()
     if first.startswith("pulse is"):
         return first  # "pulse is negative: plate.polarity is +1" says it all
+    first = re.sub(r"\s*\([^()]*\d[^()]*\)", "", first)  # "(3 found: second contact at ...)" and the like
     first = first.split(": ")[0]
     first = re.sub(r"\S*/\S*", "...", first)
     first = re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first)
