@@ -26,6 +26,8 @@ import math
 
 import numpy as np
 
+from ._checks import nonnegative_array as _nonnegative, positive_array as _positive
+
 __all__ = [
     "G_M_S2",
     "AIR_DENSITY_KG_M3",
@@ -50,22 +52,6 @@ DRAG_COEFFICIENT = 0.55
 #: Default ball diameter D [m] (ITF: 6.54-6.86 cm); ``balls.<key>.diameter_mm``.
 BALL_DIAMETER_M = 0.0654
 _ORIENTATIONS = ("horizontal", "vertical")
-
-
-def _positive(name, value):
-    arr = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        bad = arr[~(np.isfinite(arr) & (arr > 0))].ravel()[0] if arr.ndim else arr
-        raise ValueError(f"{name} must be positive and finite, got {float(bad)!r}")
-    return arr
-
-
-def _nonnegative(name, value):
-    arr = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        bad = arr[~(np.isfinite(arr) & (arr >= 0))].ravel()[0] if arr.ndim else arr
-        raise ValueError(f"{name} must be non-negative and finite, got {float(bad)!r}")
-    return arr
 
 
 def _finite(name, value):

@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import nonnegative_array as _check_nonnegative, positive_array as _check_positive
+
 __all__ = [
     "RHO_AREA_KG_M2",
     "K_CONST_N_M",
@@ -189,22 +191,6 @@ class ImpactSimulation:
     stiffness_force_N: np.ndarray | None = None
     damping_force_N: np.ndarray | None = None
     momentum_flux_force_N: np.ndarray | None = None
-
-
-def _check_positive(name, value):
-    arr = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        bad = arr[~(np.isfinite(arr) & (arr > 0))].ravel()[0] if arr.ndim else arr
-        raise ValueError(f"{name} must be positive and finite, got {float(bad)!r}")
-    return arr
-
-
-def _check_nonnegative(name, value):
-    arr = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        bad = arr[~(np.isfinite(arr) & (arr >= 0))].ravel()[0] if arr.ndim else arr
-        raise ValueError(f"{name} must be non-negative and finite, got {float(bad)!r}")
-    return arr
 
 
 def simulate_impact(
