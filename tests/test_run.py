@@ -76,10 +76,14 @@ def test_demo_impacts_against_truth(demo_run):
             assert row.status == "ok", (impact_id, row.reason)
     good = truth.index[truth.fault == ""]
     m, t = table.loc[good], truth.loc[good]
-    assert_allclose(m.contact_time_ms, t.contact_time_ms, rtol=0.01)
-    assert_allclose(m.kcal_N_per_V, t.kcal_N_per_V, rtol=0.01)
+    # tolerances about 2x the largest errors measured on the demo by
+    # `python bench/accuracy.py raw/demo-2004`: TC 0.26 %, kCAL 0.021 %, peak 1.48 %,
+    # COR 0.0001, largest displacement 0.76 %
+    assert_allclose(m.contact_time_ms, t.contact_time_ms, rtol=5e-3)
+    assert_allclose(m.kcal_N_per_V, t.kcal_N_per_V, rtol=5e-4)
     assert_allclose(m.peak_force_N, t.peak_force_N, rtol=0.03)
-    assert_allclose(m.cor, t.cor, atol=0.002)
+    assert_allclose(m.cor, t.cor, atol=2e-4)
+    assert_allclose(m.max_displacement_mm, t.max_displacement_mm, rtol=0.015)
 
 
 def test_demo_recovers_table2_within_intervals(demo_run):
