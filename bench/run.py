@@ -178,13 +178,8 @@ def bench_fit_no_kb0(n_bootstrap: int = 200) -> dict:
     return out
 
 
-def _run_workflow(n_impacts: int, workdir: Path) -> tuple[float, float]:
-    from ballimpact.synth import SynthConfig, write_session
-
-    raw = workdir / f"raw{n_impacts}"
-    sid = f"bench{n_impacts}"
-    write_session(raw / sid, SynthConfig(session_id=sid, total_impacts=n_impacts, faults_per_kind=1))
-    results = workdir / f"results{n_impacts}"
+def _snakemake_wall_s(raw: Path, results: Path, what: str) -> float:
+    """Wall time [s] of `snakemake --cores 2` on raw_dir=raw, results_dir=results; RuntimeError if it fails."""
     cmd = [
         str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
         "--config", f"raw_dir={raw}", f"results_dir={results}",
@@ -194,7 +189,18 @@ def _run_workflow(n_impacts: int, workdir: Path) -> tuple[float, float]:
     proc = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
-        raise RuntimeError(f"workflow failed for n={n_impacts}:\n{proc.stderr[-3000:]}")
+        raise RuntimeError(f"workflow failed for {what}:\n{proc.stderr[-3000:]}")
+    return wall
+
+
+def _run_workflow(n_impacts: int, workdir: Path) -> tuple[float, float]:
+    from ballimpact.synth import SynthConfig, write_session
+
+    raw = workdir / f"raw{n_impacts}"
+    sid = f"bench{n_impacts}"
+    write_session(raw / sid, SynthConfig(session_id=sid, total_impacts=n_impacts, faults_per_kind=1))
+    results = workdir / f"results{n_impacts}"
+    wall = _snakemake_wall_s(raw, results, f"n={n_impacts}")
     return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
 
 
@@ -262,16 +268,7 @@ def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
     for truth in raw.glob("*.truth.*"):
         truth.unlink()
     results = workdir / f"results_s{n_sessions}"
-    cmd = [
-        str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
-        "--config", f"raw_dir={raw}", f"results_dir={results}",
-        "--directory", str(REPO),
-    ]
-    t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise RuntimeError(f"workflow failed for {n_sessions} sessions:\n{proc.stderr[-3000:]}")
+    wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions")
     if not (results / "catalogue" / "catalogue.csv").is_file():
         raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
