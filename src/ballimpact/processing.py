@@ -154,16 +154,6 @@ def _speeds_at_plate(vin_gate, vout_gate, row: ImpactRow, session: Session):
                         orientation=meta.rig_orientation, diameter_m=diameter)
 
 
-def _touches_rail(raw, adc_range_V, spike_indices, tolerance_lsb: float = 1.5, adc_bits: int = 16) -> bool:
-    """Whether any sample other than a replaced single-sample spike is within tolerance of an ADC rail."""
-    lo, hi = (float(r) for r in adc_range_V)
-    lsb = (hi - lo) / 2**adc_bits
-    at_rail = (raw >= hi - tolerance_lsb * lsb) | (raw <= lo + tolerance_lsb * lsb)
-    if spike_indices:
-        at_rail[np.asarray(spike_indices, dtype=int)] = False
-    return bool(at_rail.any())
-
-
 def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     """Process one impact: speeds, COR, kCAL, force, motion, TC and Kelvin-Voigt kB, cB.
 
@@ -241,7 +231,9 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
             return res.exclude(f"unusable trace: {exc}")
-    if "clipping" not in res.reason and _touches_rail(raw, meta.adc_range_v, cond.spike_indices):
+    # any sample at a rail that is not a replaced single-sample spike
+    not_spikes = np.delete(raw, np.asarray(cond.spike_indices, dtype=int))
+    if "clipping" not in res.reason and detect_clipping(not_spikes, meta.adc_range_v, min_run=1):
         res.exclude("clipping at the ADC rails (a sample at a rail that is not a single-sample spike)")
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
