@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 from tracekit import HUM_HARMONICS, make_trace
 
 from ballimpact.calibration import voltage_impulse
-from ballimpact.conditioning import ConditioningWarning, condition_voltage
+from ballimpact.conditioning import MIN_POST_S, ConditioningWarning, condition_voltage
 
 CHAIN = dict(cloth_s=0.1e-3, cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
 
@@ -52,12 +52,15 @@ def test_corrected_voltage_matches_clean_voltage():
 
 @pytest.mark.parametrize("tau", [0.3, 1.0, 3.0])
 def test_time_constant_estimated(tau):
-    v, fs, _ = make_trace(tau_s=tau, seed=1, **CHAIN)
+    v, fs, truth = make_trace(tau_s=tau, seed=1, **CHAIN)
     c = _quiet(voltage_V=v, sample_rate_hz=fs)
     assert c.tau_source == "estimated"
     assert_allclose(c.tau_s, tau, rtol=0.1)
-    # undershoot = impulse / tau (the amplifier's charge balance)
+    # undershoot = impulse / tau (the amplifier's charge balance): a first-order high-pass
+    # returns the pulse's area A [V s] as a tail of -A/tau just after a short pulse. tau is
+    # estimated within 10 %, so the undershoot is too.
     assert c.undershoot_V > 5 * c.undershoot_se_V
+    assert_allclose(c.undershoot_V, truth.impulse_V_s / tau, rtol=0.1)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -100,7 +103,9 @@ def test_sixty_hertz_mains():
 
 def test_warns_when_post_contact_stretch_too_short():
     v, fs, _ = make_trace(tau_s=0.5, post_s=0.003, seed=0, **CHAIN)
-    with pytest.warns(ConditioningWarning, match="decay not corrected"):
+    # the message names the shortest stretch needed, in ms (MIN_POST_S is in s)
+    needed = rf"at least {MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot"
+    with pytest.warns(ConditioningWarning, match=rf"^charge-amplifier decay not corrected: .*{needed}$"):
         c = condition_voltage(v, fs)
     assert c.tau_source == "none" and math.isinf(c.tau_s)
     assert c.contact.found and c.warnings

@@ -283,3 +283,18 @@ def test_contact_samples_on_a_sample_are_not_doubled():
     t_rel, vs = contact_samples(t, t**2, 0.5, 2.0)
     assert_allclose(t_rel, [0.0, 0.5, 1.0, 1.5])
     assert_allclose(vs, [0.25, 1.0, 2.25, 4.0])
+
+
+@pytest.mark.parametrize("ta, tp, tb", [(0.1003, 0.1403, 0.2207), (0.05071, 0.0601, 0.0902)])
+def test_triangular_force_edges_and_ends_at_its_zero_crossings(ta, tp, tb):
+    # A noise-free triangular force (linear rise from ta to the peak at tp, linear fall to
+    # zero at tb, off the sample grid): the force acts exactly from ta to tb, and the lines
+    # through the edges cross zero there too (ContactResult: start/end and edge_start/end)
+    fs = 1000.0
+    t = np.arange(400) / fs
+    x = np.clip(np.minimum((t - ta) / (tp - ta), (tb - t) / (tb - tp)), 0.0, None)
+    c = detect_contact(3.0 * x, fs)
+    assert c.found and c.flags == ()
+    assert_allclose([c.start_s, c.edge_start_s], ta, atol=1e-9)
+    assert_allclose([c.end_s, c.edge_end_s], tb, atol=1e-9)
+    assert_allclose(c.contact_time_s, tb - ta, atol=1e-9)
