@@ -38,6 +38,33 @@ def test_fit_kb0_recovers_line():
     assert_allclose(f.slope_N_s_m2, 600, rtol=0.02)
 
 
+@pytest.mark.parametrize("confidence", [0.95, 0.68])
+def test_fit_kb0_interval_is_the_textbook_intercept_interval(confidence):
+    # Ordinary least squares written out (not scipy's linregress): intercept b0 = ybar - b1 xbar,
+    # its standard error s sqrt(1/n + xbar^2 / Sxx) with s^2 = RSS / (n - 2), and the two-sided
+    # Student-t interval with n - 2 degrees of freedom (section 3.4's kB(0) extrapolation)
+    from scipy import stats
+
+    vin = np.array([14.0, 17.0, 21.0, 24.0, 27.0, 30.0])
+    kv = 25e3 + 600.0 * vin + np.array([300.0, -250.0, 120.0, 380.0, -420.0, -60.0])
+    n, xbar, ybar = vin.size, vin.mean(), kv.mean()
+    sxx = np.sum((vin - xbar) ** 2)
+    b1 = np.sum((vin - xbar) * (kv - ybar)) / sxx
+    b0 = ybar - b1 * xbar
+    s = np.sqrt(np.sum((kv - b0 - b1 * vin) ** 2) / (n - 2))
+    half = stats.t.ppf(0.5 + confidence / 2, n - 2) * s * np.sqrt(1 / n + xbar**2 / sxx)
+    f = fit_kb0(vin, kv, confidence=confidence)
+    assert_allclose([f.kb0_N_m, f.kb0_lo, f.kb0_hi, f.slope_N_s_m2], [b0, b0 - half, b0 + half, b1], rtol=1e-10)
+    assert f.n_impacts == n and isinstance(f.kb0_N_m, float)
+
+
+def test_fit_kb0_messages_name_the_count_and_the_intercept():
+    with pytest.raises(FitError, match=r"^kB\(0\) extrapolation needs at least 3 impacts, got 2$"):
+        fit_kb0([20.0, 25.0], [3e4, 3.1e4])
+    with pytest.raises(FitError, match=r"^extrapolated kB\(0\) is not positive \(-55\.0 kN/m\)"):
+        fit_kb0([10.0, 20.0, 30.0], [-45e3, -35e3, -25e3])  # the line through them: -55 kN/m + 1 kN s/m^2 vin
+
+
 @pytest.mark.parametrize(
     "vin, kv, match",
     [
