@@ -298,3 +298,22 @@ def test_triangular_force_edges_and_ends_at_its_zero_crossings(ta, tp, tb):
     assert_allclose([c.start_s, c.edge_start_s], ta, atol=1e-9)
     assert_allclose([c.end_s, c.edge_end_s], tb, atol=1e-9)
     assert_allclose(c.contact_time_s, tb - ta, atol=1e-9)
+
+
+def test_steep_edge_line_through_the_two_samples_around_the_band():
+    # A rise so steep that no sample falls inside the edge band (3-20 % of the peak): the
+    # line through the two samples around it (2 % and 50 % of the peak, both on the linear
+    # rise) still crosses zero where the force starts (flag "edge_fallback")
+    fs = 1000.0
+    t = np.arange(400) / fs
+    ta = 0.1 - 0.02 / 0.48 * 1e-3  # the sample at 0.100 s is at 2 % of the peak, the next at 50 %
+    tp, tb = ta + 1e-3 / 0.48, 0.18
+    x = np.clip(np.minimum((t - ta) / (tp - ta), (tb - t) / (tb - tp)), 0.0, None)
+    c = detect_contact(3.0 * x, fs)
+    assert "edge_fallback" in c.flags
+    assert_allclose([c.edge_start_s, c.start_s], ta, atol=1e-9)
+
+
+def test_clipped_trace_without_contact_still_says_clipped():
+    c = detect_contact(np.zeros(500), 1000.0, raw_voltage_V=np.full(500, 10.0), adc_range_V=(-10.0, 10.0))
+    assert c.found is False and c.clipped is True and c.flags == ("clipped", "no_contact")
