@@ -3,6 +3,7 @@
     python bench/mutation_score.py            # table per module, then the survivors
     python bench/mutation_score.py --json
     python bench/mutation_score.py --selection  # the mutant name patterns `make mutation` runs
+    python bench/mutation_score.py --checked-only  # score over the mutants a partial run checked
 
 Reads the mutants/src/ballimpact/<module>.py.meta files mutmut 3 writes (exit code of the
 test run per mutant) and bench/mutation_equivalent.txt (mutants judged equivalent: they
@@ -55,7 +56,7 @@ def equivalent_mutants(path: Path = EQUIVALENT) -> dict[str, str]:
     return out
 
 
-def scores(meta_dir: Path = META_DIR) -> dict:
+def scores(meta_dir: Path = META_DIR, checked_only: bool = False) -> dict:
     equivalent = equivalent_mutants()
     table, survivors = {}, []
     for meta in sorted(meta_dir.glob("*.py.meta")):
@@ -65,6 +66,9 @@ def scores(meta_dir: Path = META_DIR) -> dict:
             if not any(fnmatch.fnmatchcase(name, pat) for pat in SELECTION):
                 continue
             status = STATUS.get(code, "suspicious")
+            if checked_only and status == "not checked":
+                counts["not checked"] += 1
+                continue
             if name.removeprefix("ballimpact.") in equivalent and status != "killed":
                 status = "equivalent"
             counts[status] += 1
@@ -72,7 +76,7 @@ def scores(meta_dir: Path = META_DIR) -> dict:
                 survivors.append((name, status))
         total = sum(counts.values())
         detected = counts["killed"] + counts["timeout"] + counts["segfault"]
-        judged = total - counts["equivalent"]
+        judged = total - counts["equivalent"] - (counts["not checked"] if checked_only else 0)
         table[meta.name.removesuffix(".py.meta")] = dict(
             counts, mutants=total, score_pct=round(100.0 * detected / judged, 1) if judged else None)
     return {"modules": table, "not_killed": survivors}
@@ -82,6 +86,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--selection", action="store_true", help="print the mutant name patterns run, one a line")
+    ap.add_argument("--checked-only", action="store_true",
+                    help="score only the mutants that were run (a run stopped early, or run on a subset)")
     args = ap.parse_args(argv)
     if args.selection:
         print("\n".join(SELECTION))
@@ -89,17 +95,18 @@ def main(argv=None) -> int:
     if not META_DIR.exists():
         print(f"no mutmut results in {META_DIR}: run `make mutation` first", file=sys.stderr)
         return 2
-    res = scores()
+    res = scores(checked_only=args.checked_only)
     if args.json:
         print(json.dumps(res, indent=2))
         return 0
-    cols = ("mutants", "killed", "timeout", "equivalent", "survived", "no tests", "score_pct")
+    cols = ("mutants", "killed", "timeout", "equivalent", "survived", "no tests", "not checked", "score_pct")
     print(f"{'module':14s}" + "".join(f"{c:>12s}" for c in cols))
     for mod, c in res["modules"].items():
         print(f"{mod:14s}" + "".join(f"{c.get(k, 0)!s:>12s}" for k in cols))
     print("\nnot killed (and not listed as equivalent):")
     for name, status in res["not_killed"]:
-        print(f"  {name}  [{status}]")
+        if status != "not checked":
+            print(f"  {name}  [{status}]")
     return 0
 
 
