@@ -130,7 +130,8 @@ def test_warns_when_undershoot_not_measurable():
     assert m, msg
     undershoot_mV, se_mV, bias_pct = (float(g) for g in m.groups())
     # printed to 3 and 2 significant digits
-    assert_allclose([undershoot_mV, se_mV], [c.undershoot_V * 1e3, c.undershoot_se_V * 1e3], rtol=[0.005, 0.05])
+    assert_allclose(undershoot_mV, c.undershoot_V * 1e3, rtol=0.005)
+    assert_allclose(se_mV, c.undershoot_se_V * 1e3, rtol=0.05)
     assert abs(undershoot_mV) < 4 * se_mV  # DC-coupled: no undershoot, within its error
     kappa_hidden = UNDERSHOOT_SIGNIFICANCE * c.undershoot_se_V / truth.impulse_V_s  # [1/s]
     assert_allclose(bias_pct, 100 * kappa_hidden * truth.contact_time_s / 2, rtol=0.05)
