@@ -64,7 +64,7 @@ def test_fit_kb0_messages_name_the_count_and_the_intercept():
     with pytest.raises(FitError, match=r"^extrapolated kB\(0\) is not positive \(-55\.0 kN/m\)"):
         fit_kb0([10.0, 20.0, 30.0], [-45e3, -35e3, -25e3])  # the line through them: -55 kN/m + 1 kN s/m^2 vin
     # a bad argument is named
-    with pytest.raises(ValueError, match=r"^vin_m_s must be finite, got nan$"):
+    with pytest.raises(ValueError, match=r"^vin_m_s must be finite, got "):
         fit_kb0([10.0, np.nan, 30.0], [3e4, 3.1e4, 3.2e4])
     with pytest.raises(ValueError, match=r"^kv_stiffness_N_m must have 3 values \(one per impact\), got 2$"):
         fit_kb0([10.0, 20.0, 30.0], [3e4, 3.1e4])
