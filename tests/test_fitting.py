@@ -63,6 +63,11 @@ def test_fit_kb0_messages_name_the_count_and_the_intercept():
         fit_kb0([20.0, 25.0], [3e4, 3.1e4])
     with pytest.raises(FitError, match=r"^extrapolated kB\(0\) is not positive \(-55\.0 kN/m\)"):
         fit_kb0([10.0, 20.0, 30.0], [-45e3, -35e3, -25e3])  # the line through them: -55 kN/m + 1 kN s/m^2 vin
+    with pytest.raises(FitError, match=r"^kB\(0\) extrapolation needs impacts at more than one inbound speed$"):
+        fit_kb0([20.0, 20.0, 20.0], [3e4, 3.1e4, 3.2e4])
+    # speeds within half a metre per second are still more than one speed: a line, exactly
+    f = fit_kb0([20.0, 20.2, 20.5], [25e3 + 600.0 * v for v in (20.0, 20.2, 20.5)])
+    assert_allclose([f.kb0_N_m, f.slope_N_s_m2], [25e3, 600.0], rtol=1e-9)
     # a bad argument is named
     with pytest.raises(ValueError, match=r"^vin_m_s must be finite, got "):
         fit_kb0([10.0, np.nan, 30.0], [3e4, 3.1e4, 3.2e4])
