@@ -101,6 +101,10 @@ RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
+TURN_FRACTION = 0.01  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
+TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
+TURN_MIN_OSCILLATION = 4  # this many turning points in the contact are an oscillation (a ball gives 1-3) [-]
+PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -700,6 +704,7 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
             out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
                        f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
     out.extend(_negative_force(x, fs, fit.noise, peak, end_u_c))
+    out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, fit.noise, peak))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          fit.noise)
     if line is not None:
@@ -723,6 +728,52 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
                        f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
                        "(give daq.mains_hz)")
     return out
+
+
+def _turning_points(y, h) -> list[int]:
+    """Indices of the turning points of y, each left by more than h (a hysteresis; noise below h makes none)."""
+    out: list[int] = []
+    direction, i_ext = 0, 0
+    for i in range(1, y.size):
+        v = y[i]
+        if direction == 0:
+            if abs(v - y[0]) > h:
+                direction, i_ext = (1 if v > y[0] else -1), i
+        elif direction * (v - y[i_ext]) > 0:
+            i_ext = i
+        elif direction * (y[i_ext] - v) > h:
+            out.append(i_ext)
+            direction, i_ext = -direction, i
+    return out
+
+
+def _peak_on_ringing(xc, fs, noise, peak):
+    """The peak force riding on plate ringing: the oscillation is there and the peak moves with it.
+
+    The ball's force turns at most three times in a contact (the pre-buckling
+    spike, the dip after it, the main maximum). More turning points, each
+    left by more than TURN_FRACTION of the peak and TURN_SIGMA noise
+    deviations, are an oscillation: the plate ringing after the force's jump
+    at the start or its drop at buckling (the spectral-line check misses a
+    burst that dies out in a few periods). It only matters to the peak when
+    the peak sits on it: averaged over one period of the oscillation (twice
+    the median spacing of its turning points) the largest value drops by more
+    than PEAK_ON_RINGING_FRACTION of the peak.
+    """
+    if xc.size < MIN_CONTACT_SAMPLES:
+        return []
+    turns = _turning_points(xc, max(TURN_FRACTION * peak, TURN_SIGMA * noise))
+    if len(turns) < TURN_MIN_OSCILLATION:
+        return []
+    period = 2.0 * float(np.median(np.diff(turns)))
+    k = max(int(round(period)), 1)
+    averaged = np.convolve(xc, np.ones(k) / k, mode="same")
+    drop = float(np.max(xc) - np.max(averaged))
+    if drop > PEAK_ON_RINGING_FRACTION * peak:
+        return [f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during the "
+                f"contact ({len(turns)} turning points) and averaged over one period its peak is "
+                f"{100 * drop / peak:.2g} % lower; the peak is not the ball's"]
+    return []
 
 
 def _negative_force(x, fs, noise, peak, end_u):
