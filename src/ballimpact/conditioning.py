@@ -101,9 +101,10 @@ RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
-TURN_FRACTION = 0.01  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
+TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
-TURN_MIN_OSCILLATION = 4  # this many turning points in the contact are an oscillation (a ball gives 1-3) [-]
+TURN_MIN_OSCILLATION = 3  # fewest turning points of an oscillation [-]
+TURN_REGULARITY = 2.0  # spacings of an oscillation's turning points closer than this factor to each other [-]
 PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
@@ -748,31 +749,47 @@ def _turning_points(y, h) -> list[int]:
 
 
 def _peak_on_ringing(xc, fs, noise, peak):
-    """The peak force riding on plate ringing: the oscillation is there and the peak moves with it.
+    """The peak force riding on plate ringing: the largest value is one of the plate's swings.
 
-    The ball's force turns at most three times in a contact (the pre-buckling
-    spike, the dip after it, the main maximum). More turning points, each
-    left by more than TURN_FRACTION of the peak and TURN_SIGMA noise
-    deviations, are an oscillation: the plate ringing after the force's jump
-    at the start or its drop at buckling (the spectral-line check misses a
-    burst that dies out in a few periods). It only matters to the peak when
-    the peak sits on it: averaged over one period of the oscillation (twice
-    the median spacing of its turning points) the largest value drops by more
-    than PEAK_ON_RINGING_FRACTION of the peak.
+    Turning points of the contact force are the places it leaves by more than
+    TURN_FRACTION of the peak and TURN_SIGMA noise deviations (a hysteresis:
+    noise makes none). The force jumps from zero at the start and drops at
+    buckling, and a plate resonance rings after each. The peak is one of those
+    swings when it is a turning point of a regular oscillation: the first
+    turning point of the contact (the overshoot of the jump) followed by two
+    more at about the same spacing, or a turning point whose spacing to the one
+    before is about (a factor TURN_REGULARITY) the spacing to the one after.
+    The ball's own spike before buckling comes after the ringing of the jump
+    has died, at an irregular spacing. It matters when averaged over one period
+    of the oscillation (twice that spacing) the peak drops by more than
+    PEAK_ON_RINGING_FRACTION of the peak.
     """
     if xc.size < MIN_CONTACT_SAMPLES:
         return []
     turns = _turning_points(xc, max(TURN_FRACTION * peak, TURN_SIGMA * noise))
-    if len(turns) < TURN_MIN_OSCILLATION:
+    i_peak = int(np.argmax(xc))
+    if i_peak not in turns or len(turns) < TURN_MIN_OSCILLATION:
         return []
-    period = 2.0 * float(np.median(np.diff(turns)))
+    j = turns.index(i_peak)
+    spacing = np.diff(turns).astype(float)
+
+    def _alike(a, b):
+        return max(a, b) < TURN_REGULARITY * min(a, b)
+
+    if j == 0:
+        on_ringing = spacing.size >= 3 and _alike(spacing[0], spacing[1]) and _alike(spacing[1], spacing[2])
+    else:
+        on_ringing = j < spacing.size and _alike(spacing[j - 1], spacing[j])
+    if not on_ringing:
+        return []
+    period = 2.0 * float(spacing[min(j, spacing.size - 1)])
     k = max(int(round(period)), 1)
     averaged = np.convolve(xc, np.ones(k) / k, mode="same")
     drop = float(np.max(xc) - np.max(averaged))
     if drop > PEAK_ON_RINGING_FRACTION * peak:
         return [f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during the "
-                f"contact ({len(turns)} turning points) and averaged over one period its peak is "
-                f"{100 * drop / peak:.2g} % lower; the peak is not the ball's"]
+                f"contact and its peak is one of the swings (averaged over one period it is "
+                f"{100 * drop / peak:.2g} % lower); the peak is not the ball's"]
     return []
 
 
