@@ -207,6 +207,15 @@ def test_clipping_rail_band_is_inclusive_at_both_rails():
     assert detect_clipping([2.0, 2.0], (0.0, 4.0), adc_bits=1, tolerance_lsb=1.0)
 
 
+def test_clipping_default_band_is_one_and_a_half_lsb():
+    # 16-bit ADC over [-10, 10] V: two samples 1 LSB below the top rail clip, 2 LSB below do not
+    lsb = 20.0 / 2**16
+    assert detect_clipping([0.0, 10.0 - lsb, 10.0 - lsb, 0.0], (-10.0, 10.0))
+    assert not detect_clipping([0.0, 10.0 - 2 * lsb, 10.0 - 2 * lsb, 0.0], (-10.0, 10.0))
+    assert detect_clipping([0.0, -10.0 + lsb, -10.0 + lsb, 0.0], (-10.0, 10.0))
+    assert not detect_clipping([0.0, -10.0 + 2 * lsb, -10.0 + 2 * lsb, 0.0], (-10.0, 10.0))
+
+
 def test_clipping_single_sample_run():
     # min_run=1: one sample at a rail is a clip; min_run=2 needs two in a row
     v = [0.0, 10.0, 0.0]
@@ -253,7 +262,7 @@ def test_contact_samples_accept_only_rounding_outside_the_trace(n):
     t = 5.0 + np.arange(n) * dt
     v = np.linspace(1.0, 2.0, n)
     rounding = 1e-6 * dt
-    t_rel, vs = contact_samples(t, v, t[0] - 0.5 * rounding, t[-1] + 0.5 * rounding)
+    t_rel, vs = contact_samples(t, v, t[0] - 0.75 * rounding, t[-1] + 0.75 * rounding)
     assert_allclose([t_rel[0], t_rel[-1]], [0.0, t[-1] - t[0]], atol=1e-12)
     assert_allclose(vs[[0, -1]], [1.0, 2.0], rtol=1e-12)
     with pytest.raises(ValueError, match="lies outside the trace"):

@@ -56,12 +56,14 @@ def test_fit_kb0_interval_is_the_textbook_intercept_interval(confidence):
     f = fit_kb0(vin, kv, confidence=confidence)
     assert_allclose([f.kb0_N_m, f.kb0_lo, f.kb0_hi, f.slope_N_s_m2], [b0, b0 - half, b0 + half, b1], rtol=1e-10)
     assert f.n_impacts == n and isinstance(f.kb0_N_m, float)
+    assert_allclose([f.result.intercept, f.result.slope], [b0, b1], rtol=1e-10)  # the regression kept
 
 
 def test_fit_kb0_messages_name_the_count_and_the_intercept():
     with pytest.raises(FitError, match=r"^kB\(0\) extrapolation needs at least 3 impacts, got 2$"):
         fit_kb0([20.0, 25.0], [3e4, 3.1e4])
-    with pytest.raises(FitError, match=r"^extrapolated kB\(0\) is not positive \(-55\.0 kN/m\)"):
+    with pytest.raises(FitError, match=r"^extrapolated kB\(0\) is not positive \(-55\.0 kN/m\): the Kelvin-Voigt "
+                       r"stiffness does not fall towards low speeds; give kb0_kN_m in session\.yaml$"):
         fit_kb0([10.0, 20.0, 30.0], [-45e3, -35e3, -25e3])  # the line through them: -55 kN/m + 1 kN s/m^2 vin
     with pytest.raises(FitError, match=r"^kB\(0\) extrapolation needs impacts at more than one inbound speed$"):
         fit_kb0([20.0, 20.0, 20.0], [3e4, 3.1e4, 3.2e4])
