@@ -43,8 +43,12 @@ Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved, a
 quiet residual that is more than white noise, plate ringing during the contact
-(a spectral line) or after it, too few samples across the contact, a contact
-window that does not settle.
+(a spectral line) or after it, a peak that is one of the plate's swings, force
+below zero after the contact (the plate swinging back), a contact end that
+moves when fitted again from higher samples (a tail fading into the noise), a
+force jump from zero that locates an end only to half a sample when that is
+more than 0.7 % of TC, too few samples across the contact, a contact window
+that does not settle.
 """
 
 from __future__ import annotations
