@@ -13,6 +13,7 @@ from tracekit import HUM_HARMONICS, make_trace
 
 from ballimpact.calibration import voltage_impulse
 from ballimpact.conditioning import ConditioningWarning, condition_voltage
+from ballimpact.problems import ProblemKind
 
 CHAIN = dict(cloth_s=0.1e-3, cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
 
@@ -75,7 +76,7 @@ def test_impulse_not_biased_by_the_undershoot(seed):
     v, fs, truth = make_trace(tau_s=0.3, seed=seed, **CHAIN)
     raw = condition_voltage(v, fs, tau_s=math.inf)
     assert raw.tau_source == "given"
-    assert any("off zero" in p for p in raw.problems)
+    assert any(p.kind is ProblemKind.BASELINE_OFF_ZERO and "off zero" in p.message for p in raw.problems)
 
 
 def test_given_time_constant_used():
@@ -260,7 +261,7 @@ def test_wrong_given_time_constant_is_a_problem():
     # a decay that the given tau cannot undo leaves the corrected baseline off zero
     v, fs, _ = make_trace(tau_s=0.02, seed=9, post_s=0.06, **CHAIN)
     c = condition_voltage(v, fs, tau_s=0.2)
-    assert any("off zero" in p for p in c.problems)
+    assert any(p.kind is ProblemKind.BASELINE_OFF_ZERO and "off zero" in p.message for p in c.problems)
 
 
 def test_baseline_step_after_contact_is_a_problem():
@@ -268,27 +269,28 @@ def test_baseline_step_after_contact_is_a_problem():
     v = v + 0.005 * (truth.time_s > truth.end_s)  # a shift up, not an undershoot
     with pytest.warns(ConditioningWarning):
         c = condition_voltage(v, fs)
-    assert any("above the one before it" in p for p in c.problems)
+    assert any(p.kind is ProblemKind.DECAY_NOT_CORRECTED and "above the one before it" in p.message
+               for p in c.problems)
 
 
 def test_plate_ringing_in_the_contact_is_a_problem():
     v, fs, _ = make_trace(seed=10, ringing_fraction=0.1, ringing_hz=8000.0, ringing_decay_s=1.5e-3, **CHAIN)
     c = condition_voltage(v, fs)
-    assert any(p.startswith("plate ringing at 8") for p in c.problems)
+    assert any(p.kind is ProblemKind.PLATE_RINGING and p.message.startswith("plate ringing at 8") for p in c.problems)
     v, fs, _ = make_trace(seed=10, **CHAIN)  # the same without ringing
-    assert not any("ringing" in p for p in condition_voltage(v, fs).problems)
+    assert not any(p.kind is ProblemKind.PLATE_RINGING for p in condition_voltage(v, fs).problems)
 
 
 def test_ringing_outlasting_the_contact_is_a_problem():
     v, fs, _ = make_trace(seed=11, ringing_fraction=0.2, ringing_hz=1500.0, ringing_decay_s=3e-3, **CHAIN)
     c = condition_voltage(v, fs)
-    assert any("outlasts the contact" in p for p in c.problems)
+    assert any(p.kind is ProblemKind.PLATE_RINGING and "outlasts the contact" in p.message for p in c.problems)
 
 
 def test_too_few_samples_in_the_contact_is_a_problem():
     v, fs, _ = make_trace(sample_rate_hz=4000.0, seed=12, pre_s=0.05, post_s=0.05, **CHAIN)
     c = condition_voltage(v, fs)
-    assert any("samples in the contact" in p for p in c.problems)
+    assert any(p.kind is ProblemKind.TOO_FEW_SAMPLES and "samples in the contact" in p.message for p in c.problems)
 
 
 def test_clean_traces_have_no_problems():
@@ -308,7 +310,8 @@ def test_contact_end_in_the_noise_is_a_problem():
     c = condition_voltage(tr.voltage_V, fs, polarity=tr.rig.polarity, n_harmonics=5, tau_s=tr.rig.tau_s,
                           mains_hz=tr.rig.mains_hz)
     assert c.contact.end_s > tr.truth.end_s + 10 / fs
-    assert any(p.startswith("contact end not determined") for p in c.problems)
+    assert any(p.kind is ProblemKind.CONTACT_END_UNDETERMINED and p.message.startswith("contact end not determined")
+               for p in c.problems)
     # a clean trace of the same chain with a well-found end has no such problem
     v, fs, _ = make_trace(seed=3, **CHAIN)
-    assert not any("not determined" in p for p in condition_voltage(v, fs).problems)
+    assert not any(p.kind is ProblemKind.CONTACT_END_UNDETERMINED for p in condition_voltage(v, fs).problems)

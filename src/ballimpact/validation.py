@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .problems import TRACE_FILE_KINDS, ProblemKind, has_kind
 from .session import read_session
 from .traces import TraceError, read_trace
 
@@ -193,14 +194,14 @@ def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
         n_default_rate = 0
         signs: Counter = Counter()
         for row in session.impacts:
-            problems.extend((row.impact_id, message) for message in row.problems)
+            problems.extend((row.impact_id, problem.message) for problem in row.problems)
             gates = (row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
-            if not any(m.startswith("gate times out of order") for m in row.problems):
+            if not has_kind(row.problems, ProblemKind.GATE_ORDER):
                 speed_problems = gate_speed_problems(meta.gate_spacing_m, gates)
                 problems.extend((row.impact_id, message) for message in speed_problems)
                 if speed_problems and math.isfinite(gates[1] - gates[0]) and gates[1] > gates[0]:
                     bad_speeds.append(meta.gate_spacing_m / (gates[1] - gates[0]))
-            if any(message.startswith(("missing trace path", "trace ")) for message in row.problems):
+            if has_kind(row.problems, TRACE_FILE_KINDS):
                 continue  # no readable trace file to look at
             trace_path = session.trace_path(row)
             key = trace_path.resolve()
