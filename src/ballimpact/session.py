@@ -717,7 +717,7 @@ def _parse_mass(cell: str, ball: BallType, problems: list[Problem], where: str) 
             f"{where}: mass_g {text} g is outside the usual {MASS_TYPICAL_MIN_G:g}-{MASS_TYPICAL_MAX_G:g} g "
             "of a tennis ball",
             SessionWarning,
-            stacklevel=4,
+            stacklevel=5,
         )
     return mass_g / 1000.0
 
@@ -800,23 +800,7 @@ def _read_impacts(session_dir: Path, meta) -> list[ImpactRow]:
         if not record or all(not cell.strip() for cell in record) and len(record) <= 1:
             continue  # blank line
         if header is None:
-            header = [cell.strip() for cell in record]
-            duplicated = sorted({c for c in header if header.count(c) > 1})
-            if duplicated:
-                raise SessionError(f"{file}: line {line}: duplicate column(s) in header: {', '.join(duplicated)}")
-            missing = [c for c in REQUIRED_COLUMNS if c not in header]
-            if missing:
-                raise SessionError(
-                    f"{file}: line {line}: missing required column(s): {', '.join(missing)} "
-                    f"(header has: {_one_line(', '.join(header))})" + _separator_hint(header)
-                )
-            unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
-            if unknown:
-                warnings.warn(
-                    f"{file}: line {line}: unknown column(s) ignored: {', '.join(unknown)}",
-                    SessionWarning,
-                    stacklevel=3,
-                )
+            header = _impacts_header(record, file, line)
             index = {name: i for i, name in enumerate(header)}
             continue
         if len(record) != len(header):
@@ -826,51 +810,9 @@ def _read_impacts(session_dir: Path, meta) -> list[ImpactRow]:
             session_problems.append(f"{file}: line {line}: expected {len(header)} fields, got {len(record)}{hint}")
             continue
         cells = {name: record[i] for name, i in index.items()}
-        impact_id = cells["impact_id"].strip()
-        if not IMPACT_ID_PATTERN.fullmatch(impact_id):
-            session_problems.append(
-                f"{file}: line {line}: impact_id {impact_id!r} is not valid "
-                "(allowed: letters, digits, '_' and '-', at least one)"
-            )
-            continue
-        if impact_id in first_line:
-            session_problems.append(
-                f"{file}: line {line}: impact_id {impact_id!r} duplicates line {first_line[impact_id]}"
-            )
-            continue
-        first_line[impact_id] = line
-        ball_key = cells["ball"].strip()
-        if balls is None:
-            continue  # session.yaml balls unusable: only the structure of the rows is checked
-        if ball_key in balls and balls[ball_key] is None:
-            continue  # a ball type with problems of its own in session.yaml
-        if ball_key not in balls:
-            session_problems.append(
-                f"{file}: line {line}: ball {ball_key!r} is not defined in {SESSION_FILE} balls "
-                f"(valid: {', '.join(balls)})"
-            )
-            continue
-        problems: list[Problem] = []
-        gates = {column: _parse_gate(cells[column], column, problems) for column in GATE_COLUMNS}
-        _check_gate_order(gates, cells, problems)
-        mass_kg = _parse_mass(cells.get("mass_g", ""), balls[ball_key], problems, f"{file}: line {line}")
-        trace = cells["trace"].strip()
-        _check_trace(trace, session_dir, problems)
-        rows.append(
-            ImpactRow(
-                impact_id=impact_id,
-                ball=ball_key,
-                trace=trace,
-                gate_in_1_s=gates["gate_in_1_s"],
-                gate_in_2_s=gates["gate_in_2_s"],
-                gate_out_2_s=gates["gate_out_2_s"],
-                gate_out_1_s=gates["gate_out_1_s"],
-                mass_kg=mass_kg,
-                note=cells.get("note", "").strip(),
-                line=line,
-                problems=problems,
-            )
-        )
+        row = _impact_row(cells, line, file, balls, first_line, session_problems, session_dir)
+        if row is not None:
+            rows.append(row)
     if header is None:
         raise SessionError(
             f"{file}: file is empty (expected a header row with columns {', '.join(REQUIRED_COLUMNS)})"
@@ -879,6 +821,78 @@ def _read_impacts(session_dir: Path, meta) -> list[ImpactRow]:
     if not rows and balls is not None:
         raise SessionError(f"{file}: no impact rows (only the header)")
     return rows
+
+
+def _impacts_header(record: list[str], file: str, line: int) -> list[str]:
+    """The header row of impacts.csv: no duplicate, every required column; warns of unknown ones."""
+    header = [cell.strip() for cell in record]
+    duplicated = sorted({c for c in header if header.count(c) > 1})
+    if duplicated:
+        raise SessionError(f"{file}: line {line}: duplicate column(s) in header: {', '.join(duplicated)}")
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise SessionError(
+            f"{file}: line {line}: missing required column(s): {', '.join(missing)} "
+            f"(header has: {_one_line(', '.join(header))})" + _separator_hint(header)
+        )
+    unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+    if unknown:
+        warnings.warn(
+            f"{file}: line {line}: unknown column(s) ignored: {', '.join(unknown)}",
+            SessionWarning,
+            stacklevel=4,
+        )
+    return header
+
+
+def _impact_row(cells: dict[str, str], line: int, file: str, balls, first_line: dict[str, int],
+                session_problems: list[str], session_dir: Path) -> ImpactRow | None:
+    """One data row of impacts.csv as an ImpactRow with its impact-level problems, or None:
+    a session-level fault (bad or duplicate impact_id, undefined ball) is appended to
+    ``session_problems``; ``balls`` None (session.yaml unusable) checks only the structure."""
+    impact_id = cells["impact_id"].strip()
+    if not IMPACT_ID_PATTERN.fullmatch(impact_id):
+        session_problems.append(
+            f"{file}: line {line}: impact_id {impact_id!r} is not valid "
+            "(allowed: letters, digits, '_' and '-', at least one)"
+        )
+        return None
+    if impact_id in first_line:
+        session_problems.append(
+            f"{file}: line {line}: impact_id {impact_id!r} duplicates line {first_line[impact_id]}"
+        )
+        return None
+    first_line[impact_id] = line
+    ball_key = cells["ball"].strip()
+    if balls is None:
+        return None  # session.yaml balls unusable: only the structure of the rows is checked
+    if ball_key in balls and balls[ball_key] is None:
+        return None  # a ball type with problems of its own in session.yaml
+    if ball_key not in balls:
+        session_problems.append(
+            f"{file}: line {line}: ball {ball_key!r} is not defined in {SESSION_FILE} balls "
+            f"(valid: {', '.join(balls)})"
+        )
+        return None
+    problems: list[Problem] = []
+    gates = {column: _parse_gate(cells[column], column, problems) for column in GATE_COLUMNS}
+    _check_gate_order(gates, cells, problems)
+    mass_kg = _parse_mass(cells.get("mass_g", ""), balls[ball_key], problems, f"{file}: line {line}")
+    trace = cells["trace"].strip()
+    _check_trace(trace, session_dir, problems)
+    return ImpactRow(
+        impact_id=impact_id,
+        ball=ball_key,
+        trace=trace,
+        gate_in_1_s=gates["gate_in_1_s"],
+        gate_in_2_s=gates["gate_in_2_s"],
+        gate_out_2_s=gates["gate_out_2_s"],
+        gate_out_1_s=gates["gate_out_1_s"],
+        mass_kg=mass_kg,
+        note=cells.get("note", "").strip(),
+        line=line,
+        problems=problems,
+    )
 
 
 # ---------------------------------------------------------------------- public
