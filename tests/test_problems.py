@@ -128,6 +128,10 @@ def test_kind_of_message_unknown_text_is_none():
 
 
 # ----------------------------------------------------------------------------- where each kind arises
+# The conditioning's kinds BASELINE_OFF_ZERO, DECAY_NOT_CORRECTED, PLATE_RINGING, TOO_FEW_SAMPLES and
+# CONTACT_END_UNDETERMINED are produced, by kind, in tests/test_conditioning.py. CONTACT_UNSTABLE,
+# UNDERSHOOT_NOT_MEASURABLE, BASELINE_RESIDUAL, MAINS_UNRESOLVED, CONTACT_TIME_OUT_OF_BOUNDS and
+# NO_CALIBRATION need traces no cheap generator makes on purpose: only their messages are read back above.
 
 
 def _rewrite_rows(session_dir, cells_by_row: dict[int, dict[str, str]]):
@@ -197,6 +201,9 @@ def test_processing_kinds_of_speed_cor_and_calibration(small_session):
     assert ProblemKind.COR_OUT_OF_BOUNDS in _kinds(lively.problems)  # rebound 5x faster than inbound
     narrow = dataclasses.replace(session, meta=dataclasses.replace(session.meta, kcal_range_N_per_V=(1.0, 2.0)))
     assert _kinds(_process(narrow).problems) == [ProblemKind.KCAL_OUT_OF_RANGE]
+    # a metadata value the conditioning cannot use (the reader would refuse it): the trace is unusable
+    bad_mains = dataclasses.replace(session, meta=dataclasses.replace(session.meta, mains_hz=-50.0))
+    assert _kinds(_process(bad_mains).problems) == [ProblemKind.TRACE_UNUSABLE]
 
 
 def test_processing_kinds_of_the_trace(small_session, tmp_path):
