@@ -101,6 +101,12 @@ MESSAGES = {
     ProblemKind.TOO_FEW_SAMPLES: "only 7.5 samples in the contact (fewer than 10): sample rate too low",
     ProblemKind.PLATE_RINGING: "plate ringing at 8.1 kHz during the contact",
     ProblemKind.MAINS_UNRESOLVED: "mains frequency not resolved: 50 and 60 Hz hum fit the quiet baseline equally well",
+    ProblemKind.CONTACT_JUMP_UNRESOLVED: "contact start between two samples: the force jumps from zero there, so TC "
+                                         "is known to +-25 us only, more than 0.7 % of 3 ms (sample faster)",
+    ProblemKind.NEGATIVE_FORCE: "force below zero after the contact: 2 % of the peak (9.1 noise deviations) 0.6 ms "
+                                "after its end",
+    ProblemKind.PEAK_ON_RINGING: "peak force on plate ringing: the force oscillates at about 20 kHz during the "
+                                 "contact",
     ProblemKind.SPEED_OUT_OF_BOUNDS: "inbound speed 1.20 m/s outside physical bounds (2.0, 80.0)",
     ProblemKind.COR_OUT_OF_BOUNDS: "COR 1.200 outside physical bounds (0.05, 1.0)",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: "contact time 0.52 ms outside physical bounds (1.0, 12.0)",
@@ -128,8 +134,9 @@ def test_kind_of_message_unknown_text_is_none():
 
 
 # ----------------------------------------------------------------------------- where each kind arises
-# The conditioning's kinds BASELINE_OFF_ZERO, DECAY_NOT_CORRECTED, PLATE_RINGING, TOO_FEW_SAMPLES and
-# CONTACT_END_UNDETERMINED are produced, by kind, in tests/test_conditioning.py. CONTACT_UNSTABLE,
+# The conditioning's kinds BASELINE_OFF_ZERO, DECAY_NOT_CORRECTED, PLATE_RINGING, TOO_FEW_SAMPLES,
+# CONTACT_END_UNDETERMINED, CONTACT_JUMP_UNRESOLVED, NEGATIVE_FORCE and PEAK_ON_RINGING are produced,
+# by kind, in tests/test_conditioning.py. CONTACT_UNSTABLE,
 # UNDERSHOOT_NOT_MEASURABLE, BASELINE_RESIDUAL, MAINS_UNRESOLVED, CONTACT_TIME_OUT_OF_BOUNDS and
 # NO_CALIBRATION need traces no cheap generator makes on purpose: only their messages are read back above.
 

@@ -58,6 +58,9 @@ class ProblemKind(enum.Enum):
     TOO_FEW_SAMPLES = "too_few_samples"
     PLATE_RINGING = "plate_ringing"
     MAINS_UNRESOLVED = "mains_unresolved"
+    CONTACT_JUMP_UNRESOLVED = "contact_jump_unresolved"  # a force jump between samples costs > 0.7 % of TC
+    NEGATIVE_FORCE = "negative_force"  # force below zero after the contact
+    PEAK_ON_RINGING = "peak_on_ringing"  # the peak is a swing of plate ringing
     # physical bounds and calibration (ballimpact.processing)
     SPEED_OUT_OF_BOUNDS = "speed_out_of_bounds"
     COR_OUT_OF_BOUNDS = "cor_out_of_bounds"
@@ -127,6 +130,9 @@ _MESSAGE_STARTS = {
     ProblemKind.TOO_FEW_SAMPLES: r"only \S+ samples in the contact",
     ProblemKind.PLATE_RINGING: r"plate ringing",
     ProblemKind.MAINS_UNRESOLVED: r"mains frequency not resolved",
+    ProblemKind.CONTACT_JUMP_UNRESOLVED: r"contact (start|end|start and end) between two samples",
+    ProblemKind.NEGATIVE_FORCE: r"force below zero after the contact",
+    ProblemKind.PEAK_ON_RINGING: r"peak force on plate ringing",
     ProblemKind.SPEED_OUT_OF_BOUNDS: r"inbound speed \S+ m/s outside physical bounds",
     ProblemKind.COR_OUT_OF_BOUNDS: r"COR \S+ outside physical bounds",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: r"contact time \S+ ms outside physical bounds",
