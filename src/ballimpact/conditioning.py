@@ -43,8 +43,12 @@ Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved, a
 quiet residual that is more than white noise, plate ringing during the contact
-(a spectral line) or after it, too few samples across the contact, a contact
-window that does not settle.
+(a spectral line) or after it, a peak that is one of the plate's swings, force
+below zero after the contact (the plate swinging back), a contact end that
+moves when fitted again from higher samples (a tail fading into the noise), a
+force jump from zero that locates an end only to half a sample when that is
+more than 0.7 % of TC, too few samples across the contact, a contact window
+that does not settle.
 """
 
 from __future__ import annotations
@@ -59,6 +63,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
+from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
 
@@ -156,7 +161,7 @@ class ConditionedSignal:
         Window/baseline iterations done [-].
     warnings : tuple of str
         Messages of the ConditioningWarnings issued.
-    problems : tuple of str
+    problems : tuple of ballimpact.problems.Problem
         Reasons the impact cannot be trusted (each names what was seen);
         empty when the conditioning passed every integrity check.
     spike_indices : tuple of int
@@ -177,7 +182,7 @@ class ConditionedSignal:
     contact: ContactResult = field(repr=False)
     n_iterations: int = 0
     warnings: tuple[str, ...] = ()
-    problems: tuple[str, ...] = ()
+    problems: tuple[Problem, ...] = ()
     spike_indices: tuple[int, ...] = ()
 
 
@@ -558,7 +563,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     pre_guard = pre_guard_s * fs
     post_guard = post_guard_s * fs
     messages: list[str] = []
-    problems: list[str] = []
+    problems: list[Problem] = []
     kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
     trend = _rough_trend(v)
@@ -583,7 +588,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     source = "none"
     n_iter = 0
     pending: list[str] = []
-    tau_problems: list[str] = []
+    tau_problems: list[Problem] = []
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
     fit = None
@@ -621,8 +626,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             break
     else:
         if c.found and moved > UNSTABLE_SAMPLES:
-            problems.append(f"contact window not stable under the baseline fit: its ends still move by "
-                            f"{moved:.2g} samples after {MAX_ITERATIONS} iterations")
+            problems.append(Problem(ProblemKind.CONTACT_UNSTABLE,
+                                    f"contact window not stable under the baseline fit: its ends still move by "
+                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations"))
     for msg in pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
@@ -654,8 +660,9 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         level = float(np.mean(x[sel]))
         se = fit.noise / math.sqrt(sel.size)
         if abs(level) > FLAT_FRACTION * peak and abs(level) > FLAT_SIGMA * se:
-            out.append(f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
-                       f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed")
+            out.append(Problem(ProblemKind.BASELINE_OFF_ZERO,
+                               f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
+                               f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed"))
     # the residual of the quiet samples must be white noise: compare its rms with the noise of
     # sample-to-sample differences (blind to hum and drift)
     qi = np.flatnonzero(fit.quiet)
@@ -668,9 +675,10 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
             clipped = np.clip(resid, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else resid
             excess = math.sqrt(max(float(np.mean(clipped ** 2)) - white ** 2, 0.0))
             if excess > FLAT_FRACTION * peak and excess > white:
-                out.append(f"quiet baseline not explained by offset, drift, hum and decay: {excess * scale * 1e3:.3g} mV "
-                           f"rms above the white noise ({100 * excess / peak:.2g} % of the peak; hum or drift "
-                           "not resolved?)")
+                out.append(Problem(ProblemKind.BASELINE_RESIDUAL,
+                                   f"quiet baseline not explained by offset, drift, hum and decay: "
+                                   f"{excess * scale * 1e3:.3g} mV rms above the white noise "
+                                   f"({100 * excess / peak:.2g} % of the peak; hum or drift not resolved?)"))
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
@@ -680,54 +688,63 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         if sel.size >= 3:
             level = float(np.mean(x[sel]))
             if level < END_CHECK_SIGMA * fit.noise / math.sqrt(sel.size):
-                out.append(f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold no "
-                           f"force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)")
+                out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                                   f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold "
+                                   f"no force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)"))
     n_contact = (contact.end_s - contact.start_s) * fs
     if n_contact < MIN_CONTACT_SAMPLES:
-        out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
-                   "sample rate too low for the contact time")
+        out.append(Problem(ProblemKind.TOO_FEW_SAMPLES,
+                           f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
+                           "sample rate too low for the contact time"))
     jumps = [w for w in ("start", "end") if f"{w}_jump" in contact.flags]
     if jumps and len(jumps) * 0.5 / fs > JUMP_MAX_FRACTION * contact.contact_time_s:
-        out.append(f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
-                   f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
-                   f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)")
+        out.append(Problem(ProblemKind.CONTACT_JUMP_UNRESOLVED,
+                           f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
+                           f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
+                           f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)"))
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
         if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
-            out.append(f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
-                       f"noise threshold it moves by {moved * 1e6:+.3g} us ({100 * moved / contact.contact_time_s:+.2g} "
-                       "% of TC); the force fades into the noise there")
+            out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                               f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
+                               f"noise threshold it moves by {moved * 1e6:+.3g} us "
+                               f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
+                               "there"))
     end_u_c = (contact.end_s - t0_s) * fs
     a = int(math.ceil(end_u_c + RING_GAP_S * fs))
     b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
     if b - a >= 3:
         ring = float(np.sqrt(np.mean(x[a:b] ** 2)))
         if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
-            out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
-                       f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
+            out.append(Problem(ProblemKind.PLATE_RINGING,
+                               f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
+                               f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable"))
     out.extend(_negative_force(x, fs, fit.noise, peak, end_u_c))
     out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, fit.noise, peak))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          fit.noise)
     if line is not None:
         f_line, amp_line, prominence = line
-        out.append(f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
-                   f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
-                   "force and plate ringing not separable")
+        out.append(Problem(ProblemKind.PLATE_RINGING,
+                           f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
+                           f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
+                           "force and plate ringing not separable"))
     if ambiguous is not None:
         mains, other, other_baseline = ambiguous
         a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
         hum = float(np.sum(fit.hum_amplitudes))
         if other_baseline is None and hum > MAINS_AMBIGUOUS_FRACTION * peak:
             tq = np.flatnonzero(fit.quiet) / fs
-            out.append(f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} ms, "
-                       f"too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
-                       "(give daq.mains_hz)")
+            out.append(Problem(ProblemKind.MAINS_UNRESOLVED,
+                               f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} "
+                               f"ms, too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
+                               "(give daq.mains_hz)"))
         diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a and other_baseline is not None \
             else 0.0
         if other_baseline is not None and diff > MAINS_AMBIGUOUS_FRACTION * peak:
-            out.append(f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
-                       f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
-                       "(give daq.mains_hz)")
+            out.append(Problem(ProblemKind.MAINS_UNRESOLVED,
+                               f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
+                               f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
+                               "(give daq.mains_hz)"))
     return out
 
 
@@ -792,9 +809,10 @@ def _peak_on_ringing(xc, fs, noise, peak):
     averaged = np.convolve(xc, np.ones(k) / k, mode="same")
     drop = float(np.max(xc) - np.max(averaged))
     if drop > PEAK_ON_RINGING_FRACTION * peak:
-        return [f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during the "
-                f"contact and its peak is one of the swings (averaged over one period it is "
-                f"{100 * drop / peak:.2g} % lower); the peak is not the ball's"]
+        return [Problem(ProblemKind.PEAK_ON_RINGING,
+                        f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during "
+                        f"the contact and its peak is one of the swings (averaged over one period it is "
+                        f"{100 * drop / peak:.2g} % lower); the peak is not the ball's")]
     return []
 
 
@@ -819,10 +837,11 @@ def _negative_force(x, fs, noise, peak, end_u):
     low = -float(avg[i])
     se = noise / math.sqrt(k)
     if low > NEGATIVE_FRACTION * peak and low > NEGATIVE_SIGMA * se:
-        deviations = f"{low / se:.3g}" if se > 0 else "inf"  # a noise-free trace: se = 0
-        return [f"force below zero after the contact: {100 * low / peak:.2g} % of the peak ({deviations} noise "
-                f"deviations) {1e3 * (i + (k - 1) / 2) / fs:.2g} ms after its end; the plate rings (or the "
-                "baseline is wrong) and TC and the peak cannot be trusted"]
+        return [Problem(ProblemKind.NEGATIVE_FORCE,
+                        f"force below zero after the contact: {100 * low / peak:.2g} % of the peak "
+                        f"({low / se if se > 0 else math.inf:.3g} "
+                        f"noise deviations) {1e3 * (i + (k - 1) / 2) / fs:.2g} ms after its end; the plate rings (or "
+                        "the baseline is wrong) and TC and the peak cannot be trusted")]
     return []
 
 
@@ -873,14 +892,14 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if not fit.has_post:
         msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
                f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
-        return math.inf, "none", [msg], [msg + " (give plate.time_constant_s)"]
+        return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg + " (give plate.time_constant_s)")]
     kappa, se = fit.kappa, fit.kappa_se
     undershoot = kappa * integral
     messages, problems = [], []
     if kappa < -UNDERSHOOT_SIGNIFICANCE * se:
         msg = (f"charge-amplifier decay not corrected: the baseline after the contact is "
                f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)")
-        return math.inf, "none", [msg], [msg]
+        return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg)]
     if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(kappa):
         # how much could a decay hidden in the noise change the impulse?
         bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / 2.0
@@ -890,7 +909,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
                    f"the impulse may be off by up to {bias * 100:.2g} %")
             messages.append(msg)
             if bias > BIAS_EXCLUDE_FRACTION:
-                problems.append(msg)
+                problems.append(Problem(ProblemKind.UNDERSHOOT_NOT_MEASURABLE, msg))
     if not (integral > 0 and kappa > 0):
         return math.inf, "none", messages, problems
     tau = 1.0 / kappa
@@ -899,7 +918,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if tau < TAU_BOUNDS_S[0]:
         msg = (f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
                f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)")
-        return math.inf, "none", messages + [msg], problems + [msg]
+        return math.inf, "none", messages + [msg], problems + [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg)]
     return tau, "estimated", messages, problems
 
 
