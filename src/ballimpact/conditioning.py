@@ -546,6 +546,53 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         short, implausible tau) and could bias the impulse by more than 0.1 %.
     """
     fs = float(sample_rate_hz)
+    raw = _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s,
+                           post_guard_s)
+    # work in units of the largest magnitude: no overflow for any finite input
+    scale = float(np.max(np.abs(raw)))
+    if not (scale > 0 and math.isfinite(scale)):
+        scale = 1.0
+    v = polarity * (raw / scale)
+    v, spikes = remove_spikes(v)
+    auto_mains = isinstance(mains_hz, str)
+    if auto_mains:
+        candidates = {0.0: []}
+        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
+    else:
+        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
+    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
+    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
+
+    trend = _rough_trend(v)
+    # the record before the peak holds no undershoot: its median is the level under the contact
+    k_peak = int(np.argmax(v - trend))
+    if k_peak >= MIN_QUIET_SAMPLES:
+        trend = np.full(v.size, float(np.median(v[:k_peak])))
+    rough = detect_contact(v - trend, fs)
+    if not rough.found:
+        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
+        mains = min(fits, key=lambda f: fits[f].bic)
+        fit = fits[mains]
+        y = v - fit.baseline
+        contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
+        return _result(y, fit, math.nan, "none", contact, 0, [], [], t0_s, scale, spikes, mains, mains_source)
+
+    it = _iterate(v, fs, candidates, rough, pre_guard_s * fs, post_guard_s * fs, tau_s, kappa_given, scale)
+    messages: list[str] = []
+    for msg in it.pending:
+        warnings.warn(msg, ConditioningWarning, stacklevel=2)
+        messages.append(msg)
+    problems = it.problems + it.tau_problems
+    contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
+    if contact.found:
+        problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u))
+    return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
+                   it.mains, mains_source, it.contact_integral)
+
+
+def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):
+    """The arguments of :func:`condition_voltage` checked (ValueError naming the bad one); the voltage as floats."""
+    fs = float(sample_rate_hz)
     if not math.isfinite(fs) or fs <= 0:
         raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
     if polarity not in (1, -1):
@@ -567,65 +614,56 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if not np.all(np.isfinite(raw)):
         bad = np.flatnonzero(~np.isfinite(raw))
         raise ValueError(f"voltage_V holds {bad.size} non-finite samples (first at index {bad[0]})")
+    return raw
 
-    # work in units of the largest magnitude: no overflow for any finite input
-    scale = float(np.max(np.abs(raw)))
-    if not (scale > 0 and math.isfinite(scale)):
-        scale = 1.0
-    v = polarity * (raw / scale)
-    v, spikes = remove_spikes(v)
-    if auto_mains:
-        candidates = {0.0: []}
-        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
-    else:
-        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
-    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
-    pre_guard = pre_guard_s * fs
-    post_guard = post_guard_s * fs
-    messages: list[str] = []
-    problems: list[Problem] = []
-    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
-    trend = _rough_trend(v)
-    # the record before the peak holds no undershoot: its median is the level under the contact
-    k_peak = int(np.argmax(v - trend))
-    if k_peak >= MIN_QUIET_SAMPLES:
-        trend = np.full(v.size, float(np.median(v[:k_peak])))
-    rough = detect_contact(v - trend, fs)
-    if not rough.found:
-        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
-        mains = min(fits, key=lambda f: fits[f].bic)
-        fit = fits[mains]
-        y = v - fit.baseline
-        contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-        return _result(y, fit, math.nan, "none", contact, 0, messages, problems, t0_s, scale, spikes, mains,
-                       mains_source)
+@dataclass
+class _Iteration:
+    """Where the window / baseline iteration of :func:`condition_voltage` ended."""
 
+    x: np.ndarray  # decay-corrected signal [scaled V]
+    fit: _BaselineFit
+    tau: float
+    source: str
+    pending: list
+    tau_problems: list
+    problems: list
+    mains: float
+    ambiguous: tuple | None
+    start_u: float
+    end_u: float
+    n_iter: int
+    contact_integral: float
+
+
+def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask, kappa_given):
+    """The baseline fit of each mains candidate; the best by BIC, its frequency, and an ambiguity (or None)."""
+    fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
+            for f, fr in candidates.items()}
+    mains = min(fits, key=lambda f: fits[f].bic)
+    fit = fits[mains]
+    hum = [f for f in fits if f > 0]
+    ambiguous = None
+    if mains > 0 and fits[mains].hum_amplitudes:
+        other = [f for f in hum if f != mains][0]
+        if not fits[other].hum_amplitudes:
+            ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
+        elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
+            ambiguous = (mains, other, fits[other].baseline)
+    return fit, mains, ambiguous
+
+
+def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale) -> _Iteration:
+    """Contact window, event mask and baseline (with the decay) fitted in turn until they stop moving."""
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
-    n = v.size
-    mask = np.zeros(n, dtype=bool)
-    tau = math.nan
-    source = "none"
-    n_iter = 0
-    pending: list[str] = []
-    tau_problems: list[Problem] = []
+    mask = np.zeros(v.size, dtype=bool)
+    problems: list[Problem] = []
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
-    fit = None
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
-            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
-                    for f, fr in candidates.items()}
-            mains = min(fits, key=lambda f: fits[f].bic)
-            fit = fits[mains]
-            hum = [f for f in fits if f > 0]
-            ambiguous = None
-            if mains > 0 and fits[mains].hum_amplitudes:
-                other = [f for f in hum if f != mains][0]
-                if not fits[other].hum_amplitudes:
-                    ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
-                elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
-                    ambiguous = (mains, other, fits[other].baseline)
+            fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
+                                                    kappa_given)
         else:
             fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
                                 kappa_given)
@@ -649,15 +687,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             problems.append(Problem(ProblemKind.CONTACT_UNSTABLE,
                                     f"contact window not stable under the baseline fit: its ends still move by "
                                     f"{moved:.2g} samples after {MAX_ITERATIONS} iterations"))
-    for msg in pending:
-        warnings.warn(msg, ConditioningWarning, stacklevel=2)
-        messages.append(msg)
-    problems.extend(tau_problems)
-    contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise, spread=True)
-    if contact.found:
-        problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
-    return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
-                   mains_source, contact_integral)
+    return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
+                      contact_integral)
 
 
 def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u):
