@@ -415,3 +415,19 @@ def test_contact_end_fading_into_the_noise_is_a_problem():
                for p in c.problems)
     v, fs, _ = make_trace(seed=3, **CHAIN)
     assert not any(p.kind is ProblemKind.CONTACT_END_UNDETERMINED for p in condition_voltage(v, fs).problems)
+
+
+def test_mains_not_resolved_in_a_short_record_is_a_problem():
+    # zoo trace 0:1440: 5.4 mV of 60 Hz hum, no daq.mains_hz, a record of 23 ms whose quiet
+    # baseline spans 16.7 ms: a full period of 60 Hz but not of 50 Hz, so the two cannot be
+    # told apart; the same trace with its mains frequency given has no such problem
+    import zoo
+
+    from ballimpact.problems import ProblemKind
+
+    tr = zoo.trace_for(0, 1440)
+    fs, rig = tr.rig.sample_rate_hz, tr.rig
+    kinds = [p.kind for p in condition_voltage(tr.voltage_V, fs, polarity=rig.polarity, n_harmonics=5).problems]
+    assert ProblemKind.MAINS_UNRESOLVED in kinds
+    given = condition_voltage(tr.voltage_V, fs, polarity=rig.polarity, n_harmonics=5, mains_hz=60.0)
+    assert ProblemKind.MAINS_UNRESOLVED not in [p.kind for p in given.problems]
