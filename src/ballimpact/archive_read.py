@@ -1,4 +1,4 @@
-"""Reading a session archive: its ball types, their values and fitted parameters with intervals, and its impacts by ball and status."""
+"""Reading a session archive: ball types, per-ball values, parameters with intervals, impacts by ball and status."""
 
 from __future__ import annotations
 

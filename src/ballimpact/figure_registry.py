@@ -1,4 +1,4 @@
-"""The report figures of a session, listed once: file stem, title, caption, height, report entry and draw function of each."""
+"""The report figures of a session, listed once: stem, title, caption, height, draw function, report entry."""
 
 from __future__ import annotations
 

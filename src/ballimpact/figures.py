@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import re
 import textwrap
-import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -16,7 +15,7 @@ from matplotlib.figure import Figure
 from . import archive_read as ar
 from .archive_read import excluded_impacts
 from .atomic import atomic_path
-from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure, rows_height_in
+from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
 from .model_data import COMPONENT_SPEED_M_S, impact_model_curve, kelvin_voigt_contact
 
 __all__ = [
@@ -200,7 +199,9 @@ def _grid(fig, n, ncols):
 
 
 def draw_contact_time_cor(fig, ds):
-    """Draw TC [ms] and COR [-] against inbound speed [m/s] with the fitted model, Eq. (14) (:func:`fig_contact_time_cor`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw TC [ms] and COR [-] against inbound speed [m/s] with the fitted model, Eq. (14)
+    (:func:`fig_contact_time_cor`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session
+    archive."""
     balls = ar.balls(ds)
     colors = _colors(ds)
     if not balls:
@@ -296,7 +297,8 @@ def fig_contact_time_cor(ds) -> Figure:
 
 
 def draw_cor_speed_itf(fig, ds):
-    """Draw COR [-] from 3 to 40 m/s with the ITF drop test (:func:`fig_cor_speed_itf`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw COR [-] from 3 to 40 m/s with the ITF drop test (:func:`fig_cor_speed_itf`) into ``fig``, a
+    matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from .itf import ITF_REBOUND_MAX_M, ITF_REBOUND_MIN_M, drop_test_cor
 
     balls = ar.balls(ds)
@@ -368,7 +370,8 @@ def fig_cor_speed_itf(ds) -> Figure:
 
 
 def draw_stiffness(fig, ds):
-    """Draw structural stiffness kB [kN/m] against displacement [mm], Eq. (4) (:func:`fig_stiffness`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw structural stiffness kB [kN/m] against displacement [mm], Eq. (4) (:func:`fig_stiffness`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from .model import structural_stiffness
 
     if not ar.balls(ds):
@@ -444,7 +447,9 @@ def _extreme_good(ds, ball):
 
 
 def draw_force_curves(fig, ds):
-    """Draw measured and modelled force [N] against time [ms] and displacement [mm] (:func:`fig_force_curves`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw measured and modelled force [N] against time [ms] and displacement [mm]
+    (:func:`fig_force_curves`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session
+    archive."""
     balls = ar.balls(ds)
     if not balls:
         _empty(fig)
@@ -519,7 +524,8 @@ def _nearest_good(ds, ball, speed, tol):
 
 
 def draw_components(fig, ds):
-    """Draw force components [N] of Eq. (14) at 20 m/s against time [ms] (:func:`fig_components`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw force components [N] of Eq. (14) at 20 m/s against time [ms] (:func:`fig_components`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -605,7 +611,8 @@ def _kelvin_voigt_curve(ds, i):
 
 
 def draw_kelvin_voigt(fig, ds):
-    """Draw Kelvin-Voigt force of Eqs. (1)-(3) [N] against the measured one (:func:`fig_kelvin_voigt`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw Kelvin-Voigt force of Eqs. (1)-(3) [N] against the measured one (:func:`fig_kelvin_voigt`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -694,7 +701,8 @@ def kcal_band(ds) -> tuple[float, float]:
 
 
 def draw_kcal(fig, ds):
-    """Draw kCAL [N/V] of every impact with the session band (:func:`fig_kcal`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
+    """Draw kCAL [N/V] of every impact with the session band (:func:`fig_kcal`) into ``fig``, a matplotlib
+    Figure or SubFigure; ``ds`` is the session archive."""
     n = ds.sizes.get("impact", 0)
     if n == 0:
         _empty(fig)

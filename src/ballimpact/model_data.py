@@ -1,4 +1,4 @@
-"""Model-derived data of fitted balls: curves over speed, force components, stiffness law, per-impact model and Kelvin-Voigt forces, ITF drop test."""
+"""Model-derived data of a fitted ball: curves over speed, force components, stiffness law, per-impact model forces."""
 
 from __future__ import annotations
 

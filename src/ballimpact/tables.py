@@ -1,4 +1,4 @@
-"""The CSV tables of a session: impacts.csv (one row per impact) and parameters.csv (one row per ball type), read from the archive."""
+"""The CSV tables of a session, read from its archive: impacts.csv (per impact) and parameters.csv (per ball type)."""
 
 from __future__ import annotations
 
