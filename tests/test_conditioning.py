@@ -312,3 +312,60 @@ def test_contact_end_in_the_noise_is_a_problem():
     # a clean trace of the same chain with a well-found end has no such problem
     v, fs, _ = make_trace(seed=3, **CHAIN)
     assert not any("not determined" in p for p in condition_voltage(v, fs).problems)
+
+
+# ------------------------------------------------------------------ what cannot be measured to 1 % (issue 9)
+
+
+def _jump_trace(fs, phase=0.7, duration_s=3.0e-3):
+    """A force that jumps from zero (0.4 of its scale) and returns to zero with a finite slope, in volts."""
+    t = np.arange(int(round(40e-3 * fs))) / fs
+    start = (int(20e-3 * fs) + phase) / fs
+    u = (t - start) / duration_s
+    f = np.where((u > 0) & (u < 1), 0.4 * (1.0 - u) + np.sin(np.pi * u), 0.0)
+    return 2.0 * f + np.random.default_rng(1).normal(0.0, 1e-3, t.size)
+
+
+def test_jump_located_to_half_a_sample_is_a_problem_when_that_exceeds_the_tolerance():
+    # at 20 kHz half a sample is 25 us, 0.83 % of a 3 ms contact: TC not known to 1 %
+    c = condition_voltage(_jump_trace(20e3), 20e3, mains_hz=None, tau_s=math.inf)
+    assert any(p.startswith("contact start between two samples") for p in c.problems)
+    # at 100 kHz it is 0.17 %
+    c = condition_voltage(_jump_trace(100e3), 100e3, mains_hz=None, tau_s=math.inf)
+    assert "start_jump" in c.contact.flags
+    assert not any("between two samples" in p for p in c.problems)
+
+
+def test_force_below_zero_after_the_contact_is_a_problem():
+    # a plate that swings back after the ball has left: 2 % of the peak below zero, 0.3-0.9 ms after
+    v, fs, truth = make_trace(seed=5, **CHAIN)
+    c = condition_voltage(v, fs)
+    assert not any("below zero" in p for p in c.problems)
+    u = (truth.time_s - truth.end_s - 0.3e-3) / 0.6e-3
+    swing = np.where((u > 0) & (u < 1), -0.02 * 5.0 * np.sin(np.pi * u), 0.0)
+    c = condition_voltage(v + swing, fs)
+    assert any(p.startswith("force below zero after the contact: 2") for p in c.problems)
+
+
+def test_peak_on_plate_ringing_is_a_problem():
+    # 20 kHz ringing of 3 % of the peak that lasts through the peak: the peak moves with it
+    v, fs, _ = make_trace(seed=6, ringing_fraction=0.03, ringing_hz=20e3, ringing_decay_s=10e-3, **CHAIN)
+    assert any(p.startswith("peak force on plate ringing") for p in condition_voltage(v, fs).problems)
+    # the same ringing dying out long before the peak (2 ms after the start) leaves the peak alone
+    v, fs, _ = make_trace(seed=6, ringing_fraction=0.03, ringing_hz=20e3, ringing_decay_s=0.15e-3, **CHAIN)
+    assert not any("peak force on plate ringing" in p for p in condition_voltage(v, fs).problems)
+
+
+def test_contact_end_fading_into_the_noise_is_a_problem():
+    # zoo trace 0:1550 (ideal plate, punctured ball at 34 m/s, 172 kHz): the last 0.3 ms of the
+    # force are a tail of 1 % of the peak, 5 noise deviations, that curves into zero; fitted from
+    # the samples above 4 noise deviations the end is 10 samples late (TC +1.6 %), and fitted
+    # from those above 8 it moves: the check names it
+    import zoo
+
+    tr = zoo.trace_for(0, 1550)
+    fs = tr.rig.sample_rate_hz
+    c = condition_voltage(tr.voltage_V, fs, polarity=tr.rig.polarity, n_harmonics=5, tau_s=tr.rig.tau_s)
+    assert any(p.startswith("contact end not determined to 1 %") for p in c.problems)
+    v, fs, _ = make_trace(seed=3, **CHAIN)
+    assert not any("not determined" in p for p in condition_voltage(v, fs).problems)

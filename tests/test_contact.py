@@ -188,3 +188,41 @@ def test_detect_contact_on_noisy_bumps(n, centre, width, amp, noise, seed):
     x = amp * np.clip(np.sin(np.pi * ((u - c0) / width + 0.5)), 0, None) * (np.abs(u - c0) < width / 2)
     x = x + amp * noise * rng.normal(size=n)
     _check_result(detect_contact(x, 1000.0), n, 1000.0, 0.0)
+
+
+# ------------------------------------------------------------------ a force that jumps from zero (issue 9)
+
+
+def _jump_force(fs, start_s, duration_s=3.0e-3, jump=0.4, noise_V=0.0, seed=0):
+    """A force that jumps from 0 to `jump` of its scale at start_s and returns to zero with a finite slope.
+
+    F = 0.4 (1 - u) + sin(pi u), u = (t - start) / duration, in [0, 1]; zero outside.
+    Its start is the jump's instant, its end start + duration (exact truth).
+    """
+    t = np.arange(int(round((start_s + duration_s + 5e-3) * fs))) / fs
+    u = (t - start_s) / duration_s
+    inside = (u > 0) & (u < 1)
+    f = np.where(inside, jump * (1.0 - u) + np.sin(np.pi * u), 0.0)
+    return f + np.random.default_rng(seed).normal(0.0, noise_V, t.size)
+
+
+@pytest.mark.parametrize("phase", [0.1, 0.5, 0.9])
+@pytest.mark.parametrize("fs", [20e3, 50e3])
+def test_jump_from_zero_located_to_half_a_sample(fs, phase):
+    # The jump happens somewhere between the last zero sample and the next: the
+    # samples cannot say where, so the start is the middle of that interval. The
+    # hinge through the samples after the jump would reach back to the zero sample
+    # (up to a whole sample early, TC +1.7 % at 20 kHz for phase 0.9).
+    start = (200 + phase) / fs
+    c = detect_contact(_jump_force(fs, start, noise_V=1e-4), fs)
+    assert "start_jump" in c.flags and "end_jump" not in c.flags
+    assert abs(c.start_s - start) * fs <= 0.5 + 1e-9
+    assert_allclose(c.end_s, start + 3.0e-3, atol=0.2 / fs)
+
+
+def test_ramp_start_is_not_a_jump():
+    # the same force without the jump (a steep but continuous rise) keeps its hinge-fitted start
+    fs, start = 50e3, 200.3 / 50e3
+    c = detect_contact(_jump_force(fs, start, jump=0.0, noise_V=1e-4), fs)
+    assert "start_jump" not in c.flags
+    assert_allclose(c.start_s, start, atol=0.2 / fs)

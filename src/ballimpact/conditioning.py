@@ -99,6 +99,17 @@ RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above th
 RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
 RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
+SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
+JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
+TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
+TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
+TURN_MIN_OSCILLATION = 3  # fewest turning points of an oscillation [-]
+TURN_REGULARITY = 2.0  # spacings of an oscillation's turning points closer than this factor to each other [-]
+PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
+NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
+NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
+NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
+NEGATIVE_SIGMA = 6.0  # ... and this many standard errors of the average [-]
 
 
 class ConditioningWarning(UserWarning):
@@ -616,7 +627,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
     problems.extend(tau_problems)
-    contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise)
+    contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise, spread=True)
     if contact.found:
         problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
     return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
@@ -675,6 +686,16 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     if n_contact < MIN_CONTACT_SAMPLES:
         out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
                    "sample rate too low for the contact time")
+    jumps = [w for w in ("start", "end") if f"{w}_jump" in contact.flags]
+    if jumps and len(jumps) * 0.5 / fs > JUMP_MAX_FRACTION * contact.contact_time_s:
+        out.append(f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
+                   f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
+                   f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)")
+    for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
+        if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
+            out.append(f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
+                       f"noise threshold it moves by {moved * 1e6:+.3g} us ({100 * moved / contact.contact_time_s:+.2g} "
+                       "% of TC); the force fades into the noise there")
     end_u_c = (contact.end_s - t0_s) * fs
     a = int(math.ceil(end_u_c + RING_GAP_S * fs))
     b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
@@ -683,6 +704,8 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
             out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
                        f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
+    out.extend(_negative_force(x, fs, fit.noise, peak, end_u_c))
+    out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, fit.noise, peak))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          fit.noise)
     if line is not None:
@@ -706,6 +729,95 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
                        f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
                        "(give daq.mains_hz)")
     return out
+
+
+def _turning_points(y, h) -> list[int]:
+    """Indices of the turning points of y, each left by more than h (a hysteresis; noise below h makes none)."""
+    out: list[int] = []
+    direction, i_ext = 0, 0
+    for i in range(1, y.size):
+        v = y[i]
+        if direction == 0:
+            if abs(v - y[0]) > h:
+                direction, i_ext = (1 if v > y[0] else -1), i
+        elif direction * (v - y[i_ext]) > 0:
+            i_ext = i
+        elif direction * (y[i_ext] - v) > h:
+            out.append(i_ext)
+            direction, i_ext = -direction, i
+    return out
+
+
+def _peak_on_ringing(xc, fs, noise, peak):
+    """The peak force riding on plate ringing: the largest value is one of the plate's swings.
+
+    Turning points of the contact force are the places it leaves by more than
+    TURN_FRACTION of the peak and TURN_SIGMA noise deviations (a hysteresis:
+    noise makes none). The force jumps from zero at the start and drops at
+    buckling, and a plate resonance rings after each. The peak is one of those
+    swings when it is a turning point of a regular oscillation: the first
+    turning point of the contact (the overshoot of the jump) followed by two
+    more at about the same spacing, or a turning point whose spacing to the one
+    before is about (a factor TURN_REGULARITY) the spacing to the one after.
+    The ball's own spike before buckling comes after the ringing of the jump
+    has died, at an irregular spacing. It matters when averaged over one period
+    of the oscillation (twice that spacing) the peak drops by more than
+    PEAK_ON_RINGING_FRACTION of the peak.
+    """
+    if xc.size < MIN_CONTACT_SAMPLES:
+        return []
+    turns = _turning_points(xc, max(TURN_FRACTION * peak, TURN_SIGMA * noise))
+    i_peak = int(np.argmax(xc))
+    if i_peak not in turns or len(turns) < TURN_MIN_OSCILLATION:
+        return []
+    j = turns.index(i_peak)
+    spacing = np.diff(turns).astype(float)
+
+    def _alike(a, b):
+        return max(a, b) < TURN_REGULARITY * min(a, b)
+
+    if j == 0:
+        on_ringing = spacing.size >= 3 and _alike(spacing[0], spacing[1]) and _alike(spacing[1], spacing[2])
+    else:
+        on_ringing = j < spacing.size and _alike(spacing[j - 1], spacing[j])
+    if not on_ringing:
+        return []
+    period = 2.0 * float(spacing[min(j, spacing.size - 1)])
+    k = max(int(round(period)), 1)
+    averaged = np.convolve(xc, np.ones(k) / k, mode="same")
+    drop = float(np.max(xc) - np.max(averaged))
+    if drop > PEAK_ON_RINGING_FRACTION * peak:
+        return [f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during the "
+                f"contact and its peak is one of the swings (averaged over one period it is "
+                f"{100 * drop / peak:.2g} % lower); the peak is not the ball's"]
+    return []
+
+
+def _negative_force(x, fs, noise, peak, end_u):
+    """A pull on the plate after the contact: the plate's own motion (or a wrong baseline), never the ball's force.
+
+    A ball only pushes. After it has left, a plate with a resonance near the
+    contact's frequencies swings back below zero (its free response; a heavily
+    damped plate still undershoots once), and the same resonance has shaped the
+    force during the contact, so neither TC nor the peak can be trusted. The
+    corrected signal in the NEGATIVE_WINDOW_S after the contact end, averaged
+    over NEGATIVE_SMOOTH_S, must not fall below zero by more than
+    NEGATIVE_FRACTION of the peak and NEGATIVE_SIGMA standard errors.
+    """
+    k = max(int(round(NEGATIVE_SMOOTH_S * fs)), 1)
+    a = int(math.ceil(end_u))
+    b = min(a + int(round(NEGATIVE_WINDOW_S * fs)), x.size)
+    if b - a < k:
+        return []
+    avg = np.convolve(x[a:b], np.ones(k) / k, mode="valid")
+    i = int(np.argmin(avg))
+    low = -float(avg[i])
+    se = noise / math.sqrt(k)
+    if low > NEGATIVE_FRACTION * peak and low > NEGATIVE_SIGMA * se:
+        return [f"force below zero after the contact: {100 * low / peak:.2g} % of the peak ({low / se:.3g} noise "
+                f"deviations) {1e3 * (i + (k - 1) / 2) / fs:.2g} ms after its end; the plate rings (or the "
+                "baseline is wrong) and TC and the peak cannot be trusted"]
+    return []
 
 
 def _ringing_line(xc, fs, noise):

@@ -66,6 +66,8 @@ FOOT_PRE_S = 0.15e-3  # stretch before the first sample above the noise in the h
 FOOT_PRE_SAMPLES = 4  # ... but at least this many samples [samples]
 FOOT_MAX_WIDENINGS = 8  # a slow foot's pre window may grow to this many more FOOT_PRE_S [-]
 FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample predicted worse than this (standard errors) ends the foot [-]
+SPREAD_FACTOR = 2.0  # the ends are fitted again from samples above this many times the noise thresholds [-]
+JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_SIGMA = 2.0  # rms after the end above this many noise deviations = ringing [-]
@@ -117,11 +119,18 @@ class ContactResult:
         ``"contact_at_trace_start"``, ``"contact_at_trace_end"``,
         ``"short_pretrigger"``, ``"cloth_foot"`` (start more than a sample
         before the steep edge), ``"end_tail"`` (end more than a sample after
-        it), ``"ringing_after_contact"``, ``"edge_fallback"``.
+        it), ``"ringing_after_contact"``, ``"edge_fallback"``, ``"start_jump"``,
+        ``"end_jump"`` (the force jumps from zero between two samples: that
+        end is the middle of the interval, uncertain by half a sample).
     other_impacts : tuple of (float, float)
         Every other impact counted in n_impacts: its start relative to the main
         contact's start [s] (negative before it) and its peak as a fraction of
         the main peak [-].
+    start_spread_s, end_spread_s : float
+        How far each end moves when it is fitted again from the samples above
+        SPREAD_FACTOR times the noise threshold (only with ``spread=True``;
+        NaN otherwise) [s]: a straight end hardly moves, a tail that fades
+        into the noise does.
     """
 
     found: bool
@@ -139,6 +148,8 @@ class ContactResult:
     clipped: bool
     flags: tuple[str, ...]
     other_impacts: tuple[tuple[float, float], ...] = ()
+    start_spread_s: float = math.nan
+    end_spread_s: float = math.nan
 
     @property
     def contact_time_s(self) -> float:
@@ -352,7 +363,16 @@ def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
 
 
 def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
-    """Where the force leaves zero before the peak [samples]; None when it never was zero.
+    """Where the force leaves zero before the peak [samples] and whether it jumps there; (None, False) when never zero.
+
+    A jump: the force is at zero on one sample and on the next already higher
+    than the rise to the sample after it (the line through the two
+    extrapolates to zero before the quiet sample). Then the force left zero
+    somewhere between the two samples and nothing in the samples says where:
+    the start is the middle of that interval, uncertain by half a sample either
+    way (the contact's ``*_jump`` flags). The model's force jumps at 2 mm of
+    compression (section 3.2 in Goodwill & Haake 2004), and any steep rise looks
+    like a jump at a low sample rate.
 
     Walks back from the peak to the first sample above FOOT_SIGMA noise
     deviations (i0), then fits the hinge ``b * max(u - ts, 0)`` to a window
@@ -365,8 +385,18 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
     """
     quiet = np.flatnonzero(xs[:peak_index + 1] <= FOOT_SIGMA * sigma)
     if not quiet.size:
-        return None
+        return None, False
     i0 = int(quiet[-1]) + 1
+    ts = _hinge_start(xs, peak_index, sigma, fs, i0)
+    if i0 + 1 <= peak_index and abs(ts - (i0 - 1)) < 0.5:
+        step, rise = xs[i0] - xs[i0 - 1], xs[i0 + 1] - xs[i0]
+        if step - rise > JUMP_SIGMA * math.sqrt(5.0) * sigma:
+            return i0 - 0.5, True
+    return ts, False
+
+
+def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: int) -> float:
+    """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise."""
     u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
@@ -430,7 +460,7 @@ def _main_run(above: np.ndarray, peak_index: int, merge_gap: int):
 
 
 def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise_rms_V: float | None = None,
-                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16) -> ContactResult:
+                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False) -> ContactResult:
     """Find the contact in a conditioned plate voltage.
 
     The voltage must have its offset, hum and decay removed and the polarity
@@ -458,6 +488,10 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         (low, high) ADC range [V].
     adc_bits : int
         ADC resolution [bit].
+    spread : bool
+        Also fit each end again from the samples above SPREAD_FACTOR times the
+        noise threshold and report how far it moves (``start_spread_s``,
+        ``end_spread_s``).
 
     Returns
     -------
@@ -549,8 +583,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     if fallback_start or fallback_end:
         flags.append("edge_fallback")
     # feet: hinge fits where the force leaves (returns to) zero
-    u_start = _foot_start(xs, peak_index, sigma, fs)
-    u_end = _foot_start(rev, n - 1 - peak_index, sigma, fs)
+    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs)
+    u_end, jump_end = _foot_start(rev, n - 1 - peak_index, sigma, fs)
     if u_end is not None:
         # Plate ringing that outlasts the contact would pass for force: measure
         # the disturbance just after the end and, when it is well above the
@@ -561,8 +595,13 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
             ring = float(np.sqrt(np.mean(xs[a:b] ** 2)))
             if ring > RING_SIGMA * sigma:
                 flags.append("ringing_after_contact")
-                u_ring = _foot_start(rev, n - 1 - peak_index, ring, fs)
-                u_end = u_end if u_ring is None else u_ring
+                u_ring, jump_ring = _foot_start(rev, n - 1 - peak_index, ring, fs)
+                if u_ring is not None:
+                    u_end, jump_end = u_ring, jump_ring
+    if jump_start and u_start is not None:
+        flags.append("start_jump")
+    if jump_end and u_end is not None:
+        flags.append("end_jump")
     if u_start is None:
         flags.append("contact_at_trace_start")
         u_start = 0.0
@@ -576,6 +615,14 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         if u_end > u_edge_end + 1.0:
             flags.append("end_tail")
 
+    spreads = [math.nan, math.nan]
+    if spread:
+        u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs)
+        e2, _ = _foot_start(rev, n - 1 - peak_index, SPREAD_FACTOR * sigma, fs)
+        if u2 is not None:
+            spreads[0] = (u2 - u_start) / fs
+        if e2 is not None:
+            spreads[1] = (n - 1 - e2 - u_end) / fs
     # consistency: the run above threshold lies inside the contact, start < end inside the trace
     u_start = min(max(u_start, 0.0), float(run_a))
     u_end = max(min(u_end, n - 1.0), float(run_b))
@@ -598,4 +645,6 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         clipped=clipped,
         flags=tuple(flags),
         other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
+        start_spread_s=spreads[0],
+        end_spread_s=spreads[1],
     )
