@@ -162,7 +162,6 @@ def test_process_impact_always_gives_ok_or_a_reason(seed, mode):
     assert judgement.category in zoo.CATEGORIES
 
 
-@pytest.mark.xfail(strict=False, raises=AssertionError, reason="issue 9: measurable zoo traces come out ok but wrong on main")
 @settings(max_examples=N_EXAMPLES, **PROPERTY)
 @given(seed=SEEDS, mode=MODES)
 def test_never_ok_and_wrong(seed, mode):

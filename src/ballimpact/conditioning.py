@@ -43,8 +43,12 @@ Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved, a
 quiet residual that is more than white noise, plate ringing during the contact
-(a spectral line) or after it, too few samples across the contact, a contact
-window that does not settle.
+(a spectral line) or after it, a peak that is one of the plate's swings, force
+below zero after the contact (the plate swinging back), a contact end that
+moves when fitted again from higher samples (a tail fading into the noise), a
+force jump from zero that locates an end only to half a sample when that is
+more than 0.7 % of TC, too few samples across the contact, a contact window
+that does not settle.
 """
 
 from __future__ import annotations
@@ -104,7 +108,7 @@ JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a samp
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
 TURN_MIN_OSCILLATION = 3  # fewest turning points of an oscillation [-]
-TURN_REGULARITY = 2.0  # spacings of an oscillation's turning points closer than this factor to each other [-]
+TURN_REGULARITY = 1.5  # spacings of an oscillation's turning points within this factor of each other [-]
 PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
@@ -731,6 +735,11 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     return out
 
 
+def _alike(a: float, b: float) -> bool:
+    """Two spacings of turning points within a factor TURN_REGULARITY of each other."""
+    return max(a, b) <= TURN_REGULARITY * min(a, b)
+
+
 def _turning_points(y, h) -> list[int]:
     """Indices of the turning points of y, each left by more than h (a hysteresis; noise below h makes none)."""
     out: list[int] = []
@@ -753,16 +762,17 @@ def _peak_on_ringing(xc, fs, noise, peak):
 
     Turning points of the contact force are the places it leaves by more than
     TURN_FRACTION of the peak and TURN_SIGMA noise deviations (a hysteresis:
-    noise makes none). The force jumps from zero at the start and drops at
-    buckling, and a plate resonance rings after each. The peak is one of those
-    swings when it is a turning point of a regular oscillation: the first
-    turning point of the contact (the overshoot of the jump) followed by two
-    more at about the same spacing, or a turning point whose spacing to the one
-    before is about (a factor TURN_REGULARITY) the spacing to the one after.
-    The ball's own spike before buckling comes after the ringing of the jump
-    has died, at an irregular spacing. It matters when averaged over one period
-    of the oscillation (twice that spacing) the peak drops by more than
-    PEAK_ON_RINGING_FRACTION of the peak.
+    noise makes none). The force jumps from zero at the start (and drops at
+    buckling), and a plate resonance rings after each jump. The peak is one of
+    the plate's swings when it is the jump's overshoot (within one period of
+    the oscillation of the start, with the oscillation going on after it) or
+    when the last two or three turning points before it are spaced like the one after
+    it (a ringing that began before the peak). Half a period of the
+    oscillation is the spacing of the peak to the next turning point; two
+    spacings are alike within a factor TURN_REGULARITY. The ball's own spike
+    before buckling comes later, after a rise with no regular turns. It
+    matters when, averaged over one period of the oscillation, the peak drops
+    by more than PEAK_ON_RINGING_FRACTION of the peak.
     """
     if xc.size < MIN_CONTACT_SAMPLES:
         return []
@@ -772,17 +782,16 @@ def _peak_on_ringing(xc, fs, noise, peak):
         return []
     j = turns.index(i_peak)
     spacing = np.diff(turns).astype(float)
-
-    def _alike(a, b):
-        return max(a, b) < TURN_REGULARITY * min(a, b)
-
-    if j == 0:
-        on_ringing = spacing.size >= 3 and _alike(spacing[0], spacing[1]) and _alike(spacing[1], spacing[2])
-    else:
-        on_ringing = j < spacing.size and _alike(spacing[j - 1], spacing[j])
-    if not on_ringing:
+    if j >= spacing.size:
         return []
-    period = 2.0 * float(spacing[min(j, spacing.size - 1)])
+    after = float(spacing[j])  # half a period of the oscillation [samples]
+    # the jump's overshoot: the peak within one period of the start, an oscillation after it
+    overshoot = i_peak <= 2.0 * after and spacing.size - j >= 2 and _alike(spacing[j + 1], after)
+    # a peak inside a ringing that began before it: the two or three turning points before it at its spacing
+    inside = j >= 2 and all(_alike(float(d), after) for d in spacing[max(j - TURN_MIN_OSCILLATION, 0):j])
+    if not (overshoot or inside):
+        return []
+    period = 2.0 * after
     k = max(int(round(period)), 1)
     averaged = np.convolve(xc, np.ones(k) / k, mode="same")
     drop = float(np.max(xc) - np.max(averaged))
