@@ -226,3 +226,19 @@ def test_ramp_start_is_not_a_jump():
     c = detect_contact(_jump_force(fs, start, jump=0.0, noise_V=1e-4), fs)
     assert "start_jump" not in c.flags
     assert_allclose(c.start_s, start, atol=0.2 / fs)
+
+
+def test_second_contact_cut_off_by_the_trace_end_is_counted():
+    # zoo trace 1:1956: a second contact (29 % of the peak) starts 0.3 ms before the trace ends;
+    # only its rise is recorded (16 % of the peak, shorter than SECOND_IMPACT_MIN_S), and it
+    # must still count: it may be as long as any other
+    fs = 30e3
+    t = np.arange(int(20e-3 * fs)) / fs
+    x = np.where((t > 5e-3) & (t < 9e-3), np.sin(np.pi * (t - 5e-3) / 4e-3), 0.0)
+    x += np.where(t > t[-1] - 0.25e-3, 0.16 * (t - (t[-1] - 0.25e-3)) / 0.25e-3, 0.0)
+    c = detect_contact(x + np.random.default_rng(0).normal(0, 1e-3, t.size), fs)
+    assert c.n_impacts == 2 and "multiple_impacts" in c.flags
+    # the same rise in the middle of the record is too short to be an impact
+    x2 = np.where((t > 5e-3) & (t < 9e-3), np.sin(np.pi * (t - 5e-3) / 4e-3), 0.0)
+    x2 += np.where((t > 15e-3) & (t < 15.2e-3), 0.16, 0.0)
+    assert detect_contact(x2 + np.random.default_rng(0).normal(0, 1e-3, t.size), fs).n_impacts == 1

@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.gates import check_gate_times, coefficient_of_restitution, gate_speeds, speed_uncertainty
+from ballimpact.problems import ProblemKind
 
 
 def test_gate_speeds_scalar():
@@ -69,14 +70,19 @@ def test_speed_uncertainty_bad_resolution():
         speed_uncertainty(20.0, 0.1, -1e-6)
 
 
+def _messages(problems):
+    return [p.message for p in problems]
+
+
 def test_check_gate_times():
     assert check_gate_times(0.0, 0.005, 0.02, 0.03) == []
-    assert check_gate_times(0.0, math.nan, 0.02, math.nan) == [
+    assert _messages(check_gate_times(0.0, math.nan, 0.02, math.nan)) == [
         "missing gate time gate_in_2_s", "missing gate time gate_out_1_s"]
+    assert {p.kind for p in check_gate_times(0.0, math.nan, 0.02, math.nan)} == {ProblemKind.GATE_TIME_MISSING}
     problems = check_gate_times(0.0, -0.005, 0.02, 0.01)
-    assert len(problems) == 2
-    assert problems[0].startswith("inbound gate interval not positive")
-    assert problems[1].startswith("rebound gate interval not positive")
+    assert [p.kind for p in problems] == [ProblemKind.GATE_INTERVAL] * 2
+    assert problems[0].message.startswith("inbound gate interval not positive")
+    assert problems[1].message.startswith("rebound gate interval not positive")
 
 
 # Cases found by mutation testing (`make mutation`, README "Mutation testing").
@@ -122,14 +128,14 @@ def test_speed_uncertainty_types_and_bad_input():
 
 def test_check_gate_times_edges():
     # a value that is not a number is reported as missing, not an exception
-    assert check_gate_times("abc", 0.005, 0.02, 0.03) == ["missing gate time gate_in_1_s"]
-    assert check_gate_times(None, 0.005, 0.02, 0.03) == ["missing gate time gate_in_1_s"]
+    assert _messages(check_gate_times("abc", 0.005, 0.02, 0.03)) == ["missing gate time gate_in_1_s"]
+    assert _messages(check_gate_times(None, 0.005, 0.02, 0.03)) == ["missing gate time gate_in_1_s"]
     # a zero interval is not positive; the interval is a difference of the times
-    assert check_gate_times(0.0, 0.0, 0.02, 0.03) == [
+    assert _messages(check_gate_times(0.0, 0.0, 0.02, 0.03)) == [
         "inbound gate interval not positive (gate_in_2_s - gate_in_1_s = 0 s)"]
-    assert check_gate_times(10.0, 9.995, 10.02, 10.03) == [
+    assert _messages(check_gate_times(10.0, 9.995, 10.02, 10.03)) == [
         "inbound gate interval not positive (gate_in_2_s - gate_in_1_s = -0.005 s)"]
-    assert check_gate_times(10.0, 10.005, 10.03, 10.03) == [
+    assert _messages(check_gate_times(10.0, 10.005, 10.03, 10.03)) == [
         "rebound gate interval not positive (gate_out_1_s - gate_out_2_s = 0 s)"]
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+from ballimpact.problems import Problem, ProblemKind
 from ballimpact.processing import (
     IMPACT_COLUMNS,
     ImpactResult,
@@ -113,7 +114,9 @@ def test_kcal_spread_of_a_few_percent_is_not_flagged():
 
 
 def test_excluded_result_row_has_reason():
-    r = ImpactResult(impact_id="x", ball="b").exclude("no contact found").exclude("clipping at the ADC rails")
+    r = ImpactResult(impact_id="x", ball="b").exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
+    r.exclude(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
+    assert [p.kind for p in r.problems] == [ProblemKind.NO_CONTACT, ProblemKind.CLIPPING]
     assert r.row()["status"] == "excluded"
     assert r.row()["reason"] == "no contact found; clipping at the ADC rails"
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
+from ballimpact.problems import Problem, ProblemKind, kind_of_message
 from ballimpact.session import (
     BallType,
     ImpactRow,
@@ -439,7 +440,8 @@ def test_impact_level_fault(tmp_path, cells, problems):
     session = read_session(folder)
     assert [r.impact_id for r in session.impacts] == ["b1-02", "b1-01", "b2-01"]
     faulty = session.impacts[1]
-    assert faulty.problems == problems
+    assert [p.message for p in faulty.problems] == problems
+    assert [p.kind for p in faulty.problems] == [kind_of_message(m) for m in problems]
     assert session.impacts[0].problems == [] and session.impacts[2].problems == []
     assert faulty.line == 3
 
@@ -462,7 +464,8 @@ def test_symlink_escaping_session_is_caught(tmp_path):
     folder = make_session(tmp_path, rows=[row_with(trace="traces/link.csv")])
     os.symlink(outside, folder / "traces" / "link.csv")
     session = read_session(folder)
-    assert session.impacts[0].problems == ["trace path escapes the session folder: traces/link.csv"]
+    assert session.impacts[0].problems == [
+        Problem(ProblemKind.TRACE_PATH_ESCAPES, "trace path escapes the session folder: traces/link.csv")]
 
 
 def test_backslash_trace_path(tmp_path):

@@ -229,7 +229,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"ballimpact {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_simulate(sub)
+    _add_itf(sub)
+    val = sub.add_parser("validate", help="check a raw session folder without processing it")
+    val.add_argument("session", type=Path, help="session folder, e.g. raw/demo-2004")
+    val.add_argument("--strict", action="store_true", help="exit 1 when any impact has a problem")
+    val.set_defaults(func=_cmd_validate)
+    _add_synth(sub)
+    return parser
 
+
+def _add_simulate(sub) -> None:
+    """The ``simulate`` subcommand."""
     sim = sub.add_parser(
         "simulate",
         help="simulate impacts with the ball model (parameters in Table 2 units)",
@@ -246,6 +257,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--json", action="store_true", help="print a JSON list of objects")
     sim.set_defaults(func=_cmd_simulate)
 
+
+def _add_itf(sub) -> None:
+    """The ``itf`` subcommand."""
     itf = sub.add_parser(
         "itf",
         help="predict the ITF 254 cm drop test with the ball model (Table 2 balls or given parameters)",
@@ -267,11 +281,9 @@ def build_parser() -> argparse.ArgumentParser:
     itf.add_argument("--json", action="store_true", help="print a JSON list of objects")
     itf.set_defaults(func=_cmd_itf)
 
-    val = sub.add_parser("validate", help="check a raw session folder without processing it")
-    val.add_argument("session", type=Path, help="session folder, e.g. raw/demo-2004")
-    val.add_argument("--strict", action="store_true", help="exit 1 when any impact has a problem")
-    val.set_defaults(func=_cmd_validate)
 
+def _add_synth(sub) -> None:
+    """The ``synth`` subcommand."""
     syn = sub.add_parser("synth", help="write a synthetic session (seeded) and its ground truth")
     syn.add_argument("out_dir", type=Path, help="session folder to create; its name is the session id")
     syn.add_argument("--seed", type=int, default=0,
@@ -299,7 +311,6 @@ def build_parser() -> argparse.ArgumentParser:
     syn.add_argument("--gate-to-plate-m", type=_positive_float, default=None,
                      help="distance from gate 2 to the plate [m] (default 0.08; use > 0.0654 with --drag)")
     syn.set_defaults(func=_cmd_synth)
-    return parser
 
 
 def main(argv=None) -> int:

@@ -63,6 +63,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
+from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
 
@@ -160,7 +161,7 @@ class ConditionedSignal:
         Window/baseline iterations done [-].
     warnings : tuple of str
         Messages of the ConditioningWarnings issued.
-    problems : tuple of str
+    problems : tuple of ballimpact.problems.Problem
         Reasons the impact cannot be trusted (each names what was seen);
         empty when the conditioning passed every integrity check.
     spike_indices : tuple of int
@@ -181,7 +182,7 @@ class ConditionedSignal:
     contact: ContactResult = field(repr=False)
     n_iterations: int = 0
     warnings: tuple[str, ...] = ()
-    problems: tuple[str, ...] = ()
+    problems: tuple[Problem, ...] = ()
     spike_indices: tuple[int, ...] = ()
 
 
@@ -270,22 +271,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     n = v.size
     if mask is None:
         mask = np.zeros(n, dtype=bool)
-    pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
-    min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
-    has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
-    has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
-    if not with_decay or not has_pre:
-        post = post & False if has_pre else post
-    quiet = pre | post
-    if np.count_nonzero(quiet) < MIN_PRE_SAMPLES:
-        # no quiet stretch at all: a median offset is the best there is
-        quiet = ~mask if np.count_nonzero(~mask) >= 3 else np.ones(n, dtype=bool)
-        pre, post = quiet, np.zeros(n, dtype=bool)
-        has_post = False
-    use_post = has_post and (kappa_given is None or kappa_given > 0)
-    if not has_post and has_pre and with_decay:
-        quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
-        post = np.zeros(n, dtype=bool)
+    pre, post, quiet, has_post, use_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask,
+                                                          with_decay, kappa_given)
     t = np.arange(n) / fs
     qi = np.flatnonzero(quiet)
     tq = t[qi]
@@ -293,70 +280,15 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     # a full period of the fundamental is needed, or no hum is fitted at all
     freqs = list(frequencies) if frequencies and span * min(frequencies) >= 1.0 else []
     t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
-
     trig = _trig(n, fs, tuple(freqs))
-
-    def design(sel):
-        tt = t[sel]
-        return np.column_stack([np.ones(tt.size), tt - t_mid, trig[sel]])
-
-    phi = design(qi)
-    p = phi.shape[1]
-    norms = np.sqrt(np.sum(phi * phi, axis=0))
-    norms[norms == 0] = 1.0
-    phi = phi / norms
+    phi, norms, big_phi, iv = _design(v, fs, t, t_mid, trig, qi, post[qi], start_u, use_post)
     y = v[qi]
-    big_phi = np.zeros_like(phi)
-    iv = np.zeros(qi.size)
-    post_q = post[qi]
-    if use_post and post_q.any():
-        i0 = max(int(math.floor(start_u)) - 1, 0)
-        last = int(qi[post_q][-1])
-        at = qi[post_q] - i0
-        big_phi[post_q] = cumulative_trapezoid(design(slice(i0, last + 1)) / norms, dx=1.0 / fs, axis=0,
-                                               initial=0.0)[at]
-        iv[post_q] = cumulative_trapezoid(v[i0:last + 1], dx=1.0 / fs, initial=0.0)[at]
-
-    def normal(keep):
-        a, b_, y_, i_ = phi[keep], big_phi[keep], y[keep], iv[keep]
-        return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
-                float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
-
-    def solve(ne, k):
-        p0, p1, p2, q0, q1, q2, r0, r1, r2 = ne
-        k = np.atleast_1d(np.asarray(k, dtype=float))[:, None, None]
-        a = p0 + k * p1 + k * k * p2
-        q = (q0 + k[:, :, 0] * q1 + k[:, :, 0] ** 2 * q2)[:, :, None]
-        try:
-            theta = np.linalg.solve(a, q)[:, :, 0]
-        except np.linalg.LinAlgError:
-            theta = (np.linalg.pinv(a, rcond=1e-12, hermitian=True) @ q)[:, :, 0]
-        kk = k[:, 0, 0]
-        rss = np.maximum(r0 + kk * r1 + kk * kk * r2 - np.sum(q[:, :, 0] * theta, axis=1), 0.0)
-        return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
-
-    def best_kappa(ne):
-        if kappa_given is not None or not use_post:
-            return (kappa_given if use_post else 0.0), math.nan
-        k_max = 2.0 / TAU_BOUNDS_S[0]
-        pos = np.geomspace(1e-4, k_max, 48)
-        grid = np.concatenate([-pos[::-1], [0.0], pos])
-        rss = solve(ne, grid)[0]
-        j = int(np.argmin(rss))
-        lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
-        res = minimize_scalar(lambda k: solve(ne, k)[0], bounds=(lo, hi), method="bounded",
-                              options={"xatol": 1e-9 * max(abs(grid[j]), 1e-3)})
-        k = float(res.x) if res.fun <= rss[j] else float(grid[j])
-        h = max(1e-3 * abs(k), 1e-5)
-        r3 = solve(ne, np.array([k - h, k, k + h]))[0]
-        curv = (r3[0] - 2.0 * r3[1] + r3[2]) / (h * h)
-        return k, curv
-
+    p = phi.shape[1]
     keep = np.ones(qi.size, dtype=bool)
     for _ in range(2):
-        ne = normal(keep)
-        kappa, curv = best_kappa(ne)
-        rss, theta = solve(ne, kappa)
+        ne = _normal_equations(phi, big_phi, y, iv, keep)
+        kappa, curv = _best_kappa(ne, kappa_given, use_post)
+        rss, theta = _solve_kappa(ne, kappa)
         resid = (y + kappa * iv) - (phi + kappa * big_phi) @ theta
         s = robust_noise(resid[keep])
         new_keep = np.abs(resid) <= ROBUST_SIGMA * max(s, 1e-300)
@@ -365,8 +297,7 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         keep = new_keep
     n_par = p + (1 if (use_post and kappa_given is None) else 0)
     n_keep = int(np.count_nonzero(keep))
-    dof = max(n_keep - n_par, 1)
-    s2 = rss / dof
+    s2 = rss / max(n_keep - n_par, 1)
     coef = theta / norms
     baseline = coef[0] + coef[1] * (t - t_mid) + trig @ coef[2:]
     if use_post and kappa_given is None:
@@ -391,6 +322,96 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     }
     return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
                         noise, amps, bic, quiet, pre, post)
+
+
+def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
+    """Quiet samples of the baseline fit: (pre, post, quiet, has_post, use_post), boolean masks and flags."""
+    pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
+    min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
+    has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
+    has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
+    if not with_decay or not has_pre:
+        post = post & False if has_pre else post
+    quiet = pre | post
+    if np.count_nonzero(quiet) < MIN_PRE_SAMPLES:
+        # no quiet stretch at all: a median offset is the best there is
+        quiet = ~mask if np.count_nonzero(~mask) >= 3 else np.ones(n, dtype=bool)
+        pre, post = quiet, np.zeros(n, dtype=bool)
+        has_post = False
+    use_post = has_post and (kappa_given is None or kappa_given > 0)
+    if not has_post and has_pre and with_decay:
+        quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
+        post = np.zeros(n, dtype=bool)
+    return pre, post, quiet, has_post, use_post
+
+
+def _design(v, fs, t, t_mid, trig, qi, post_q, start_u, use_post):
+    """Normalised model columns at the quiet samples and, after the contact, their running integrals and v's.
+
+    Returns (phi, norms, big_phi, iv): columns offset, drift, cos/sin per hum
+    frequency, scaled to unit norm (``norms``); their integrals from the contact
+    start and that of v at the post-contact quiet samples (zero elsewhere).
+    """
+
+    def design(sel):
+        tt = t[sel]
+        return np.column_stack([np.ones(tt.size), tt - t_mid, trig[sel]])
+
+    phi = design(qi)
+    norms = np.sqrt(np.sum(phi * phi, axis=0))
+    norms[norms == 0] = 1.0
+    phi = phi / norms
+    big_phi = np.zeros_like(phi)
+    iv = np.zeros(qi.size)
+    if use_post and post_q.any():
+        i0 = max(int(math.floor(start_u)) - 1, 0)
+        last = int(qi[post_q][-1])
+        at = qi[post_q] - i0
+        big_phi[post_q] = cumulative_trapezoid(design(slice(i0, last + 1)) / norms, dx=1.0 / fs, axis=0,
+                                               initial=0.0)[at]
+        iv[post_q] = cumulative_trapezoid(v[i0:last + 1], dx=1.0 / fs, initial=0.0)[at]
+    return phi, norms, big_phi, iv
+
+
+def _normal_equations(phi, big_phi, y, iv, keep):
+    """Coefficients of the normal equations, quadratic in kappa, of the kept samples."""
+    a, b_, y_, i_ = phi[keep], big_phi[keep], y[keep], iv[keep]
+    return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
+            float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
+
+
+def _solve_kappa(ne, k):
+    """Residual sum of squares and coefficients for kappa = k (a scalar or an array of them)."""
+    p0, p1, p2, q0, q1, q2, r0, r1, r2 = ne
+    k = np.atleast_1d(np.asarray(k, dtype=float))[:, None, None]
+    a = p0 + k * p1 + k * k * p2
+    q = (q0 + k[:, :, 0] * q1 + k[:, :, 0] ** 2 * q2)[:, :, None]
+    try:
+        theta = np.linalg.solve(a, q)[:, :, 0]
+    except np.linalg.LinAlgError:
+        theta = (np.linalg.pinv(a, rcond=1e-12, hermitian=True) @ q)[:, :, 0]
+    kk = k[:, 0, 0]
+    rss = np.maximum(r0 + kk * r1 + kk * kk * r2 - np.sum(q[:, :, 0] * theta, axis=1), 0.0)
+    return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
+
+
+def _best_kappa(ne, kappa_given, use_post):
+    """kappa = 1 / tau [1/s] of least residual (grid, then bounded refinement) and the curvature there."""
+    if kappa_given is not None or not use_post:
+        return (kappa_given if use_post else 0.0), math.nan
+    k_max = 2.0 / TAU_BOUNDS_S[0]
+    pos = np.geomspace(1e-4, k_max, 48)
+    grid = np.concatenate([-pos[::-1], [0.0], pos])
+    rss = _solve_kappa(ne, grid)[0]
+    j = int(np.argmin(rss))
+    lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+    res = minimize_scalar(lambda k: _solve_kappa(ne, k)[0], bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-9 * max(abs(grid[j]), 1e-3)})
+    k = float(res.x) if res.fun <= rss[j] else float(grid[j])
+    h = max(1e-3 * abs(k), 1e-5)
+    r3 = _solve_kappa(ne, np.array([k - h, k, k + h]))[0]
+    curv = (r3[0] - 2.0 * r3[1] + r3[2]) / (h * h)
+    return k, curv
 
 
 @functools.lru_cache(maxsize=4)
@@ -525,6 +546,53 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         short, implausible tau) and could bias the impulse by more than 0.1 %.
     """
     fs = float(sample_rate_hz)
+    raw = _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s,
+                           post_guard_s)
+    # work in units of the largest magnitude: no overflow for any finite input
+    scale = float(np.max(np.abs(raw)))
+    if not (scale > 0 and math.isfinite(scale)):
+        scale = 1.0
+    v = polarity * (raw / scale)
+    v, spikes = remove_spikes(v)
+    auto_mains = isinstance(mains_hz, str)
+    if auto_mains:
+        candidates = {0.0: []}
+        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
+    else:
+        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
+    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
+    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
+
+    trend = _rough_trend(v)
+    # the record before the peak holds no undershoot: its median is the level under the contact
+    k_peak = int(np.argmax(v - trend))
+    if k_peak >= MIN_QUIET_SAMPLES:
+        trend = np.full(v.size, float(np.median(v[:k_peak])))
+    rough = detect_contact(v - trend, fs)
+    if not rough.found:
+        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
+        mains = min(fits, key=lambda f: fits[f].bic)
+        fit = fits[mains]
+        y = v - fit.baseline
+        contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
+        return _result(y, fit, math.nan, "none", contact, 0, [], [], t0_s, scale, spikes, mains, mains_source)
+
+    it = _iterate(v, fs, candidates, rough, pre_guard_s * fs, post_guard_s * fs, tau_s, kappa_given, scale)
+    messages: list[str] = []
+    for msg in it.pending:
+        warnings.warn(msg, ConditioningWarning, stacklevel=2)
+        messages.append(msg)
+    problems = it.problems + it.tau_problems
+    contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
+    if contact.found:
+        problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u))
+    return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
+                   it.mains, mains_source, it.contact_integral)
+
+
+def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):
+    """The arguments of :func:`condition_voltage` checked (ValueError naming the bad one); the voltage as floats."""
+    fs = float(sample_rate_hz)
     if not math.isfinite(fs) or fs <= 0:
         raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
     if polarity not in (1, -1):
@@ -546,65 +614,56 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if not np.all(np.isfinite(raw)):
         bad = np.flatnonzero(~np.isfinite(raw))
         raise ValueError(f"voltage_V holds {bad.size} non-finite samples (first at index {bad[0]})")
+    return raw
 
-    # work in units of the largest magnitude: no overflow for any finite input
-    scale = float(np.max(np.abs(raw)))
-    if not (scale > 0 and math.isfinite(scale)):
-        scale = 1.0
-    v = polarity * (raw / scale)
-    v, spikes = remove_spikes(v)
-    if auto_mains:
-        candidates = {0.0: []}
-        candidates.update({f: _mains_frequencies(f, n_harmonics, fs) for f in MAINS_CANDIDATES_HZ})
-    else:
-        candidates = {float(mains_hz or 0.0): _mains_frequencies(mains_hz, n_harmonics, fs) if mains_hz else []}
-    mains_source = "detected" if auto_mains else ("given" if mains_hz else "none")
-    pre_guard = pre_guard_s * fs
-    post_guard = post_guard_s * fs
-    messages: list[str] = []
-    problems: list[str] = []
-    kappa_given = None if tau_s is None else (0.0 if math.isinf(tau_s) else 1.0 / float(tau_s))
 
-    trend = _rough_trend(v)
-    # the record before the peak holds no undershoot: its median is the level under the contact
-    k_peak = int(np.argmax(v - trend))
-    if k_peak >= MIN_QUIET_SAMPLES:
-        trend = np.full(v.size, float(np.median(v[:k_peak])))
-    rough = detect_contact(v - trend, fs)
-    if not rough.found:
-        fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0) for f, fr in candidates.items()}
-        mains = min(fits, key=lambda f: fits[f].bic)
-        fit = fits[mains]
-        y = v - fit.baseline
-        contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
-        return _result(y, fit, math.nan, "none", contact, 0, messages, problems, t0_s, scale, spikes, mains,
-                       mains_source)
+@dataclass
+class _Iteration:
+    """Where the window / baseline iteration of :func:`condition_voltage` ended."""
 
+    x: np.ndarray  # decay-corrected signal [scaled V]
+    fit: _BaselineFit
+    tau: float
+    source: str
+    pending: list
+    tau_problems: list
+    problems: list
+    mains: float
+    ambiguous: tuple | None
+    start_u: float
+    end_u: float
+    n_iter: int
+    contact_integral: float
+
+
+def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask, kappa_given):
+    """The baseline fit of each mains candidate; the best by BIC, its frequency, and an ambiguity (or None)."""
+    fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
+            for f, fr in candidates.items()}
+    mains = min(fits, key=lambda f: fits[f].bic)
+    fit = fits[mains]
+    hum = [f for f in fits if f > 0]
+    ambiguous = None
+    if mains > 0 and fits[mains].hum_amplitudes:
+        other = [f for f in hum if f != mains][0]
+        if not fits[other].hum_amplitudes:
+            ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
+        elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
+            ambiguous = (mains, other, fits[other].baseline)
+    return fit, mains, ambiguous
+
+
+def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale) -> _Iteration:
+    """Contact window, event mask and baseline (with the decay) fitted in turn until they stop moving."""
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
-    n = v.size
-    mask = np.zeros(n, dtype=bool)
-    tau = math.nan
-    source = "none"
-    n_iter = 0
-    pending: list[str] = []
-    tau_problems: list[str] = []
+    mask = np.zeros(v.size, dtype=bool)
+    problems: list[Problem] = []
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
-    fit = None
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
-            fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given)
-                    for f, fr in candidates.items()}
-            mains = min(fits, key=lambda f: fits[f].bic)
-            fit = fits[mains]
-            hum = [f for f in fits if f > 0]
-            ambiguous = None
-            if mains > 0 and fits[mains].hum_amplitudes:
-                other = [f for f in hum if f != mains][0]
-                if not fits[other].hum_amplitudes:
-                    ambiguous = (mains, other, None)  # the quiet stretch is too short for the other frequency
-                elif fits[other].bic - fit.bic < MAINS_AMBIGUOUS_BIC:
-                    ambiguous = (mains, other, fits[other].baseline)
+            fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
+                                                    kappa_given)
         else:
             fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
                                 kappa_given)
@@ -625,25 +684,27 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             break
     else:
         if c.found and moved > UNSTABLE_SAMPLES:
-            problems.append(f"contact window not stable under the baseline fit: its ends still move by "
-                            f"{moved:.2g} samples after {MAX_ITERATIONS} iterations")
-    for msg in pending:
-        warnings.warn(msg, ConditioningWarning, stacklevel=2)
-        messages.append(msg)
-    problems.extend(tau_problems)
-    contact = detect_contact(x, fs, t0_s=t0_s, noise_rms_V=fit.noise, spread=True)
-    if contact.found:
-        problems.extend(_integrity(x, fs, fit, contact, t0_s, scale, ambiguous, start_u, end_u))
-    return _result(x, fit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
-                   mains_source, contact_integral)
+            problems.append(Problem(ProblemKind.CONTACT_UNSTABLE,
+                                    f"contact window not stable under the baseline fit: its ends still move by "
+                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations"))
+    return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
+                      contact_integral)
 
 
 def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u):
-    """Problems of the corrected signal: a level off zero before or after the contact, unresolved mains."""
-    out = []
+    """Problems of the corrected signal, in a fixed order: levels, contact ends, ringing, mains."""
     peak = float(contact.peak_V)
     if not peak > 0:
-        return out
+        return []
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    return (_level_problems(x, fs, fit, peak, scale) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
+            + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
+            + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
+
+
+def _level_problems(x, fs, fit: _BaselineFit, peak, scale):
+    """The corrected signal off zero before or after the contact, or a quiet residual that is not white noise."""
+    out = []
     w = max(int(round(FLAT_WINDOW_S * fs)), MIN_QUIET_SAMPLES)
     pre_idx = np.flatnonzero(fit.pre)
     post_idx = np.flatnonzero(fit.post)
@@ -658,8 +719,9 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         level = float(np.mean(x[sel]))
         se = fit.noise / math.sqrt(sel.size)
         if abs(level) > FLAT_FRACTION * peak and abs(level) > FLAT_SIGMA * se:
-            out.append(f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
-                       f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed")
+            out.append(Problem(ProblemKind.BASELINE_OFF_ZERO,
+                               f"corrected signal {where} the contact is {level * scale * 1e3:.3g} mV off zero "
+                               f"({100 * abs(level) / peak:.2g} % of the peak): baseline or amplifier decay not removed"))
     # the residual of the quiet samples must be white noise: compare its rms with the noise of
     # sample-to-sample differences (blind to hum and drift)
     qi = np.flatnonzero(fit.quiet)
@@ -672,66 +734,92 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
             clipped = np.clip(resid, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else resid
             excess = math.sqrt(max(float(np.mean(clipped ** 2)) - white ** 2, 0.0))
             if excess > FLAT_FRACTION * peak and excess > white:
-                out.append(f"quiet baseline not explained by offset, drift, hum and decay: {excess * scale * 1e3:.3g} mV "
-                           f"rms above the white noise ({100 * excess / peak:.2g} % of the peak; hum or drift "
-                           "not resolved?)")
+                out.append(Problem(ProblemKind.BASELINE_RESIDUAL,
+                                   f"quiet baseline not explained by offset, drift, hum and decay: "
+                                   f"{excess * scale * 1e3:.3g} mV rms above the white noise "
+                                   f"({100 * excess / peak:.2g} % of the peak; hum or drift not resolved?)"))
+    return out
+
+
+def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
+    """Contact ends that hold no force, are located to half a sample only or move when fitted again."""
+    out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
-    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     for where, sel in (("start", np.arange(int(math.ceil(s_u)), int(math.ceil(s_u)) + k_end)),
                        ("end", np.arange(int(math.floor(e_u)) - k_end + 1, int(math.floor(e_u)) + 1))):
         sel = sel[(sel >= 0) & (sel < x.size)]
         if sel.size >= 3:
             level = float(np.mean(x[sel]))
             if level < END_CHECK_SIGMA * fit.noise / math.sqrt(sel.size):
-                out.append(f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold no "
-                           f"force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)")
+                out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                                   f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold "
+                                   f"no force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)"))
     n_contact = (contact.end_s - contact.start_s) * fs
     if n_contact < MIN_CONTACT_SAMPLES:
-        out.append(f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
-                   "sample rate too low for the contact time")
+        out.append(Problem(ProblemKind.TOO_FEW_SAMPLES,
+                           f"only {n_contact:.1f} samples in the contact (fewer than {MIN_CONTACT_SAMPLES}): "
+                           "sample rate too low for the contact time"))
     jumps = [w for w in ("start", "end") if f"{w}_jump" in contact.flags]
     if jumps and len(jumps) * 0.5 / fs > JUMP_MAX_FRACTION * contact.contact_time_s:
-        out.append(f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
-                   f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
-                   f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)")
+        out.append(Problem(ProblemKind.CONTACT_JUMP_UNRESOLVED,
+                           f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
+                           f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
+                           f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)"))
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
         if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
-            out.append(f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
-                       f"noise threshold it moves by {moved * 1e6:+.3g} us ({100 * moved / contact.contact_time_s:+.2g} "
-                       "% of TC); the force fades into the noise there")
-    end_u_c = (contact.end_s - t0_s) * fs
-    a = int(math.ceil(end_u_c + RING_GAP_S * fs))
+            out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                               f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
+                               f"noise threshold it moves by {moved * 1e6:+.3g} us "
+                               f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
+                               "there"))
+    return out
+
+
+def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u):
+    """Plate ringing after the contact, force below zero, a peak on ringing, a spectral line in the contact."""
+    out = []
+    a = int(math.ceil(e_u + RING_GAP_S * fs))
     b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
     if b - a >= 3:
         ring = float(np.sqrt(np.mean(x[a:b] ** 2)))
-        if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * fit.noise:
-            out.append(f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
-                       f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable")
-    out.extend(_negative_force(x, fs, fit.noise, peak, end_u_c))
-    out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, fit.noise, peak))
+        if ring > RING_MAX_FRACTION * peak and ring > FLAT_SIGMA * noise:
+            out.append(Problem(ProblemKind.PLATE_RINGING,
+                               f"plate ringing outlasts the contact ({100 * ring / peak:.2g} % of the peak rms in the "
+                               f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable"))
+    out.extend(_negative_force(x, fs, noise, peak, e_u))
+    out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, noise, peak))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
-                         fit.noise)
+                         noise)
     if line is not None:
         f_line, amp_line, prominence = line
-        out.append(f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
-                   f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
-                   "force and plate ringing not separable")
+        out.append(Problem(ProblemKind.PLATE_RINGING,
+                           f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
+                           f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
+                           "force and plate ringing not separable"))
+    return out
+
+
+def _mains_problems(x, fs, fit: _BaselineFit, peak, scale, ambiguous, start_u, end_u):
+    """50 and 60 Hz hum that fit the quiet samples alike but differ under the contact."""
+    out = []
     if ambiguous is not None:
         mains, other, other_baseline = ambiguous
         a, b = max(int(math.floor(start_u)), 0), min(int(math.ceil(end_u)) + 1, x.size)
         hum = float(np.sum(fit.hum_amplitudes))
         if other_baseline is None and hum > MAINS_AMBIGUOUS_FRACTION * peak:
             tq = np.flatnonzero(fit.quiet) / fs
-            out.append(f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} ms, "
-                       f"too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
-                       "(give daq.mains_hz)")
+            out.append(Problem(ProblemKind.MAINS_UNRESOLVED,
+                               f"mains frequency not resolved: the quiet baseline spans {1e3 * (tq[-1] - tq[0]):.3g} "
+                               f"ms, too short to tell {mains:g} from {other:g} Hz hum of {hum * scale * 1e3:.3g} mV "
+                               "(give daq.mains_hz)"))
         diff = float(np.max(np.abs(other_baseline[a:b] - fit.baseline[a:b]))) if b > a and other_baseline is not None \
             else 0.0
         if other_baseline is not None and diff > MAINS_AMBIGUOUS_FRACTION * peak:
-            out.append(f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
-                       f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
-                       "(give daq.mains_hz)")
+            out.append(Problem(ProblemKind.MAINS_UNRESOLVED,
+                               f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
+                               f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
+                               "(give daq.mains_hz)"))
     return out
 
 
@@ -796,9 +884,10 @@ def _peak_on_ringing(xc, fs, noise, peak):
     averaged = np.convolve(xc, np.ones(k) / k, mode="same")
     drop = float(np.max(xc) - np.max(averaged))
     if drop > PEAK_ON_RINGING_FRACTION * peak:
-        return [f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during the "
-                f"contact and its peak is one of the swings (averaged over one period it is "
-                f"{100 * drop / peak:.2g} % lower); the peak is not the ball's"]
+        return [Problem(ProblemKind.PEAK_ON_RINGING,
+                        f"peak force on plate ringing: the force oscillates at about {fs / period / 1e3:.3g} kHz during "
+                        f"the contact and its peak is one of the swings (averaged over one period it is "
+                        f"{100 * drop / peak:.2g} % lower); the peak is not the ball's")]
     return []
 
 
@@ -823,9 +912,11 @@ def _negative_force(x, fs, noise, peak, end_u):
     low = -float(avg[i])
     se = noise / math.sqrt(k)
     if low > NEGATIVE_FRACTION * peak and low > NEGATIVE_SIGMA * se:
-        return [f"force below zero after the contact: {100 * low / peak:.2g} % of the peak ({low / se:.3g} noise "
-                f"deviations) {1e3 * (i + (k - 1) / 2) / fs:.2g} ms after its end; the plate rings (or the "
-                "baseline is wrong) and TC and the peak cannot be trusted"]
+        return [Problem(ProblemKind.NEGATIVE_FORCE,
+                        f"force below zero after the contact: {100 * low / peak:.2g} % of the peak "
+                        f"({low / se if se > 0 else math.inf:.3g} "
+                        f"noise deviations) {1e3 * (i + (k - 1) / 2) / fs:.2g} ms after its end; the plate rings (or "
+                        "the baseline is wrong) and TC and the peak cannot be trusted")]
     return []
 
 
@@ -876,14 +967,14 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if not fit.has_post:
         msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
                f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
-        return math.inf, "none", [msg], [msg + " (give plate.time_constant_s)"]
+        return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg + " (give plate.time_constant_s)")]
     kappa, se = fit.kappa, fit.kappa_se
     undershoot = kappa * integral
     messages, problems = [], []
     if kappa < -UNDERSHOOT_SIGNIFICANCE * se:
         msg = (f"charge-amplifier decay not corrected: the baseline after the contact is "
                f"{-undershoot * scale * 1e3:.3g} mV above the one before it (expected an undershoot)")
-        return math.inf, "none", [msg], [msg]
+        return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg)]
     if integral > 0 and UNDERSHOOT_SIGNIFICANCE * se > abs(kappa):
         # how much could a decay hidden in the noise change the impulse?
         bias = duration_s * UNDERSHOOT_SIGNIFICANCE * se / 2.0
@@ -893,7 +984,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
                    f"the impulse may be off by up to {bias * 100:.2g} %")
             messages.append(msg)
             if bias > BIAS_EXCLUDE_FRACTION:
-                problems.append(msg)
+                problems.append(Problem(ProblemKind.UNDERSHOOT_NOT_MEASURABLE, msg))
     if not (integral > 0 and kappa > 0):
         return math.inf, "none", messages, problems
     tau = 1.0 / kappa
@@ -902,7 +993,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if tau < TAU_BOUNDS_S[0]:
         msg = (f"charge-amplifier decay not corrected: estimated time constant {tau:.3g} s is below "
                f"the plausible {TAU_BOUNDS_S[0]:g} s (a baseline shift that is not the amplifier's decay?)")
-        return math.inf, "none", messages + [msg], problems + [msg]
+        return math.inf, "none", messages + [msg], problems + [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg)]
     return tau, "estimated", messages, problems
 
 

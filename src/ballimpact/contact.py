@@ -562,7 +562,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     others_found: list[tuple[int, float]] = []
     if starts.size > 1:
         others = np.arange(starts.size) != k
-        long_enough = (ends - starts + 1) / fs > SECOND_IMPACT_MIN_S
+        # a run cut off by either end of the trace may be longer than it shows: its length does not count
+        long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
         bounds = np.empty(2 * starts.size, dtype=int)
         bounds[0::2], bounds[1::2] = starts, ends + 1
         run_max = np.maximum.reduceat(np.concatenate([xs, [-np.inf]]), bounds)[0::2]

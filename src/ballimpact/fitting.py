@@ -729,32 +729,13 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof
     qs = _quantities(n_par, kb0)
     offsets = np.concatenate([-np.geomspace(10, 0.3, n_grid // 2), [0.0], np.geomspace(0.3, 10, n_grid // 2)])
     g = offsets.size
-    centre = g // 2
     q_hat, crit, starts, psi = [], [], [], []
     for spec in qs:
-        qh = float(spec.fwd(theta))
-        grad = np.zeros(n_par)
-        for j in range(n_par):
-            th = theta.copy()
-            th[j] += 1e-6
-            grad[j] = (float(spec.fwd(th)) - qh) / 1e-6
-        var = float(grad @ cov @ grad)
-        se = np.sqrt(max(var, 1e-12))
-        dof = _satterthwaite_dof(grad, jac, n, dof_tc, dof_cor)
-        crit.append(stats.f.ppf(confidence, 1, max(dof, 1.0)))
-        grid = qh + offsets * se
-        if spec.key == "a":
-            grid = np.clip(grid, lo_b[1], hi_b[1])
-        if spec.key == "ac":
-            grid = np.clip(grid, lo_b[2], hi_b[2])
-        if spec.key == "kb0":
-            grid = np.clip(grid, lo_b[3], hi_b[3])
-        # Wald-linearised conditional optimum of the other parameters at each grid point
-        shift = (cov @ grad) / max(var, 1e-300)
-        th_start = theta[None, :] + (grid - qh)[:, None] * shift[None, :]
-        keep = [i for i in range(n_par) if i != spec.drop]
-        starts.append(np.clip(th_start[:, keep], lo_b[keep], hi_b[keep]))
+        qh, c, start, grid = _profile_grid(spec, theta, cov, jac, n, dof_tc, dof_cor, confidence, offsets,
+                                           lo_b, hi_b)
         q_hat.append(qh)
+        crit.append(c)
+        starts.append(start)
         psi.append(grid)
     psi_all = np.concatenate(psi)
     q_of_row = np.repeat(np.arange(len(qs)), g)
@@ -787,24 +768,55 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof
         warnings.simplefilter("ignore", RuntimeWarning)
         r = resid(pts[None], np.arange(pts.shape[0]))[0]
     dev_all = ((np.sum(r**2, axis=-1) - s_min)).reshape(len(qs), g)
-    out = {}
-    for j, spec in enumerate(qs):
-        dev = np.where(np.isfinite(dev_all[j]), dev_all[j], np.inf)
-        dev[centre] = 0.0
-        grid = psi[j]
-        ends = []
-        for step in (-1, 1):
-            prev, end, closed = centre, grid[0 if step < 0 else g - 1], False
-            for i in range(centre + step, -1 if step < 0 else g, step):
-                if dev[i] > crit[j]:
-                    w = (crit[j] - dev[prev]) / (dev[i] - dev[prev]) if np.isfinite(dev[i]) else 0.0
-                    end, closed = grid[prev] + w * (grid[i] - grid[prev]), True
-                    break
-                prev = i
-            ends.append((end, closed))
-        out[spec.key] = (float(min(ends[0][0], q_hat[j])), float(max(ends[1][0], q_hat[j])),
-                         ends[0][1] and ends[1][1])
-    return out
+    return {spec.key: _profile_ends(dev_all[j], psi[j], crit[j], q_hat[j]) for j, spec in enumerate(qs)}
+
+
+def _profile_grid(spec, theta, cov, jac, n, dof_tc, dof_cor, confidence, offsets, lo_b, hi_b):
+    """The profile grid of one quantity of :func:`_quantities`: (its estimate, the F(1, nu)
+    critical value, the starts of the other parameters at each grid point, the grid)."""
+    n_par = theta.size
+    qh = float(spec.fwd(theta))
+    grad = np.zeros(n_par)
+    for j in range(n_par):
+        th = theta.copy()
+        th[j] += 1e-6
+        grad[j] = (float(spec.fwd(th)) - qh) / 1e-6
+    var = float(grad @ cov @ grad)
+    se = np.sqrt(max(var, 1e-12))
+    dof = _satterthwaite_dof(grad, jac, n, dof_tc, dof_cor)
+    crit = stats.f.ppf(confidence, 1, max(dof, 1.0))
+    grid = qh + offsets * se
+    if spec.key == "a":
+        grid = np.clip(grid, lo_b[1], hi_b[1])
+    if spec.key == "ac":
+        grid = np.clip(grid, lo_b[2], hi_b[2])
+    if spec.key == "kb0":
+        grid = np.clip(grid, lo_b[3], hi_b[3])
+    # Wald-linearised conditional optimum of the other parameters at each grid point
+    shift = (cov @ grad) / max(var, 1e-300)
+    th_start = theta[None, :] + (grid - qh)[:, None] * shift[None, :]
+    keep = [i for i in range(n_par) if i != spec.drop]
+    return qh, crit, np.clip(th_start[:, keep], lo_b[keep], hi_b[keep]), grid
+
+
+def _profile_ends(deviance, grid, crit, q_hat):
+    """(lo, hi, closed) of one profile: where the deviance along ``grid`` first crosses
+    ``crit`` on each side of the centre (linear interpolation), else the grid's end (open)."""
+    g = grid.size
+    centre = g // 2
+    dev = np.where(np.isfinite(deviance), deviance, np.inf)
+    dev[centre] = 0.0
+    ends = []
+    for step in (-1, 1):
+        prev, end, closed = centre, grid[0 if step < 0 else g - 1], False
+        for i in range(centre + step, -1 if step < 0 else g, step):
+            if dev[i] > crit:
+                w = (crit - dev[prev]) / (dev[i] - dev[prev]) if np.isfinite(dev[i]) else 0.0
+                end, closed = grid[prev] + w * (grid[i] - grid[prev]), True
+                break
+            prev = i
+        ends.append((end, closed))
+    return float(min(ends[0][0], q_hat)), float(max(ends[1][0], q_hat)), ends[0][1] and ends[1][1]
 
 
 def _kb0_lines(vin, kv, confidence):
@@ -935,36 +947,14 @@ def detect_fit_outliers(vin_m_s, contact_time_s, cor, mass_kg, *, kb0_N_m=None, 
         kb0 = float(kb0_N_m)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        s1 = fit_contact_time(vin, tc, mass, kb0)
-        s2 = fit_restitution(vin, e, mass, kb0, s1.ak, s1.a)
-        th0 = _to_theta(s2.ak, s2.a, s2.ac)
-        tc_m, cor_m = _simulate(th0, vin, mass, kb0)
-        mad_tc = max(1.4826 * float(np.median(np.abs((tc_m - tc) / tc))), 1e-4)
-        mad_cor = max(1.4826 * float(np.median(np.abs((cor_m - e) / e))), 1e-4)
-        res = _fit_weighted(vin, tc, e, mass, kb0, th0, mad_tc, mad_cor, "robust fit (soft-L1)", loss="soft_l1")
-        tc_m, cor_m = _simulate(res.x, vin, mass, kb0)
-        r_tc, r_cor = (tc_m - tc) / tc, (cor_m - e) / e
-        mad_tc = max(1.4826 * float(np.median(np.abs(r_tc))), 1e-4)
-        mad_cor = max(1.4826 * float(np.median(np.abs(r_cor))), 1e-4)
-        result.start = (res.x.copy(), mad_tc, mad_cor)
+        theta, mad_tc, mad_cor, r_tc, r_cor = _robust_fit(vin, tc, e, mass, kb0)
+        result.start = (theta.copy(), mad_tc, mad_cor)
         d2 = (r_tc / mad_tc) ** 2 + (r_cor / mad_cor) ** 2
         suspects = np.flatnonzero(d2 > stats.chi2.ppf(0.99, 2))
         suspects = suspects[np.argsort(-d2[suspects])][: max(n - 6, 0)]
         if not suspects.size:
             return result
-        # Generalised ESD (Rosner 1983): remove the most extreme impact, refit, repeat
-        # `cap` times; the number of outliers is the last step whose test is significant
-        # (so that one outlier cannot mask another).
-        keep = np.ones(n, dtype=bool)
-        theta = res.x
-        steps = []
-        for _ in range(cap):
-            step = _most_extreme(vin, tc, e, mass, kb0, keep, theta, mad_tc, mad_cor)
-            if step is None:
-                break
-            i, p, note, theta = step
-            steps.append((i, p, note))
-            keep[i] = False
+        steps = _esd_steps(vin, tc, e, mass, kb0, theta, mad_tc, mad_cor, cap)
     result.steps = [(int(i), float(p)) for i, p, _ in steps]
     n_out = 0
     for k, (i, p, note) in enumerate(steps):
@@ -975,6 +965,40 @@ def detect_fit_outliers(vin_m_s, contact_time_s, cor, mass_kg, *, kb0_N_m=None, 
         used[i] = False
         notes[i] = note + f"; p = {p:.1e} < {level:g}/{n - k} (Bonferroni, generalised ESD step {k + 1})"
     return result
+
+
+def _robust_fit(vin, tc, e, mass, kb0):
+    """Step 1 of :func:`detect_fit_outliers`: AK, a, AC (theta) by the soft-L1 loss from the
+    stage fits, the robust scatter (1.4826 MAD, at least 1e-4) of the relative TC and COR
+    residuals [-] and those residuals: (theta, mad_tc, mad_cor, r_tc, r_cor)."""
+    s1 = fit_contact_time(vin, tc, mass, kb0)
+    s2 = fit_restitution(vin, e, mass, kb0, s1.ak, s1.a)
+    th0 = _to_theta(s2.ak, s2.a, s2.ac)
+    tc_m, cor_m = _simulate(th0, vin, mass, kb0)
+    mad_tc = max(1.4826 * float(np.median(np.abs((tc_m - tc) / tc))), 1e-4)
+    mad_cor = max(1.4826 * float(np.median(np.abs((cor_m - e) / e))), 1e-4)
+    res = _fit_weighted(vin, tc, e, mass, kb0, th0, mad_tc, mad_cor, "robust fit (soft-L1)", loss="soft_l1")
+    tc_m, cor_m = _simulate(res.x, vin, mass, kb0)
+    r_tc, r_cor = (tc_m - tc) / tc, (cor_m - e) / e
+    mad_tc = max(1.4826 * float(np.median(np.abs(r_tc))), 1e-4)
+    mad_cor = max(1.4826 * float(np.median(np.abs(r_cor))), 1e-4)
+    return res.x, mad_tc, mad_cor, r_tc, r_cor
+
+
+def _esd_steps(vin, tc, e, mass, kb0, theta, mad_tc, mad_cor, cap):
+    """Generalised ESD (Rosner 1983): remove the most extreme impact, refit, repeat ``cap``
+    times; the steps as (impact index, p value, note). Which of them are outliers is
+    decided by the caller (the last significant step, so one outlier cannot mask another)."""
+    keep = np.ones(vin.size, dtype=bool)
+    steps = []
+    for _ in range(cap):
+        step = _most_extreme(vin, tc, e, mass, kb0, keep, theta, mad_tc, mad_cor)
+        if step is None:
+            break
+        i, p, note, theta = step
+        steps.append((i, p, note))
+        keep[i] = False
+    return steps
 
 
 def _most_extreme(vin, tc, e, mass, kb0, keep, theta, s_tc, s_cor):
@@ -1116,6 +1140,52 @@ def fit_ball_model(
     FitError
         Too few impacts, or an optimiser that did not succeed.
     """
+    vin, tc, e, mass, kv_all = _fit_inputs(vin_m_s, contact_time_s, cor, mass_kg, kb0_N_m, kv_stiffness_N_m,
+                                           n_bootstrap, confidence)
+    used, outlier_notes, start, steps, messages = _outlier_search(vin, tc, e, mass, kb0_N_m, detect_outliers,
+                                                                  outlier_level, max_outlier_share)
+    vin, tc, e, mass = vin[used], tc[used], e[used], mass[used]
+    n = vin.size
+    if n < 6:
+        messages.append(f"only {n} impacts: the intervals are rough")
+    kv = kv_all[used] if kv_all is not None else kelvin_voigt_parameters(mass, tc, e)[0]
+    kb0, kb0_source, kb0_fit, line = _kb0_choice(vin, kv, kb0_N_m, confidence)
+    main, free = _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, start)
+    theta = main["theta"]
+    if kb0_source == "fitted":
+        kb0 = float(np.exp(theta[3]))
+    ak, a, ac = (float(v) for v in _from_theta(theta[:3]))
+    messages += _bound_messages(theta[:3])
+    lo_hi = _interval_ends(main, free, kb0_source, kb0_fit, messages)
+    method = _interval_method(kb0_source)
+    tc_m, cor_m = _simulate(theta, vin, mass, kb0)
+    s_tc, s_cor = main["sigma_tc"], main["sigma_cor"]
+    boot, dropped, corr = np.empty((0, 4)), 0, float("nan")
+    if n_bootstrap > 0:
+        boot, dropped, corr, method_note = _bootstrap_summary(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor,
+                                                              kb0_source, n_bootstrap, seed, messages)
+        method += method_note
+    return BallFit(
+        mass_kg=float(np.mean(mass)), n_impacts=n,
+        kb0_N_m=float(kb0), kb0_lo=lo_hi["kb0"][0], kb0_hi=lo_hi["kb0"][1], kb0_source=kb0_source,
+        ak=ak, ak_lo=lo_hi["ak"][0], ak_hi=lo_hi["ak"][1],
+        a=a, a_lo=lo_hi["a"][0], a_hi=lo_hi["a"][1],
+        ac=ac, ac_lo=lo_hi["ac"][0], ac_hi=lo_hi["ac"][1],
+        ak_a_correlation=corr,
+        contact_time_rmse_pct=_rmse_pct((tc_m - tc) / tc), cor_rmse_pct=_rmse_pct((cor_m - e) / e),
+        interval_method=method, messages=messages, result=main["result"], bootstrap=boot,
+        kb_10mm_N_m=float(kb0 + ak * 0.010**a), kb_10mm_lo=lo_hi["kb_10mm"][0], kb_10mm_hi=lo_hi["kb_10mm"][1],
+        kb_20mm_N_m=float(kb0 + ak * 0.020**a), kb_20mm_lo=lo_hi["kb_20mm"][0], kb_20mm_hi=lo_hi["kb_20mm"][1],
+        contact_time_scatter=s_tc, cor_scatter=s_cor, scatter_dof=float(min(main["dof_tc"], main["dof_cor"])),
+        bootstrap_dropped=int(dropped), used=used, outlier_notes=list(outlier_notes), outlier_steps=list(steps),
+        kb0_linear_N_m=line[0][0] if line else float("nan"),
+        kb0_quadratic_N_m=line[1][0] if line else float("nan"),
+    )
+
+
+def _fit_inputs(vin_m_s, contact_time_s, cor, mass_kg, kb0_N_m, kv_stiffness_N_m, n_bootstrap, confidence):
+    """The checked inputs of :func:`fit_ball_model`: (vin [m/s], TC [s], COR [-], mass [kg],
+    Kelvin-Voigt stiffness [N/m] or None) as 1-D arrays of one length."""
     vin = _as_1d("vin_m_s", vin_m_s)
     n_all = vin.size
     tc = _as_1d("contact_time_s", contact_time_s, n_all)
@@ -1134,48 +1204,48 @@ def fit_ball_model(
     kv_all = None
     if kv_stiffness_N_m is not None:
         kv_all = _as_1d("kv_stiffness_N_m", kv_stiffness_N_m, n_all)
-    messages = []
-    used = np.ones(n_all, dtype=bool)
-    outlier_notes = [""] * n_all
-    start = None
-    steps = []
-    if detect_outliers:
-        found = detect_fit_outliers(vin, tc, e, mass, kb0_N_m=kb0_N_m, level=outlier_level,
-                                    max_share=max_outlier_share)
-        used, outlier_notes = found.used, found.notes
-        messages += found.messages
-        start = found.start
-        steps = found.steps
-        if (~used).any():
-            messages.append(f"{int((~used).sum())} fit outlier(s) left out")
-    vin, tc, e, mass = vin[used], tc[used], e[used], mass[used]
-    n = vin.size
-    if n < 6:
-        messages.append(f"only {n} impacts: the intervals are rough")
-    kv = kv_all[used] if kv_all is not None else kelvin_voigt_parameters(mass, tc, e)[0]
+    return vin, tc, e, mass, kv_all
 
-    nan = float("nan")
-    line = None
+
+def _outlier_search(vin, tc, e, mass, kb0_N_m, detect, level, max_share):
+    """Step 1 of :func:`fit_ball_model`: (used mask, outlier notes, robust start or None,
+    search steps, messages); everything used when ``detect`` is false."""
+    if not detect:
+        return np.ones(vin.size, dtype=bool), [""] * vin.size, None, [], []
+    found = detect_fit_outliers(vin, tc, e, mass, kb0_N_m=kb0_N_m, level=level, max_share=max_share)
+    messages = list(found.messages)
+    if (~found.used).any():
+        messages.append(f"{int((~found.used).sum())} fit outlier(s) left out")
+    return found.used, found.notes, found.start, found.steps, messages
+
+
+def _kb0_choice(vin, kv, kb0_N_m, confidence):
+    """kB(0) [N/m] to start from, its source ("config", "fitted" or "extrapolated"), the
+    straight-line :class:`Kb0Fit` (None from the config) and :func:`_kb0_lines` (None)."""
     if kb0_N_m is not None:
-        kb0, kb0_source = float(kb0_N_m), "config"
-    else:
-        kb0_fit = fit_kb0(vin, kv, confidence=confidence)
-        line = _kb0_lines(vin, kv, confidence)
-        kb0 = kb0_fit.kb0_N_m
-        kb0_source = "fitted" if np.min(vin) < LOW_SPEED_M_S else "extrapolated"
+        return float(kb0_N_m), "config", None, None
+    kb0_fit = fit_kb0(vin, kv, confidence=confidence)
+    line = _kb0_lines(vin, kv, confidence)
+    source = "fitted" if np.min(vin) < LOW_SPEED_M_S else "extrapolated"
+    return kb0_fit.kb0_N_m, source, kb0_fit, line
 
+
+def _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, robust_start):
+    """The joint fit with kB(0) fixed, and with kB(0) free unless it comes from the config:
+    (the one the parameters come from, the free one or None)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        cond = _joint_fit(vin, tc, e, mass, kb0, None, confidence, robust_start=start)
+        cond = _joint_fit(vin, tc, e, mass, kb0, None, confidence, robust_start=robust_start)
         free = None
         if kb0_source != "config":
             free = _joint_fit(vin, tc, e, mass, kb0, cond, confidence)
-    main = free if kb0_source == "fitted" else cond
-    theta = main["theta"]
-    if kb0_source == "fitted":
-        kb0 = float(np.exp(theta[3]))
-    ak, a, ac = (float(v) for v in _from_theta(theta[:3]))
-    messages += _bound_messages(theta[:3])
+    return (free if kb0_source == "fitted" else cond), free
+
+
+def _interval_ends(main, free, kb0_source, kb0_fit, messages):
+    """Interval ends of each parameter in SI (``a`` [-], the others [N/m...]): the profile
+    intervals of ``main``, the hull with ``free`` and the straight line's when kB(0) is
+    extrapolated, NaN for kB(0) from the config. Appends a message per open interval."""
     iv = dict(main["intervals"])
     if kb0_source == "extrapolated":
         for key, (lo, hi, closed) in free["intervals"].items():
@@ -1191,7 +1261,27 @@ def fit_ball_model(
         if not closed:
             messages.append(f"the {key} interval reaches the end of its profile grid: the data barely constrain it")
     if kb0_source == "config":
-        lo_hi["kb0"] = (nan, nan)
+        lo_hi["kb0"] = (float("nan"), float("nan"))
+    return lo_hi
+
+
+def _bootstrap_summary(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_bootstrap, seed, messages):
+    """:func:`_bootstrap` and what follows from it: (resamples, dropped count, AK-a correlation
+    [-] (NaN with fewer than 10 resamples), the note for the interval method). Appends a
+    message when more than a fifth of the refits did not converge."""
+    boot, dropped = _bootstrap(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_bootstrap, seed)
+    if dropped > 0.2 * n_bootstrap:
+        messages.append(f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable")
+    corr, note = float("nan"), ""
+    if boot.shape[0] >= 10:
+        corr = float(np.corrcoef(np.log(boot[:, 1]), boot[:, 2])[0, 1])
+        note = (f"; AK-a correlation and curve bands from {boot.shape[0]} bootstrap resamples over impacts "
+                f"({dropped} unconverged dropped)")
+    return boot, dropped, corr, note
+
+
+def _interval_method(kb0_source):
+    """How the intervals were found, for ``BallFit.interval_method``."""
     method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
               "the unbiased TC and COR scatter")
     if kb0_source == "extrapolated":
@@ -1199,53 +1289,7 @@ def fit_ball_model(
                    "there and with kB(0) fitted (extrapolation-model uncertainty)")
     elif kb0_source == "config":
         method += "; conditional on kB(0) from the config"
-
-    tc_m, cor_m = _simulate(theta, vin, mass, kb0)
-    tc_rmse = _rmse_pct((tc_m - tc) / tc)
-    cor_rmse = _rmse_pct((cor_m - e) / e)
-    s_tc, s_cor = main["sigma_tc"], main["sigma_cor"]
-
-    corr = nan
-    boot = np.empty((0, 4))
-    dropped = 0
-    if n_bootstrap > 0:
-        boot, dropped = _bootstrap(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_bootstrap, seed)
-        if dropped > 0.2 * n_bootstrap:
-            messages.append(f"only {boot.shape[0]} of {n_bootstrap} bootstrap refits converged; bands unreliable")
-        if boot.shape[0] >= 10:
-            corr = float(np.corrcoef(np.log(boot[:, 1]), boot[:, 2])[0, 1])
-            method += (f"; AK-a correlation and curve bands from {boot.shape[0]} bootstrap resamples over impacts "
-                       f"({dropped} unconverged dropped)")
-    kb10 = kb0 + ak * 0.010**a
-    kb20 = kb0 + ak * 0.020**a
-    return BallFit(
-        mass_kg=float(np.mean(mass)),
-        n_impacts=n,
-        kb0_N_m=float(kb0),
-        kb0_lo=lo_hi["kb0"][0],
-        kb0_hi=lo_hi["kb0"][1],
-        kb0_source=kb0_source,
-        ak=ak, ak_lo=lo_hi["ak"][0], ak_hi=lo_hi["ak"][1],
-        a=a, a_lo=lo_hi["a"][0], a_hi=lo_hi["a"][1],
-        ac=ac, ac_lo=lo_hi["ac"][0], ac_hi=lo_hi["ac"][1],
-        ak_a_correlation=corr,
-        contact_time_rmse_pct=tc_rmse,
-        cor_rmse_pct=cor_rmse,
-        interval_method=method,
-        messages=messages,
-        result=main["result"],
-        bootstrap=boot,
-        kb_10mm_N_m=float(kb10), kb_10mm_lo=lo_hi["kb_10mm"][0], kb_10mm_hi=lo_hi["kb_10mm"][1],
-        kb_20mm_N_m=float(kb20), kb_20mm_lo=lo_hi["kb_20mm"][0], kb_20mm_hi=lo_hi["kb_20mm"][1],
-        contact_time_scatter=s_tc, cor_scatter=s_cor,
-        scatter_dof=float(min(main["dof_tc"], main["dof_cor"])),
-        bootstrap_dropped=int(dropped),
-        used=used,
-        outlier_notes=list(outlier_notes),
-        outlier_steps=list(steps),
-        kb0_linear_N_m=line[0][0] if line else nan,
-        kb0_quadratic_N_m=line[1][0] if line else nan,
-    )
+    return method
 
 
 def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from ._checks import positive_scalar
+from .problems import Problem, ProblemKind
 
 __all__ = [
     "gate_speeds",
@@ -128,8 +129,8 @@ def speed_uncertainty(speed_m_s, spacing_m, resolution_s):
     return _as_result(u, scalar)
 
 
-def check_gate_times(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s) -> list[str]:
-    """Problems with the four gate times of one impact, as short messages.
+def check_gate_times(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s) -> list[Problem]:
+    """Problems with the four gate times of one impact, each a kind and a short message.
 
     Parameters
     ----------
@@ -138,9 +139,9 @@ def check_gate_times(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s) -> li
 
     Returns
     -------
-    list of str
-        Empty when both speeds can be computed; otherwise e.g.
-        ``"missing gate time gate_out_1_s"`` or
+    list of ballimpact.problems.Problem
+        Empty when both speeds can be computed; otherwise e.g. GATE_TIME_MISSING
+        ``"missing gate time gate_out_1_s"`` or GATE_INTERVAL
         ``"inbound gate interval not positive (gate_in_2_s - gate_in_1_s = -0.001 s)"``.
     """
     names = ("gate_in_1_s", "gate_in_2_s", "gate_out_2_s", "gate_out_1_s")
@@ -153,13 +154,15 @@ def check_gate_times(gate_in_1_s, gate_in_2_s, gate_out_2_s, gate_out_1_s) -> li
             v = math.nan
         values[name] = v
         if not math.isfinite(v):
-            problems.append(f"missing gate time {name}")
+            problems.append(Problem(ProblemKind.GATE_TIME_MISSING, f"missing gate time {name}"))
     if problems:
         return problems
     d_in = values["gate_in_2_s"] - values["gate_in_1_s"]
     d_out = values["gate_out_1_s"] - values["gate_out_2_s"]
     if d_in <= 0:
-        problems.append(f"inbound gate interval not positive (gate_in_2_s - gate_in_1_s = {d_in:.6g} s)")
+        problems.append(Problem(ProblemKind.GATE_INTERVAL,
+                                f"inbound gate interval not positive (gate_in_2_s - gate_in_1_s = {d_in:.6g} s)"))
     if d_out <= 0:
-        problems.append(f"rebound gate interval not positive (gate_out_1_s - gate_out_2_s = {d_out:.6g} s)")
+        problems.append(Problem(ProblemKind.GATE_INTERVAL,
+                                f"rebound gate interval not positive (gate_out_1_s - gate_out_2_s = {d_out:.6g} s)"))
     return problems

@@ -19,6 +19,7 @@ from .atomic import atomic_path
 # FIGURE_STEMS: the PNG file stems make_figures writes into the figures folder; QC_DIR_NAME: its
 # sub-folder of QC pages (both from the figure registry, where the workflow reads them too)
 from .figure_registry import FIGURE_STEMS, QC_DIR_NAME
+from .problems import TRACE_FILE_KINDS, has_kind
 
 __all__ = [
     "FIGURE_STEMS",
@@ -145,7 +146,7 @@ def snapshot_session(session_dir, out_json) -> dict:
     root = session.path.resolve()
     files = {SESSION_FILE: session.path / SESSION_FILE, IMPACTS_FILE: session.path / IMPACTS_FILE}
     for row in session.impacts:
-        if any(p.startswith(("missing trace path", "trace ")) for p in row.problems):
+        if has_kind(row.problems, TRACE_FILE_KINDS):
             continue  # no readable trace file inside the session folder
         trace = session.trace_path(row)
         if trace.is_file():
@@ -159,7 +160,7 @@ def snapshot_session(session_dir, out_json) -> dict:
         "synthetic": session.meta.synthetic,
         "n_impacts": len(session.impacts),
         "impacts_per_ball": {key: per_ball[key] for key in session.meta.balls if per_ball[key]},
-        "impact_problems": {r.impact_id: list(r.problems) for r in session.impacts if r.problems},
+        "impact_problems": {r.impact_id: [p.message for p in r.problems] for r in session.impacts if r.problems},
         "raw_sha256": raw_sha256,
         "warnings": list(quick.warnings),
     }
@@ -203,7 +204,7 @@ def chunk_impact_ids(impact_ids, chunk: int, n_chunks: int) -> list:
 
 def _trace_info(session, row) -> tuple[str, str]:
     """(trace path relative to the session folder, sha256) of a row; sha256 empty when unreadable."""
-    if any(p.startswith(("missing trace path", "trace ")) for p in row.problems):
+    if has_kind(row.problems, TRACE_FILE_KINDS):
         return row.trace, ""
     from .session import file_sha256
 

@@ -24,6 +24,7 @@ from .contact import contact_samples, detect_clipping
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import kelvin_voigt_parameters
+from .problems import GATE_TIME_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import ImpactRow, Session
 from .traces import TraceError, read_trace
 
@@ -74,7 +75,8 @@ class ImpactResult:
     impact_id: str
     ball: str
     status: str = "ok"
-    reason: str = ""
+    reason: str = ""  # the messages of ``problems``, "; "-separated (impacts.csv)
+    problems: list = field(default_factory=list)  # ballimpact.problems.Problem, in the order found
     vin_m_s: float = math.nan
     vout_m_s: float = math.nan
     cor: float = math.nan
@@ -102,10 +104,13 @@ class ImpactResult:
     raw_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     raw_voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
 
-    def exclude(self, reason: str) -> "ImpactResult":
-        """Mark excluded, adding ``reason`` to any reason already given."""
+    def exclude(self, problem: Problem) -> "ImpactResult":
+        """Mark excluded for ``problem``, adding its message to any reason already given."""
+        if not isinstance(problem, Problem):
+            raise TypeError(f"problem must be a ballimpact.problems.Problem, got {problem!r}")
         self.status = "excluded"
-        self.reason = f"{self.reason}; {reason}" if self.reason else reason
+        self.problems.append(problem)
+        self.reason = f"{self.reason}; {problem.message}" if self.reason else problem.message
         return self
 
     def row(self) -> dict:
@@ -124,13 +129,13 @@ def _out_of_bounds(name, value):
 OPPOSITE_PULSE_RATIO = 2.0
 
 
-def _opposite_pulse_reason(raw, polarity: int) -> str | None:
+def _opposite_pulse_reason(raw, polarity: int) -> Problem | None:
     """Why a trace cannot be processed when it is the polarity: the pulse has the other sign.
 
     Compares the largest excursion of the voltage [V] from its median in the declared
     direction (``plate.polarity`` [-]) and in the other, after a 3-sample running median
-    so that a single-sample spike counts for nothing. Returns the reason "pulse is
-    negative: plate.polarity is +1" (or the converse), else None.
+    so that a single-sample spike counts for nothing. Returns the POLARITY problem "pulse
+    is negative: plate.polarity is +1" (or the converse), else None.
     """
     v = polarity * (np.asarray(raw, dtype=float) - np.median(raw))
     if v.size >= 3:
@@ -138,7 +143,7 @@ def _opposite_pulse_reason(raw, polarity: int) -> str | None:
     if v.size == 0 or not np.max(-v) > OPPOSITE_PULSE_RATIO * max(np.max(v), 0.0):
         return None
     sign = "negative" if polarity == 1 else "positive"
-    return f"pulse is {sign}: plate.polarity is {polarity:+d}"
+    return Problem(ProblemKind.POLARITY, f"pulse is {sign}: plate.polarity is {polarity:+d}")
 
 
 def _speeds_at_plate(vin_gate, vout_gate, row: ImpactRow, session: Session):
@@ -184,7 +189,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     gate_problems = check_gate_times(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
     # The reader already names every gate fault of its rows (missing, non-numeric, out of
     # order); these messages are for rows it did not check, and would only repeat it.
-    if not any("gate time" in q for q in row.problems):
+    if not has_kind(row.problems, GATE_TIME_KINDS):
         for p in gate_problems:
             res.exclude(p)
     if not gate_problems:
@@ -196,9 +201,11 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
         res.vin_m_s, res.vout_m_s = float(vin), float(vout)
         res.cor = float(coefficient_of_restitution(vin, vout))
         if _out_of_bounds("vin_m_s", res.vin_m_s):
-            res.exclude(f"inbound speed {res.vin_m_s:.2f} m/s outside physical bounds {PHYSICAL_BOUNDS['vin_m_s']}")
+            res.exclude(Problem(ProblemKind.SPEED_OUT_OF_BOUNDS, f"inbound speed {res.vin_m_s:.2f} m/s outside "
+                                f"physical bounds {PHYSICAL_BOUNDS['vin_m_s']}"))
         if _out_of_bounds("cor", res.cor):
-            res.exclude(f"COR {res.cor:.3f} outside physical bounds {PHYSICAL_BOUNDS['cor']}")
+            res.exclude(Problem(ProblemKind.COR_OUT_OF_BOUNDS,
+                                f"COR {res.cor:.3f} outside physical bounds {PHYSICAL_BOUNDS['cor']}"))
 
     # The trace.
     path = session.trace_path(row)
@@ -207,13 +214,13 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     except (OSError, ValueError):  # e.g. a file name too long for the OS: Path.is_file() re-raises ENAMETOOLONG
         is_file = False
     if not is_file:
-        if "trace" not in res.reason:
-            res.exclude(f"trace file not found: {row.trace}")
+        if not has_kind(res.problems, TRACE_FILE_KINDS):
+            res.exclude(Problem(ProblemKind.TRACE_NOT_FOUND, f"trace file not found: {row.trace}"))
         return res
     try:
         trace = read_trace(path, meta.sample_rate_hz)
     except TraceError as exc:
-        return res.exclude(f"unreadable trace: {exc}")
+        return res.exclude(Problem(ProblemKind.TRACE_UNREADABLE, f"unreadable trace: {exc}"))
     fs = trace.sample_rate_hz
     res.sample_rate_hz = fs
     raw = trace.voltage_V
@@ -222,7 +229,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     res.raw_voltage_V = meta.polarity * raw
 
     if detect_clipping(raw, meta.adc_range_v):
-        res.exclude("clipping at the ADC rails")
+        res.exclude(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         try:
@@ -230,11 +237,12 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
-            return res.exclude(f"unusable trace: {exc}")
+            return res.exclude(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
     # any sample at a rail that is not a replaced single-sample spike
     not_spikes = np.delete(raw, np.asarray(cond.spike_indices, dtype=int))
-    if "clipping" not in res.reason and detect_clipping(not_spikes, meta.adc_range_v, min_run=1):
-        res.exclude("clipping at the ADC rails (a sample at a rail that is not a single-sample spike)")
+    if not has_kind(res.problems, ProblemKind.CLIPPING) and detect_clipping(not_spikes, meta.adc_range_v, min_run=1):
+        res.exclude(Problem(ProblemKind.CLIPPING,
+                            "clipping at the ADC rails (a sample at a rail that is not a single-sample spike)"))
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
     res.tau_s = cond.tau_s
@@ -243,20 +251,22 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     if wrong_sign is not None:
         return res.exclude(wrong_sign)
     if not contact.found:
-        return res.exclude("no contact found")
+        return res.exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
     res.raw_time_s = t - contact.start_s
     if contact.n_impacts > 1:
         seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
                          f"{100 * frac:.0f} % of the peak" for k, (dt, frac) in enumerate(contact.other_impacts))
-        res.exclude(f"more than one impact in the trace ({contact.n_impacts} found: {seen})")
+        res.exclude(Problem(ProblemKind.MULTIPLE_IMPACTS,
+                            f"more than one impact in the trace ({contact.n_impacts} found: {seen})"))
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
-        res.exclude("contact not entirely inside the trace (truncated trace?)")
+        res.exclude(Problem(ProblemKind.CONTACT_TRUNCATED, "contact not entirely inside the trace (truncated trace?)"))
     for problem in cond.problems:
         res.exclude(problem)
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
-        res.exclude(f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}")
+        res.exclude(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
+                            f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}"))
 
     t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s)
     res.time_s = t_rel
@@ -269,18 +279,20 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
         kcal = calibration_factor(t, cond.voltage_V, contact.start_s, contact.end_s, row.mass_kg,
                                   res.vin_m_s, res.vout_m_s)
     except ValueError as exc:
-        return res.exclude(f"no calibration: {exc}")
+        return res.exclude(Problem(ProblemKind.NO_CALIBRATION, f"no calibration: {exc}"))
     # A positive but vanishing (or overflowing) voltage integral gives kCAL = inf (or 0),
     # which force_from_voltage rejects with a ValueError: exclude instead of raising.
     if not (math.isfinite(kcal) and kcal > 0):
-        return res.exclude(f"no calibration: calibration factor is {kcal!r} N/V (voltage integral over the "
-                           "contact too small or too large to calibrate)")
+        return res.exclude(Problem(ProblemKind.NO_CALIBRATION,
+                                   f"no calibration: calibration factor is {kcal!r} N/V (voltage integral over the "
+                                   "contact too small or too large to calibrate)"))
     res.kcal_N_per_V = kcal
     if meta.kcal_range_N_per_V is not None:
         lo, hi = meta.kcal_range_N_per_V
         if not lo <= kcal <= hi:
-            res.exclude(f"calibration factor {kcal:.4g} N/V outside the plate's range [{lo:g}, {hi:g}] "
-                        "N/V (plate.kcal_range_N_per_V)")
+            res.exclude(Problem(ProblemKind.KCAL_OUT_OF_RANGE,
+                                f"calibration factor {kcal:.4g} N/V outside the plate's range [{lo:g}, {hi:g}] "
+                                "N/V (plate.kcal_range_N_per_V)"))
     force = force_from_voltage(v_contact, kcal)
     velocity, displacement = integrate_motion(t_rel, force, row.mass_kg, res.vin_m_s)
     summary = contact_summary(t_rel, force, row.mass_kg, res.vin_m_s)
@@ -392,9 +404,9 @@ def exclude_calibration_outliers(status, reason, kcal_N_per_V):
 
 def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
     """Exclude, in place, impacts whose kCAL is an outlier of the session; returns (median, spread) [N/V]."""
-    status, reason, median, spread = exclude_calibration_outliers(
-        [r.status for r in results], [r.reason for r in results], [r.kcal_N_per_V for r in results]
-    )
-    for r, st, why in zip(results, status, reason):
-        r.status, r.reason = st, why
+    flags, median, spread = flag_calibration_outliers([r.kcal_N_per_V for r in results],
+                                                      [r.status == "ok" for r in results])
+    for r, flag in zip(results, flags):
+        if flag:
+            r.exclude(Problem(ProblemKind.KCAL_OUTLIER, flag))
     return median, spread

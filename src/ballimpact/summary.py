@@ -8,6 +8,8 @@ import re
 from collections import Counter
 from pathlib import Path
 
+from .problems import ProblemKind, kind_of_message
+
 __all__ = [
     "NOT_DETERMINED",
     "STALE_FILE",
@@ -216,9 +218,9 @@ def clear_stale(results_session_dir) -> None:
 
 
 def _reason_kind(reason: str) -> str:
-    """The kind of an exclusion reason: its first reason, file names and numbers left out."""
+    """The summary label of an exclusion reason: its first reason, file names and numbers left out."""
     first = str(reason).split("; ")[0].strip()
-    if first.startswith("pulse is"):
+    if kind_of_message(first) is ProblemKind.POLARITY:
         return first  # "pulse is negative: plate.polarity is +1" says it all
     first = re.sub(r"\s*\([^()]*\d[^()]*\)", "", first)  # "(3 found: second contact at ...)" and the like
     first = first.split(": ")[0]

@@ -337,9 +337,51 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
     (out / "traces").mkdir(parents=True, exist_ok=True)
     chain = config.chain
     rng = np.random.default_rng(config.seed)
-    rate = chain.sample_rate_hz
+    plan = _plan_impacts(config, rng)
+    rows, truth = [], []
+    timer = float(rng.uniform(1.0, 5.0))  # timer clock at the first impact [s]
+    n_time = int(round(chain.trace_duration_s * chain.sample_rate_hz))
+    for i, (key, vin, fault) in enumerate(plan):
+        params = config.balls[key]
+        if config.ball_variability > 0:
+            jitter = np.exp(config.ball_variability * rng.standard_normal(2))
+            params = params.with_(ak=params.ak * jitter[0], ac=params.ac * jitter[1])
+        impact_id = f"{key}-{i + 1:03d}"
+        sim, kcal, t_start, time_s, volts = _impact_trace(vin, params, fault, config, rng, n_time)
+        tc, vout = float(sim.contact_time_s), float(sim.rebound_speed_m_s)
+        gate_txt = _gate_cells(timer, tc, vin, vout, params.mass_kg, config)
+        timer += float(rng.uniform(20.0, 60.0))
+        if fault == "missing_gate":
+            gate_txt[int(rng.integers(0, 4))] = ""
+        trace_rel = _write_trace(out, impact_id, i, fault, time_s, volts, config)
+        rows.append([impact_id, key, trace_rel, *gate_txt, "", f"synthetic {fault}" if fault else ""])
+        truth.append({
+            "impact_id": impact_id,
+            "ball": key,
+            "fault": fault,
+            "expected_reason": FAULT_KINDS.get(fault, ""),
+            "vin_m_s": vin,
+            "vout_m_s": vout,
+            "cor": vout / vin,
+            "contact_time_ms": tc * 1e3,
+            "kcal_N_per_V": kcal,
+            # the model's own peak (at high speed the spike before buckling, 0.2 ms)
+            "peak_force_N": float(sim.peak_force_N),
+            "time_to_peak_ms": float(sim.time_to_peak_s) * 1e3,
+            "max_displacement_mm": float(sim.max_displacement_m) * 1e3,
+            "impulse_N_s": params.mass_kg * (vin + vout),
+            "contact_start_s": t_start,
+        })
+    _write_impacts_csv(out / "impacts.csv", rows)
+    _write_session_yaml(out / "session.yaml", config)
+    truth_csv = out.parent / f"{out.name}.truth.csv"
+    _write_truth(truth_csv, truth, config)
+    return out, truth_csv
 
-    # Plan the impacts: good ones per ball, then faults spread over the balls.
+
+def _plan_impacts(config: SynthConfig, rng) -> list[tuple[str, float, str]]:
+    """(ball key, inbound speed [m/s], fault or "") of every impact, in the session's order:
+    good ones per ball, then the faults spread over the balls, shuffled."""
     plan = []
     ball_keys = list(config.balls)
     lo, hi = config.vin_range_m_s
@@ -364,88 +406,65 @@ def write_session(out_dir, config: SynthConfig | None = None) -> tuple[Path, Pat
             plan.append((ball_keys[k % len(ball_keys)], float(rng.uniform(lo, hi)), fault))
             k += 1
     order = rng.permutation(len(plan))
-    plan = [plan[i] for i in order]
+    return [plan[i] for i in order]
 
-    rows, truth = [], []
-    timer = float(rng.uniform(1.0, 5.0))  # timer clock at the first impact [s]
-    n_time = int(round(chain.trace_duration_s * rate))
-    for i, (key, vin, fault) in enumerate(plan):
-        params = config.balls[key]
-        if config.ball_variability > 0:
-            jitter = np.exp(config.ball_variability * rng.standard_normal(2))
-            params = params.with_(ak=params.ak * jitter[0], ac=params.ac * jitter[1])
-        impact_id = f"{key}-{i + 1:03d}"
-        sim, ft, ff = _impact_force(vin, params, chain)
-        tc = float(sim.contact_time_s)
-        vout = float(sim.rebound_speed_m_s)
-        kcal = chain.kcal_N_per_V * (1.0 + chain.kcal_spread * rng.standard_normal())
-        if fault == "clipped":
-            # amplifier gain set too high: the peak reaches 1.4 times the upper rail
-            kcal = float(sim.peak_force_N) / (1.4 * chain.adc_range_V[1])
-        t_start = chain.pretrigger_s + rng.uniform(0, 1.0 / rate)  # contact start, sub-sample
-        time_s = np.arange(n_time) / rate
-        force_t = ft + t_start
-        force_f = ff
-        if fault == "double_impact":
-            gap = rng.uniform(0.008, 0.015)
-            dur = 2.5e-3
-            tt = np.linspace(0, dur, 200)
-            second = 0.25 * float(sim.peak_force_N) * np.sin(np.pi * tt / dur)
-            force_t = np.concatenate([force_t, t_start + tc + gap + tt])
-            force_f = np.concatenate([force_f, second])
-        volts = simulate_voltage(time_s, force_t, force_f, kcal, chain, config.polarity, rng)
 
-        # Gate times on the timer clock, rounded down to the timer resolution.
-        t_contact = timer
-        if config.flight_drag:
-            g_in_1, g_in_2, g_out_2, g_out_1 = _gate_times_with_drag(t_contact, tc, vin, vout, params.mass_kg,
-                                                                     config)
+def _impact_trace(vin, params, fault, config: SynthConfig, rng, n_time):
+    """One impact's simulation and voltage trace: (model result, kCAL [N/V], contact start
+    [s], sample times [s], voltage [V]); a clipped or double impact when ``fault`` says so."""
+    chain = config.chain
+    rate = chain.sample_rate_hz
+    sim, ft, ff = _impact_force(vin, params, chain)
+    tc = float(sim.contact_time_s)
+    kcal = chain.kcal_N_per_V * (1.0 + chain.kcal_spread * rng.standard_normal())
+    if fault == "clipped":
+        # amplifier gain set too high: the peak reaches 1.4 times the upper rail
+        kcal = float(sim.peak_force_N) / (1.4 * chain.adc_range_V[1])
+    t_start = chain.pretrigger_s + rng.uniform(0, 1.0 / rate)  # contact start, sub-sample
+    time_s = np.arange(n_time) / rate
+    force_t = ft + t_start
+    force_f = ff
+    if fault == "double_impact":
+        gap = rng.uniform(0.008, 0.015)
+        dur = 2.5e-3
+        tt = np.linspace(0, dur, 200)
+        second = 0.25 * float(sim.peak_force_N) * np.sin(np.pi * tt / dur)
+        force_t = np.concatenate([force_t, t_start + tc + gap + tt])
+        force_f = np.concatenate([force_f, second])
+    volts = simulate_voltage(time_s, force_t, force_f, kcal, chain, config.polarity, rng)
+    return sim, kcal, t_start, time_s, volts
+
+
+def _gate_cells(t_contact, tc, vin, vout, mass_kg, config: SynthConfig) -> list[str]:
+    """The four gate times [s] of an impact whose contact starts at ``t_contact`` on the
+    timer clock, rounded down to the timer resolution, as impacts.csv cells."""
+    chain = config.chain
+    if config.flight_drag:
+        g_in_1, g_in_2, g_out_2, g_out_1 = _gate_times_with_drag(t_contact, tc, vin, vout, mass_kg, config)
+    else:
+        g_in_2 = t_contact - chain.gate_to_plate_m / vin
+        g_in_1 = g_in_2 - chain.gate_spacing_m / vin
+        g_out_2 = t_contact + tc + chain.gate_to_plate_m / vout
+        g_out_1 = g_out_2 + chain.gate_spacing_m / vout
+    res = chain.gate_resolution_s
+    gates = [np.floor(g / res) * res for g in (g_in_1, g_in_2, g_out_2, g_out_1)]
+    return [f"{g:.7f}" for g in gates]
+
+
+def _write_trace(out: Path, impact_id: str, i: int, fault: str, time_s, volts, config: SynthConfig) -> str:
+    """Write impact ``i``'s trace (CSV or TDMS as ``config.trace_format`` says; none for a
+    missing trace) and return its path relative to the session folder."""
+    fmt = config.trace_format
+    use_tdms = fmt == "tdms" or (fmt == "mixed" and i % 4 == 3)
+    trace_rel = f"traces/{impact_id}.{'tdms' if use_tdms else 'csv'}"
+    meta = {"channel": "charge amplifier output", "impact_id": impact_id}
+    if fault != "missing_trace":
+        if use_tdms:
+            _write_tdms_trace(out / trace_rel, volts, config.chain.sample_rate_hz, meta)
         else:
-            g_in_2 = t_contact - chain.gate_to_plate_m / vin
-            g_in_1 = g_in_2 - chain.gate_spacing_m / vin
-            g_out_2 = t_contact + tc + chain.gate_to_plate_m / vout
-            g_out_1 = g_out_2 + chain.gate_spacing_m / vout
-        res = chain.gate_resolution_s
-        gates = [np.floor(g / res) * res for g in (g_in_1, g_in_2, g_out_2, g_out_1)]
-        gate_txt = [f"{g:.7f}" for g in gates]
-        timer += float(rng.uniform(20.0, 60.0))
-        if fault == "missing_gate":
-            gate_txt[int(rng.integers(0, 4))] = ""
-
-        fmt = config.trace_format
-        use_tdms = fmt == "tdms" or (fmt == "mixed" and i % 4 == 3)
-        trace_rel = f"traces/{impact_id}.{'tdms' if use_tdms else 'csv'}"
-        meta = {"channel": "charge amplifier output", "impact_id": impact_id}
-        if fault != "missing_trace":
-            if use_tdms:
-                _write_tdms_trace(out / trace_rel, volts, rate, meta)
-            else:
-                with_time = fmt == "mixed" and i % 3 == 2
-                _write_csv_trace(out / trace_rel, time_s, volts, rate, with_time, meta)
-        rows.append([impact_id, key, trace_rel, *gate_txt, "", f"synthetic {fault}" if fault else ""])
-        truth.append({
-            "impact_id": impact_id,
-            "ball": key,
-            "fault": fault,
-            "expected_reason": FAULT_KINDS.get(fault, ""),
-            "vin_m_s": vin,
-            "vout_m_s": vout,
-            "cor": vout / vin,
-            "contact_time_ms": tc * 1e3,
-            "kcal_N_per_V": kcal,
-            # the model's own peak (at high speed the spike before buckling, 0.2 ms)
-            "peak_force_N": float(sim.peak_force_N),
-            "time_to_peak_ms": float(sim.time_to_peak_s) * 1e3,
-            "max_displacement_mm": float(sim.max_displacement_m) * 1e3,
-            "impulse_N_s": params.mass_kg * (vin + vout),
-            "contact_start_s": t_start,
-        })
-
-    _write_impacts_csv(out / "impacts.csv", rows)
-    _write_session_yaml(out / "session.yaml", config)
-    truth_csv = out.parent / f"{out.name}.truth.csv"
-    _write_truth(truth_csv, truth, config)
-    return out, truth_csv
+            with_time = fmt == "mixed" and i % 3 == 2
+            _write_csv_trace(out / trace_rel, time_s, volts, config.chain.sample_rate_hz, with_time, meta)
+    return trace_rel
 
 
 def _gate_times_with_drag(t_contact, tc, vin, vout, mass_kg, config: SynthConfig):

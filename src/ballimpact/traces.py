@@ -196,42 +196,11 @@ def _time_column_rate(time: np.ndarray, time_texts: list[str], first_line: int, 
 
 
 def _read_csv(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
-    data_bytes = _read_bytes(path, file)
-    if not data_bytes.strip():
-        raise TraceError(f"{file}: empty trace file (no header row, no samples)")
-    try:
-        text = data_bytes.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = data_bytes[: exc.start].count(b"\n") + 1
-        raise TraceError(f"{file}: line {line}: not valid UTF-8 (byte 0x{data_bytes[exc.start]:02x})") from None
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    lines = _csv_lines(path, file)
     metadata, key_line, header_index = _parse_header(lines, file)
-    if header_index >= len(lines):
-        raise TraceError(f"{file}: no header row ({VOLTAGE_COLUMN}) and no samples")
+    columns = _csv_columns(lines, header_index, file)
     header_line = header_index + 1
-    columns = [cell.strip().strip('"') for cell in lines[header_index].split(",")]
-    if columns not in ([VOLTAGE_COLUMN], [TIME_COLUMN, VOLTAGE_COLUMN]):
-        if VOLTAGE_COLUMN not in columns:
-            raise TraceError(
-                f"{file}: line {header_line}: missing {VOLTAGE_COLUMN} column (header row is {lines[header_index]!r})"
-            )
-        raise TraceError(
-            f"{file}: line {header_line}: header row must be '{VOLTAGE_COLUMN}' or "
-            f"'{TIME_COLUMN},{VOLTAGE_COLUMN}', got {lines[header_index]!r}"
-        )
-
-    units = metadata.get("units")
-    if units is not None and units != "V":
-        raise TraceError(f"{file}: line {key_line['units']}: units must be 'V', got {units!r}")
-    header_rate = None
-    if "sample_rate_hz" in metadata:
-        header_rate = _positive_float(metadata["sample_rate_hz"])
-        if header_rate is None:
-            raise TraceError(
-                f"{file}: line {key_line['sample_rate_hz']}: sample_rate_hz must be a positive number, "
-                f"got {metadata['sample_rate_hz']!r}"
-            )
-
+    header_rate = _csv_header_rate(metadata, key_line, file)
     data = lines[header_index + 1 :]
     while data and not data[-1].strip():
         data.pop()
@@ -248,20 +217,7 @@ def _read_csv(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
 
     t0_s = 0.0
     if len(columns) == 2:
-        time = values[:, 0]
-        if not np.isfinite(time).all():
-            i = int(np.argmin(np.isfinite(time)))
-            raise TraceError(f"{file}: line {first_line + i}: non-finite time_s value {float(time[i])!r}")
-        probe = data[:_QUANTUM_PROBE_LINES] + data[-_QUANTUM_PROBE_LINES:]
-        time_texts = [line.split(",", 1)[0] for line in probe]
-        rate = _time_column_rate(time, time_texts, first_line, file)
-        if header_rate is not None and abs(rate - header_rate) > RATE_AGREEMENT_RTOL * header_rate:
-            raise TraceError(
-                f"{file}: line {key_line['sample_rate_hz']}: header sample_rate_hz {header_rate:g} Hz disagrees "
-                f"with the time_s column ({rate:.6g} Hz) by {abs(rate / header_rate - 1):.2%} "
-                f"(more than {RATE_AGREEMENT_RTOL:.1%})"
-            )
-        t0_s = float(time[0])
+        rate, t0_s = _csv_time_column_rate(values[:, 0], data, first_line, header_rate, key_line, file)
         source = "time_s"
     elif header_rate is not None:
         rate, source = header_rate, "header"
@@ -276,6 +232,70 @@ def _read_csv(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
         format="csv",
         sample_rate_source=source,
     )
+
+
+def _csv_lines(path: Path, file: str) -> list[str]:
+    """The lines of a CSV trace, decoded (UTF-8, BOM allowed), any line ending."""
+    data_bytes = _read_bytes(path, file)
+    if not data_bytes.strip():
+        raise TraceError(f"{file}: empty trace file (no header row, no samples)")
+    try:
+        text = data_bytes.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data_bytes[: exc.start].count(b"\n") + 1
+        raise TraceError(f"{file}: line {line}: not valid UTF-8 (byte 0x{data_bytes[exc.start]:02x})") from None
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def _csv_columns(lines: list[str], header_index: int, file: str) -> list[str]:
+    """The columns of the header row: [voltage_V] or [time_s, voltage_V], else a TraceError."""
+    if header_index >= len(lines):
+        raise TraceError(f"{file}: no header row ({VOLTAGE_COLUMN}) and no samples")
+    header_line = header_index + 1
+    columns = [cell.strip().strip('"') for cell in lines[header_index].split(",")]
+    if columns not in ([VOLTAGE_COLUMN], [TIME_COLUMN, VOLTAGE_COLUMN]):
+        if VOLTAGE_COLUMN not in columns:
+            raise TraceError(
+                f"{file}: line {header_line}: missing {VOLTAGE_COLUMN} column (header row is {lines[header_index]!r})"
+            )
+        raise TraceError(
+            f"{file}: line {header_line}: header row must be '{VOLTAGE_COLUMN}' or "
+            f"'{TIME_COLUMN},{VOLTAGE_COLUMN}', got {lines[header_index]!r}"
+        )
+    return columns
+
+
+def _csv_header_rate(metadata: dict, key_line: dict, file: str) -> float | None:
+    """The ``# sample_rate_hz`` of a CSV header [Hz] (None when absent); checks ``# units``."""
+    units = metadata.get("units")
+    if units is not None and units != "V":
+        raise TraceError(f"{file}: line {key_line['units']}: units must be 'V', got {units!r}")
+    header_rate = None
+    if "sample_rate_hz" in metadata:
+        header_rate = _positive_float(metadata["sample_rate_hz"])
+        if header_rate is None:
+            raise TraceError(
+                f"{file}: line {key_line['sample_rate_hz']}: sample_rate_hz must be a positive number, "
+                f"got {metadata['sample_rate_hz']!r}"
+            )
+    return header_rate
+
+
+def _csv_time_column_rate(time, data, first_line, header_rate, key_line, file) -> tuple[float, float]:
+    """Sample rate [Hz] and first time [s] from a time_s column, which must agree with a header rate."""
+    if not np.isfinite(time).all():
+        i = int(np.argmin(np.isfinite(time)))
+        raise TraceError(f"{file}: line {first_line + i}: non-finite time_s value {float(time[i])!r}")
+    probe = data[:_QUANTUM_PROBE_LINES] + data[-_QUANTUM_PROBE_LINES:]
+    time_texts = [line.split(",", 1)[0] for line in probe]
+    rate = _time_column_rate(time, time_texts, first_line, file)
+    if header_rate is not None and abs(rate - header_rate) > RATE_AGREEMENT_RTOL * header_rate:
+        raise TraceError(
+            f"{file}: line {key_line['sample_rate_hz']}: header sample_rate_hz {header_rate:g} Hz disagrees "
+            f"with the time_s column ({rate:.6g} Hz) by {abs(rate / header_rate - 1):.2%} "
+            f"(more than {RATE_AGREEMENT_RTOL:.1%})"
+        )
+    return rate, float(time[0])
 
 
 # --------------------------------------------------------------------------- TDMS

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .problems import TRACE_FILE_KINDS, ProblemKind, has_kind
 from .session import read_session
 from .traces import TraceError, read_trace
 
@@ -182,71 +183,89 @@ def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         session = read_session(path)
-        problems: list[tuple[str, str]] = []
-        rates: Counter = Counter()
-        sources: Counter = Counter()
-        formats: Counter = Counter()
-        trace_users: dict[Path, str] = {}
         meta = session.meta
-        bad_speeds: list[float] = []
-        own_rates: list[float] = []  # [Hz] rates the traces give themselves (header, time_s, TDMS)
-        n_default_rate = 0
-        signs: Counter = Counter()
+        tally = _Tally()
         for row in session.impacts:
-            problems.extend((row.impact_id, message) for message in row.problems)
-            gates = (row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
-            if not any(m.startswith("gate times out of order") for m in row.problems):
-                speed_problems = gate_speed_problems(meta.gate_spacing_m, gates)
-                problems.extend((row.impact_id, message) for message in speed_problems)
-                if speed_problems and math.isfinite(gates[1] - gates[0]) and gates[1] > gates[0]:
-                    bad_speeds.append(meta.gate_spacing_m / (gates[1] - gates[0]))
-            if any(message.startswith(("missing trace path", "trace ")) for message in row.problems):
+            _check_row_gates(row, meta.gate_spacing_m, tally)
+            if has_kind(row.problems, TRACE_FILE_KINDS):
                 continue  # no readable trace file to look at
-            trace_path = session.trace_path(row)
-            key = trace_path.resolve()
-            if key in trace_users:
-                warnings.warn(f"{row.impact_id}: trace {row.trace} is also the trace of impact {trace_users[key]}")
-            else:
-                trace_users[key] = row.impact_id
-            if not read_traces:
-                rate = trace_own_rate(trace_path)
-                if rate is None:
-                    n_default_rate += 1
-                else:
-                    own_rates.append(rate)
-                continue
-            try:
-                trace = read_trace(trace_path, session.meta.sample_rate_hz)
-            except TraceError as exc:
-                problems.append((row.impact_id, str(exc)))
-                continue
-            rates[float(f"{trace.sample_rate_hz:.{RATE_SIGNIFICANT_DIGITS}g}")] += 1
-            sources[trace.sample_rate_source] += 1
-            formats[trace.format] += 1
-            if trace.sample_rate_source == "session":
-                n_default_rate += 1
-            else:
-                own_rates.append(trace.sample_rate_hz)
-            signs[pulse_sign(trace.voltage_V)] += 1
-            del trace  # one trace in memory at a time
-        if len(bad_speeds) >= max(2, len(session.impacts) // 2):
+            _check_row_trace(session, row, read_traces, tally)
+        if len(tally.bad_speeds) >= max(2, len(session.impacts) // 2):
             warnings.warn(
-                f"{len(bad_speeds)} of {len(session.impacts)} impacts have gate speeds outside "
-                f"{SPEED_RANGE_M_S[0]:g}-{SPEED_RANGE_M_S[1]:g} m/s{_units_hint(bad_speeds)}"
+                f"{len(tally.bad_speeds)} of {len(session.impacts)} impacts have gate speeds outside "
+                f"{SPEED_RANGE_M_S[0]:g}-{SPEED_RANGE_M_S[1]:g} m/s{_units_hint(tally.bad_speeds)}"
             )
-        _check_sample_rate(meta.sample_rate_hz, own_rates, n_default_rate)
-        _check_polarity(meta.polarity, signs)
+        _check_sample_rate(meta.sample_rate_hz, tally.own_rates, tally.n_default_rate)
+        _check_polarity(meta.polarity, tally.signs)
     per_ball = Counter(row.ball for row in session.impacts)
     return ValidationReport(
         session_id=session.meta.session_id,
         n_impacts=len(session.impacts),
         impacts_per_ball={ball: per_ball[ball] for ball in session.meta.balls if per_ball[ball]},
-        sample_rates_hz=dict(sorted(rates.items())),
-        trace_formats=dict(sorted(formats.items())),
-        problems=problems,
-        sample_rate_sources=dict(sorted(sources.items())),
+        sample_rates_hz=dict(sorted(tally.rates.items())),
+        trace_formats=dict(sorted(tally.formats.items())),
+        problems=tally.problems,
+        sample_rate_sources=dict(sorted(tally.sources.items())),
         warnings=[str(w.message) for w in caught],
     )
+
+
+@dataclass
+class _Tally:
+    """What :func:`validate_session` gathers over the impacts of a session."""
+
+    problems: list = field(default_factory=list)  # (impact_id, message)
+    rates: Counter = field(default_factory=Counter)  # [Hz] trace sample rates, rounded
+    sources: Counter = field(default_factory=Counter)  # where each trace's rate came from
+    formats: Counter = field(default_factory=Counter)  # trace formats
+    trace_users: dict = field(default_factory=dict)  # resolved trace path -> first impact_id
+    bad_speeds: list = field(default_factory=list)  # [m/s] implausible inbound gate speeds
+    own_rates: list = field(default_factory=list)  # [Hz] rates the traces give themselves (header, time_s, TDMS)
+    n_default_rate: int = 0  # traces that take daq.sample_rate_hz
+    signs: Counter = field(default_factory=Counter)  # pulse sign per trace
+
+
+def _check_row_gates(row, spacing_m: float, tally: _Tally) -> None:
+    """The reader's problems of one row, then its implausible gate speeds (gate spacing [m])."""
+    tally.problems.extend((row.impact_id, problem.message) for problem in row.problems)
+    gates = (row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
+    if has_kind(row.problems, ProblemKind.GATE_ORDER):
+        return
+    speed_problems = gate_speed_problems(spacing_m, gates)
+    tally.problems.extend((row.impact_id, message) for message in speed_problems)
+    if speed_problems and math.isfinite(gates[1] - gates[0]) and gates[1] > gates[0]:
+        tally.bad_speeds.append(spacing_m / (gates[1] - gates[0]))
+
+
+def _check_row_trace(session, row, read_traces: bool, tally: _Tally) -> None:
+    """One row's trace: shared with another impact (warning), its sample rate, format and pulse
+    sign; only its header's rate when ``read_traces`` is false. One trace in memory at a time."""
+    trace_path = session.trace_path(row)
+    key = trace_path.resolve()
+    if key in tally.trace_users:
+        warnings.warn(f"{row.impact_id}: trace {row.trace} is also the trace of impact {tally.trace_users[key]}")
+    else:
+        tally.trace_users[key] = row.impact_id
+    if not read_traces:
+        rate = trace_own_rate(trace_path)
+        if rate is None:
+            tally.n_default_rate += 1
+        else:
+            tally.own_rates.append(rate)
+        return
+    try:
+        trace = read_trace(trace_path, session.meta.sample_rate_hz)
+    except TraceError as exc:
+        tally.problems.append((row.impact_id, str(exc)))
+        return
+    tally.rates[float(f"{trace.sample_rate_hz:.{RATE_SIGNIFICANT_DIGITS}g}")] += 1
+    tally.sources[trace.sample_rate_source] += 1
+    tally.formats[trace.format] += 1
+    if trace.sample_rate_source == "session":
+        tally.n_default_rate += 1
+    else:
+        tally.own_rates.append(trace.sample_rate_hz)
+    tally.signs[pulse_sign(trace.voltage_V)] += 1
 
 
 def _check_sample_rate(rate_hz: float, own_rates: list[float], n_default: int) -> None:
