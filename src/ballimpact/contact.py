@@ -505,16 +505,7 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         If the voltage holds NaN or infinite values or the sample rate is not
         positive.
     """
-    fs = float(sample_rate_hz)
-    if not math.isfinite(fs) or fs <= 0:
-        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
-    x = np.asarray(voltage_V, dtype=float).ravel()
-    if not np.all(np.isfinite(x)):
-        bad = np.flatnonzero(~np.isfinite(x))
-        raise ValueError(f"voltage_V holds {bad.size} non-finite samples (first at index {bad[0]})")
-    if not math.isfinite(t0_s):
-        raise ValueError(f"t0_s must be finite, got {t0_s!r}")
-
+    fs, x = _checked_arguments(voltage_V, sample_rate_hz, t0_s)
     flags: list[str] = []
     clipped = False
     if raw_voltage_V is not None and adc_range_V is not None:
@@ -532,8 +523,65 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     xs = x / scale  # work in units of the largest magnitude: no overflow for any finite input
     peak = float(xs[peak_index])
     merge_gap = max(int(round(MERGE_GAP_S * fs)), 1)
+    sigma = _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
+    thr = max(THRESHOLD_SIGMA * sigma, THRESHOLD_FRACTION * peak)
+    if not peak > thr:
+        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
 
-    # --- noise and threshold
+    starts, ends, k = _main_run(xs > thr, peak_index, merge_gap)
+    if k < 0 or ends[k] - starts[k] + 1 < MIN_CONTACT_SAMPLES:
+        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
+    run_a, run_b = int(starts[k]), int(ends[k])
+    others_found = _other_impacts(xs, starts, ends, k, peak, fs)
+    n_impacts = 1 + len(others_found)
+    if n_impacts > 1:
+        flags.append("multiple_impacts")
+
+    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags)
+    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end) if spread else (math.nan, math.nan)
+    # consistency: the run above threshold lies inside the contact, start < end inside the trace
+    u_start = min(max(u_start, 0.0), float(run_a))
+    u_end = max(min(u_end, n - 1.0), float(run_b))
+    u_edge_start = min(max(u_edge_start, u_start), float(run_a))
+    u_edge_end = max(min(u_edge_end, u_end), float(run_b))
+
+    return ContactResult(
+        found=True,
+        start_s=t0_s + u_start / fs,
+        end_s=t0_s + u_end / fs,
+        edge_start_s=t0_s + u_edge_start / fs,
+        edge_end_s=t0_s + u_edge_end / fs,
+        start_index=int(math.ceil(u_start)),
+        end_index=int(math.floor(u_end)),
+        peak_index=peak_index,
+        peak_V=peak * scale,
+        n_impacts=n_impacts,
+        noise_rms_V=sigma * scale,
+        threshold_V=thr * scale,
+        clipped=clipped,
+        flags=tuple(flags),
+        other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
+        start_spread_s=spreads[0],
+        end_spread_s=spreads[1],
+    )
+
+
+def _checked_arguments(voltage_V, sample_rate_hz, t0_s):
+    """(sample rate [Hz], voltage as a float array [V]); ValueError naming a bad argument."""
+    fs = float(sample_rate_hz)
+    if not math.isfinite(fs) or fs <= 0:
+        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    x = np.asarray(voltage_V, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        bad = np.flatnonzero(~np.isfinite(x))
+        raise ValueError(f"voltage_V holds {bad.size} non-finite samples (first at index {bad[0]})")
+    if not math.isfinite(t0_s):
+        raise ValueError(f"t0_s must be finite, got {t0_s!r}")
+    return fs, x
+
+
+def _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags) -> float:
+    """Noise standard deviation in units of the largest magnitude: given, or from the quiet pre-trigger [-]."""
     if noise_rms_V is not None and math.isfinite(noise_rms_V) and noise_rms_V >= 0:
         sigma = float(noise_rms_V) / scale
     else:
@@ -547,33 +595,28 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         else:
             flags.append("short_pretrigger")
             sigma = sigma0
-    sigma = max(sigma, _quantum(xs) / math.sqrt(12.0), NOISE_FLOOR_FRACTION * peak, 1e-300)
-    thr = max(THRESHOLD_SIGMA * sigma, THRESHOLD_FRACTION * peak)
-    if not peak > thr:
-        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
+    return max(sigma, _quantum(xs) / math.sqrt(12.0), NOISE_FLOOR_FRACTION * peak, 1e-300)
 
-    starts, ends, k = _main_run(xs > thr, peak_index, merge_gap)
-    if k < 0 or ends[k] - starts[k] + 1 < MIN_CONTACT_SAMPLES:
-        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
-    run_a, run_b = int(starts[k]), int(ends[k])
 
-    # --- impact counting
-    n_impacts = 1
-    others_found: list[tuple[int, float]] = []
-    if starts.size > 1:
-        others = np.arange(starts.size) != k
-        # a run cut off by either end of the trace may be longer than it shows: its length does not count
-        long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
-        bounds = np.empty(2 * starts.size, dtype=int)
-        bounds[0::2], bounds[1::2] = starts, ends + 1
-        run_max = np.maximum.reduceat(np.concatenate([xs, [-np.inf]]), bounds)[0::2]
-        high_enough = run_max > SECOND_IMPACT_FRACTION * peak
-        counted = others & long_enough & high_enough
-        n_impacts += int(np.count_nonzero(counted))
-        others_found = [(int(starts[j]), float(run_max[j] / peak)) for j in np.flatnonzero(counted)]
-    if n_impacts > 1:
-        flags.append("multiple_impacts")
+def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
+    """Runs above the threshold besides the main one (k) that count as impacts: (first sample, peak fraction)."""
+    if starts.size <= 1:
+        return []
+    n = xs.size
+    others = np.arange(starts.size) != k
+    # a run cut off by either end of the trace may be longer than it shows: its length does not count
+    long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
+    bounds = np.empty(2 * starts.size, dtype=int)
+    bounds[0::2], bounds[1::2] = starts, ends + 1
+    run_max = np.maximum.reduceat(np.concatenate([xs, [-np.inf]]), bounds)[0::2]
+    high_enough = run_max > SECOND_IMPACT_FRACTION * peak
+    counted = others & long_enough & high_enough
+    return [(int(starts[j]), float(run_max[j] / peak)) for j in np.flatnonzero(counted)]
 
+
+def _contact_ends(xs, peak_index, peak, sigma, fs, flags):
+    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen."""
+    n = xs.size
     lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
     hi = EDGE_BAND[1] * peak
     rev = xs[::-1]
@@ -615,37 +658,17 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         u_end = n - 1 - u_end
         if u_end > u_edge_end + 1.0:
             flags.append("end_tail")
+    return u_start, u_end, u_edge_start, u_edge_end
 
+
+def _spreads(xs, peak_index, sigma, fs, u_start, u_end) -> tuple[float, float]:
+    """How far each end moves when fitted from the samples above SPREAD_FACTOR times the thresholds [s]."""
+    n = xs.size
     spreads = [math.nan, math.nan]
-    if spread:
-        u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs)
-        e2, _ = _foot_start(rev, n - 1 - peak_index, SPREAD_FACTOR * sigma, fs)
-        if u2 is not None:
-            spreads[0] = (u2 - u_start) / fs
-        if e2 is not None:
-            spreads[1] = (n - 1 - e2 - u_end) / fs
-    # consistency: the run above threshold lies inside the contact, start < end inside the trace
-    u_start = min(max(u_start, 0.0), float(run_a))
-    u_end = max(min(u_end, n - 1.0), float(run_b))
-    u_edge_start = min(max(u_edge_start, u_start), float(run_a))
-    u_edge_end = max(min(u_edge_end, u_end), float(run_b))
-
-    return ContactResult(
-        found=True,
-        start_s=t0_s + u_start / fs,
-        end_s=t0_s + u_end / fs,
-        edge_start_s=t0_s + u_edge_start / fs,
-        edge_end_s=t0_s + u_edge_end / fs,
-        start_index=int(math.ceil(u_start)),
-        end_index=int(math.floor(u_end)),
-        peak_index=peak_index,
-        peak_V=peak * scale,
-        n_impacts=n_impacts,
-        noise_rms_V=sigma * scale,
-        threshold_V=thr * scale,
-        clipped=clipped,
-        flags=tuple(flags),
-        other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
-        start_spread_s=spreads[0],
-        end_spread_s=spreads[1],
-    )
+    u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs)
+    e2, _ = _foot_start(xs[::-1], n - 1 - peak_index, SPREAD_FACTOR * sigma, fs)
+    if u2 is not None:
+        spreads[0] = (u2 - u_start) / fs
+    if e2 is not None:
+        spreads[1] = (n - 1 - e2 - u_end) / fs
+    return spreads[0], spreads[1]

@@ -37,6 +37,7 @@ interpolated between time steps (see :mod:`ballimpact.model`).
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 
@@ -801,7 +802,12 @@ def _profile_grid(spec, theta, cov, jac, n, dof_tc, dof_cor, confidence, offsets
 
 def _profile_ends(deviance, grid, crit, q_hat):
     """(lo, hi, closed) of one profile: where the deviance along ``grid`` first crosses
-    ``crit`` on each side of the centre (linear interpolation), else the grid's end (open)."""
+    ``crit`` on each side of the centre, else the grid's end (open).
+
+    Between two grid points the root of the deviance is interpolated linearly: it is
+    linear in q where the profile is quadratic (a linear model), so the crossing is then
+    exact; interpolating the deviance itself would put it inside the true one (the
+    deviance is convex), about 2.5 % narrow on this grid."""
     g = grid.size
     centre = g // 2
     dev = np.where(np.isfinite(deviance), deviance, np.inf)
@@ -811,7 +817,8 @@ def _profile_ends(deviance, grid, crit, q_hat):
         prev, end, closed = centre, grid[0 if step < 0 else g - 1], False
         for i in range(centre + step, -1 if step < 0 else g, step):
             if dev[i] > crit:
-                w = (crit - dev[prev]) / (dev[i] - dev[prev]) if np.isfinite(dev[i]) else 0.0
+                r_prev, r_i = math.sqrt(max(dev[prev], 0.0)), math.sqrt(max(dev[i], 0.0))
+                w = (math.sqrt(crit) - r_prev) / (r_i - r_prev) if np.isfinite(dev[i]) else 0.0
                 end, closed = grid[prev] + w * (grid[i] - grid[prev]), True
                 break
             prev = i

@@ -184,7 +184,20 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     res = ImpactResult(impact_id=row.impact_id, ball=row.ball, mass_kg=row.mass_kg, trace_file=row.trace)
     for problem in row.problems:
         res.exclude(problem)
+    _gate_speeds(res, row, session)
+    read = _conditioned_trace(res, row, session)
+    if read is None:
+        return res
+    t, raw, cond = read
+    contact = _contact(res, t, raw, cond, meta)
+    if contact is None:
+        return res
+    return _calibrated(res, row, t, cond, contact, meta)
 
+
+def _gate_speeds(res: ImpactResult, row: ImpactRow, session: Session) -> None:
+    """Speeds at the plate [m/s] and COR of the impact from its gate times, or the gate problems (section 2)."""
+    meta = session.meta
     # Speeds from the gates (section 2): vin = spacing / (in_2 - in_1), vout = spacing / (out_1 - out_2).
     gate_problems = check_gate_times(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s)
     # The reader already names every gate fault of its rows (missing, non-numeric, out of
@@ -207,6 +220,10 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
             res.exclude(Problem(ProblemKind.COR_OUT_OF_BOUNDS,
                                 f"COR {res.cor:.3f} outside physical bounds {PHYSICAL_BOUNDS['cor']}"))
 
+
+def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
+    """Read and condition the trace: (time [s], raw voltage [V], ConditionedSignal), or None when excluded."""
+    meta = session.meta
     # The trace.
     path = session.trace_path(row)
     try:
@@ -216,11 +233,12 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     if not is_file:
         if not has_kind(res.problems, TRACE_FILE_KINDS):
             res.exclude(Problem(ProblemKind.TRACE_NOT_FOUND, f"trace file not found: {row.trace}"))
-        return res
+        return None
     try:
         trace = read_trace(path, meta.sample_rate_hz)
     except TraceError as exc:
-        return res.exclude(Problem(ProblemKind.TRACE_UNREADABLE, f"unreadable trace: {exc}"))
+        res.exclude(Problem(ProblemKind.TRACE_UNREADABLE, f"unreadable trace: {exc}"))
+        return None
     fs = trace.sample_rate_hz
     res.sample_rate_hz = fs
     raw = trace.voltage_V
@@ -237,21 +255,29 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
-            return res.exclude(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
+            res.exclude(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
+            return None
     # any sample at a rail that is not a replaced single-sample spike
     not_spikes = np.delete(raw, np.asarray(cond.spike_indices, dtype=int))
     if not has_kind(res.problems, ProblemKind.CLIPPING) and detect_clipping(not_spikes, meta.adc_range_v, min_run=1):
         res.exclude(Problem(ProblemKind.CLIPPING,
                             "clipping at the ADC rails (a sample at a rail that is not a single-sample spike)"))
+    return t, raw, cond
+
+
+def _contact(res: ImpactResult, t, raw, cond, meta):
+    """The contact of the conditioned trace with its problems and TC [ms]; None when there is no usable one."""
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
     res.tau_s = cond.tau_s
     contact = cond.contact
     wrong_sign = _opposite_pulse_reason(raw, meta.polarity)
     if wrong_sign is not None:
-        return res.exclude(wrong_sign)
+        res.exclude(wrong_sign)
+        return None
     if not contact.found:
-        return res.exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
+        res.exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
+        return None
     res.raw_time_s = t - contact.start_s
     if contact.n_impacts > 1:
         seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
@@ -267,7 +293,11 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     if _out_of_bounds("contact_time_ms", tc_ms):
         res.exclude(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
                             f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}"))
+    return contact
 
+
+def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:
+    """kCAL from the impulse, force, velocity, displacement, peak and Kelvin-Voigt kB, cB (Eqs. 2, 3)."""
     t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s)
     res.time_s = t_rel
     res.voltage_V = v_contact
