@@ -31,13 +31,14 @@ test: setup
 bench: setup
 	$(BIN)/python bench/run.py
 
-# Mutation testing of model.py, gates.py and calibration.py against their own fast tests
-# (mutmut 3, config in pyproject.toml [tool.mutmut]); not part of `make test` or CI.
-# Budget: 25 min on 2 cores (1122 mutants; measured 13-21 min under load); README "Mutation testing".
+# Mutation testing of the physics modules (model, gates, calibration, conditioning, contact
+# and the core functions of fitting, listed by `bench/mutation_score.py --selection`) against
+# their own fast tests (mutmut 3, config in pyproject.toml [tool.mutmut]); not part of
+# `make test` or CI. Budget and measured time: README "Mutation testing".
 mutation: setup
 	$(BIN)/python -m pip install --quiet -e '.[test,mutation]'
 	rm -rf mutants
-	$(BIN)/mutmut run --max-children $(CORES)
+	$(BIN)/python bench/mutation_score.py --selection | xargs -d '\n' $(BIN)/mutmut run --max-children $(CORES)
 	$(BIN)/python bench/mutation_score.py
 
 clean-results:

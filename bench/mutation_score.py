@@ -2,16 +2,22 @@
 
     python bench/mutation_score.py            # table per module, then the survivors
     python bench/mutation_score.py --json
+    python bench/mutation_score.py --selection  # the mutant name patterns `make mutation` runs
+    python bench/mutation_score.py --checked-only  # score over the mutants a partial run checked
 
 Reads the mutants/src/ballimpact/<module>.py.meta files mutmut 3 writes (exit code of the
 test run per mutant) and bench/mutation_equivalent.txt (mutants judged equivalent: they
 change no behaviour any input can show, each with its reason). Score = (killed + timeout)
 / (mutants - equivalent). A mutant with no test covering its function counts as not killed.
+Only mutants matching SELECTION are counted: whole modules, and the core of fitting.py
+(the model inversion: kB(0), the two stages, the joint least squares and its residual
+scatter; not its interval profiles, outlier search, bootstrap and bands).
 """
 
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import sys
 from collections import Counter
@@ -20,6 +26,17 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 META_DIR = REPO / "mutants" / "src" / "ballimpact"
 EQUIVALENT = REPO / "bench" / "mutation_equivalent.txt"
+
+FITTING_CORE = (
+    "fit_kb0", "_to_theta", "_from_theta", "_theta_bounds", "_simulate", "_least_squares", "_rmse_pct",
+    "_start_grid", "fit_contact_time", "fit_restitution", "_relative_offset", "_batched_lm", "_residuals",
+    "_jacobian", "_full_bounds", "_fit_weighted", "_block_scatter", "_satterthwaite_dof",
+)
+SELECTION = (
+    ["ballimpact.model.*", "ballimpact.gates.*", "ballimpact.calibration.*",
+     "ballimpact.conditioning.*", "ballimpact.contact.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
+    + [f"ballimpact.fitting.x_{name}__mutmut_*" for name in FITTING_CORE]
+)
 
 # mutmut 3.8 (mutmut/stats.py): exit code of the mutant's test run -> status
 STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", 34: "skipped",
@@ -39,14 +56,19 @@ def equivalent_mutants(path: Path = EQUIVALENT) -> dict[str, str]:
     return out
 
 
-def scores(meta_dir: Path = META_DIR) -> dict:
+def scores(meta_dir: Path = META_DIR, checked_only: bool = False) -> dict:
     equivalent = equivalent_mutants()
     table, survivors = {}, []
     for meta in sorted(meta_dir.glob("*.py.meta")):
         codes = json.loads(meta.read_text())["exit_code_by_key"]
         counts = Counter()
         for name, code in codes.items():
+            if not any(fnmatch.fnmatchcase(name, pat) for pat in SELECTION):
+                continue
             status = STATUS.get(code, "suspicious")
+            if checked_only and status == "not checked":
+                counts["not checked"] += 1
+                continue
             if name.removeprefix("ballimpact.") in equivalent and status != "killed":
                 status = "equivalent"
             counts[status] += 1
@@ -54,7 +76,7 @@ def scores(meta_dir: Path = META_DIR) -> dict:
                 survivors.append((name, status))
         total = sum(counts.values())
         detected = counts["killed"] + counts["timeout"] + counts["segfault"]
-        judged = total - counts["equivalent"]
+        judged = total - counts["equivalent"] - (counts["not checked"] if checked_only else 0)
         table[meta.name.removesuffix(".py.meta")] = dict(
             counts, mutants=total, score_pct=round(100.0 * detected / judged, 1) if judged else None)
     return {"modules": table, "not_killed": survivors}
@@ -63,21 +85,28 @@ def scores(meta_dir: Path = META_DIR) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--selection", action="store_true", help="print the mutant name patterns run, one a line")
+    ap.add_argument("--checked-only", action="store_true",
+                    help="score only the mutants that were run (a run stopped early, or run on a subset)")
     args = ap.parse_args(argv)
+    if args.selection:
+        print("\n".join(SELECTION))
+        return 0
     if not META_DIR.exists():
         print(f"no mutmut results in {META_DIR}: run `make mutation` first", file=sys.stderr)
         return 2
-    res = scores()
+    res = scores(checked_only=args.checked_only)
     if args.json:
         print(json.dumps(res, indent=2))
         return 0
-    cols = ("mutants", "killed", "timeout", "equivalent", "survived", "no tests", "score_pct")
+    cols = ("mutants", "killed", "timeout", "equivalent", "survived", "no tests", "not checked", "score_pct")
     print(f"{'module':14s}" + "".join(f"{c:>12s}" for c in cols))
     for mod, c in res["modules"].items():
         print(f"{mod:14s}" + "".join(f"{c.get(k, 0)!s:>12s}" for k in cols))
     print("\nnot killed (and not listed as equivalent):")
     for name, status in res["not_killed"]:
-        print(f"  {name}  [{status}]")
+        if status != "not checked":
+            print(f"  {name}  [{status}]")
     return 0
 
 

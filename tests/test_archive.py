@@ -197,10 +197,29 @@ def test_metadata_validation(kwargs, match):
 
 def test_model_force_agrees_with_truth(ds):
     # the fixture's 'measured' force is the model with Table 2 parameters plus N(0, 3 N) noise,
-    # and the 'fit' is Table 2: the model force must match within the noise
+    # and the 'fit' is Table 2: the true model must pass the check, within the noise
     ok = ds["status"].values == "ok"
     assert_allclose(ds["model_agreement_fraction"].values[ok], 1.0, atol=0)
     assert_allclose(ds["model_rms_N"].values[ok], 3.0, rtol=0.15)
+
+
+@pytest.mark.parametrize("name, factor", [("ak_kN_m", 1.2), ("ak_kN_m", 1 / 1.2), ("ac_kN_s_m3", 1.5)])
+def test_model_force_check_flags_a_wrong_model(ds, name, factor):
+    # The same 'measured' forces (the true model plus 3 N noise) against a model that is
+    # wrong by a known amount: AK 20 % too stiff or too soft, or AC 50 % too large. The
+    # true model leaves an RMS difference of the noise, 3 N (test above); a wrong one must
+    # leave at least 4 times that at every impact. (The agreement fraction, "within 10 % of
+    # the peak after 0.2 ms", stays 1.0 for AK +-20 %: too loose to flag a stiffness error
+    # of that size, so the RMS difference is the part of the check that does.)
+    wrong = ds.copy()
+    wrong[name] = ds[name] * factor
+    checked = archive.add_model_forces(wrong)
+    ok = ds["status"].values == "ok"
+    rms = checked["model_rms_N"].values[ok]
+    assert np.all(np.isfinite(rms))
+    assert np.all(rms > 4 * 3.0), rms
+    # and the model forces themselves moved: never equal to the true model's
+    assert not np.allclose(checked["model_force_N"].values[ok], ds["model_force_N"].values[ok], equal_nan=True)
 
 
 def test_kelvin_voigt_force_starts_at_damping_times_speed(ds):

@@ -1,6 +1,7 @@
 """Tests for ballimpact.conditioning: offset, hum and charge-amplifier decay removal."""
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -12,7 +13,7 @@ from numpy.testing import assert_allclose
 from tracekit import HUM_HARMONICS, make_trace
 
 from ballimpact.calibration import voltage_impulse
-from ballimpact.conditioning import ConditioningWarning, condition_voltage
+from ballimpact.conditioning import MIN_POST_S, ConditioningWarning, condition_voltage
 from ballimpact.problems import ProblemKind
 
 CHAIN = dict(cloth_s=0.1e-3, cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
@@ -53,12 +54,15 @@ def test_corrected_voltage_matches_clean_voltage():
 
 @pytest.mark.parametrize("tau", [0.3, 1.0, 3.0])
 def test_time_constant_estimated(tau):
-    v, fs, _ = make_trace(tau_s=tau, seed=1, **CHAIN)
+    v, fs, truth = make_trace(tau_s=tau, seed=1, **CHAIN)
     c = _quiet(voltage_V=v, sample_rate_hz=fs)
     assert c.tau_source == "estimated"
     assert_allclose(c.tau_s, tau, rtol=0.1)
-    # undershoot = impulse / tau (the amplifier's charge balance)
+    # undershoot = impulse / tau (the amplifier's charge balance): a first-order high-pass
+    # returns the pulse's area A [V s] as a tail of -A/tau just after a short pulse. tau is
+    # estimated within 10 %, so the undershoot is too.
     assert c.undershoot_V > 5 * c.undershoot_se_V
+    assert_allclose(c.undershoot_V, truth.impulse_V_s / tau, rtol=0.1)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -101,26 +105,61 @@ def test_sixty_hertz_mains():
 
 def test_warns_when_post_contact_stretch_too_short():
     v, fs, _ = make_trace(tau_s=0.5, post_s=0.003, seed=0, **CHAIN)
-    with pytest.warns(ConditioningWarning, match="decay not corrected"):
+    # the message names the shortest stretch needed, in ms (MIN_POST_S is in s)
+    needed = rf"at least {MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot"
+    with pytest.warns(ConditioningWarning, match=rf"^charge-amplifier decay not corrected: .*{needed}$"):
         c = condition_voltage(v, fs)
     assert c.tau_source == "none" and math.isinf(c.tau_s)
     assert c.contact.found and c.warnings
 
 
 def test_warns_when_undershoot_not_measurable():
-    # small impulse, large noise, DC-coupled: an undetected decay could matter
-    v, fs, _ = make_trace(peak_V=1.0, noise_V=0.02, seed=0)
-    with pytest.warns(ConditioningWarning, match="undershoot not measurable"):
+    # small impulse, large noise, DC-coupled: an undetected decay could matter. The message
+    # gives the undershoot [mV] with its standard error, and the bias a decay hidden in that
+    # error could cause: a decay kappa = 1/tau left uncorrected loses about kappa T / 2 of an
+    # impulse of duration T, and kappa can hide up to UNDERSHOOT_SIGNIFICANCE standard errors
+    # (the undershoot's error divided by the impulse A).
+    from ballimpact.conditioning import UNDERSHOOT_SIGNIFICANCE
+
+    v, fs, truth = make_trace(peak_V=1.0, noise_V=0.02, seed=0)
+    with pytest.warns(ConditioningWarning, match="undershoot not measurable") as record:
         c = condition_voltage(v, fs)
     assert c.contact.found
+    msg = str(record[0].message)
+    m = re.fullmatch(r"charge-amplifier undershoot not measurable \((\S+) \+/- (\S+) mV\): "
+                     r"the impulse may be off by up to (\S+) %", msg)
+    assert m, msg
+    undershoot_mV, se_mV, bias_pct = (float(g) for g in m.groups())
+    # printed to 3 and 2 significant digits
+    assert_allclose(undershoot_mV, c.undershoot_V * 1e3, rtol=0.005)
+    assert_allclose(se_mV, c.undershoot_se_V * 1e3, rtol=0.05)
+    assert abs(undershoot_mV) < 4 * se_mV  # DC-coupled: no undershoot, within its error
+    kappa_hidden = UNDERSHOOT_SIGNIFICANCE * c.undershoot_se_V / truth.impulse_V_s  # [1/s]
+    assert_allclose(bias_pct, 100 * kappa_hidden * truth.contact_time_s / 2, rtol=0.05)
+    # 0.6 %: above the 0.3 % that excludes the impact
+    assert [(p.kind, p.message) for p in c.problems] == [(ProblemKind.UNDERSHOOT_NOT_MEASURABLE, msg)]
 
 
 def test_warns_when_baseline_rises_after_contact():
     v, fs, truth = make_trace(noise_V=0.002, seed=0)
-    v = v + 0.005 * (truth.time_s > truth.end_s)  # a shift up, not an undershoot
-    with pytest.warns(ConditioningWarning, match="above the one before it"):
+    v = v + 0.005 * (truth.time_s > truth.end_s)  # a shift up by 5 mV, not an undershoot
+    with pytest.warns(ConditioningWarning, match="above the one before it") as record:
         c = condition_voltage(v, fs)
-    assert math.isinf(c.tau_s)
+    assert math.isinf(c.tau_s) and c.tau_source == "none"
+    msg = str(record[0].message)
+    m = re.fullmatch(r"charge-amplifier decay not corrected: the baseline after the contact is (\S+) mV "
+                     r"above the one before it \(expected an undershoot\)", msg)
+    assert m, msg
+    assert_allclose(float(m.group(1)), 5.0, rtol=0.05)  # the 5 mV step, within the noise
+    assert [(p.kind, p.message) for p in c.problems] == [(ProblemKind.DECAY_NOT_CORRECTED, msg)]
+
+
+def test_short_post_contact_problem_says_what_to_give():
+    v, fs, _ = make_trace(tau_s=0.5, post_s=0.003, seed=0)
+    with pytest.warns(ConditioningWarning):
+        c = condition_voltage(v, fs)
+    assert any(p.kind == ProblemKind.DECAY_NOT_CORRECTED
+               and p.message.endswith("to measure the undershoot (give plate.time_constant_s)") for p in c.problems)
 
 
 def test_quiet_dc_coupled_trace_gives_no_warning():

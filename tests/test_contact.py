@@ -1,6 +1,7 @@
 """Tests for ballimpact.contact: sub-sample contact start/end, impact counting, clipping."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -188,6 +189,143 @@ def test_detect_contact_on_noisy_bumps(n, centre, width, amp, noise, seed):
     x = amp * np.clip(np.sin(np.pi * ((u - c0) / width + 0.5)), 0, None) * (np.abs(u - c0) < width / 2)
     x = x + amp * noise * rng.normal(size=n)
     _check_result(detect_contact(x, 1000.0), n, 1000.0, 0.0)
+
+
+# ------------------------------------------------- found by mutation testing (issue 15)
+# Each case is a contract of the docstrings (the rails, the not-found result, the contact's
+# samples) at an edge the tests above did not reach; see README "Mutation testing".
+
+
+def test_clipping_rail_band_is_inclusive_at_both_rails():
+    # a 2-bit ADC over [0, 4] V has an LSB of exactly 1 V: with tolerance_lsb=1, "within one
+    # LSB of a rail" is v >= 3 V or v <= 1 V, the ends included
+    rng_kw = dict(adc_bits=2, tolerance_lsb=1.0)
+    assert detect_clipping([2.0, 3.0, 3.0, 2.0], (0.0, 4.0), **rng_kw)
+    assert detect_clipping([2.0, 1.0, 1.0, 2.0], (0.0, 4.0), **rng_kw)
+    assert not detect_clipping([2.0, 2.999, 2.999, 1.001, 1.001, 2.0], (0.0, 4.0), **rng_kw)
+    # the same band for a 1-bit ADC (LSB 2 V): any sample of [0, 4] is within one LSB of a rail
+    assert detect_clipping([2.0, 2.0], (0.0, 4.0), adc_bits=1, tolerance_lsb=1.0)
+
+
+def test_clipping_default_band_is_one_and_a_half_lsb():
+    # 16-bit ADC over [-10, 10] V: two samples 1 LSB below the top rail clip, 2 LSB below do not
+    lsb = 20.0 / 2**16
+    assert detect_clipping([0.0, 10.0 - lsb, 10.0 - lsb, 0.0], (-10.0, 10.0))
+    assert not detect_clipping([0.0, 10.0 - 2 * lsb, 10.0 - 2 * lsb, 0.0], (-10.0, 10.0))
+    assert detect_clipping([0.0, -10.0 + lsb, -10.0 + lsb, 0.0], (-10.0, 10.0))
+    assert not detect_clipping([0.0, -10.0 + 2 * lsb, -10.0 + 2 * lsb, 0.0], (-10.0, 10.0))
+
+
+def test_clipping_single_sample_run():
+    # min_run=1: one sample at a rail is a clip; min_run=2 needs two in a row
+    v = [0.0, 10.0, 0.0]
+    assert detect_clipping(v, (-10.0, 10.0), min_run=1)
+    assert not detect_clipping(v, (-10.0, 10.0), min_run=2)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"adc_range_V": (1.0, 1.0)}, r"adc_range_V must be \(low, high\) with low < high, got \(1.0, 1.0\)"),
+    ({"adc_bits": 0}, "adc_bits must be positive, got 0"),
+    ({"min_run": 0}, "min_run must be at least 1, got 0"),
+])
+def test_clipping_settings_rejected_with_their_value(kwargs, match):
+    args = {"adc_range_V": (-10.0, 10.0), **kwargs}
+    with pytest.raises(ValueError, match=match):
+        detect_clipping(np.zeros(4), args.pop("adc_range_V"), **args)
+
+
+def test_no_contact_result_is_nan_and_minus_one():
+    # ContactResult's contract when nothing is found: times NaN, indices -1, found False
+    c = detect_contact(np.zeros(500), 1000.0)
+    assert c.found is False
+    assert all(math.isnan(x) for x in (c.start_s, c.end_s, c.edge_start_s, c.edge_end_s))
+    assert (c.start_index, c.end_index) == (-1, -1)
+    assert isinstance(c.peak_index, int) and 0 <= c.peak_index < 500
+
+
+def test_contact_samples_two_samples_and_messages():
+    t_rel, vs = contact_samples([0.0, 1.0], [0.0, 2.0], 0.25, 0.75)  # 2 samples are enough
+    assert_allclose(t_rel, [0.0, 0.5])
+    assert_allclose(vs, [0.5, 1.5])
+    with pytest.raises(ValueError, match="need at least 2 samples, got 1"):
+        contact_samples([0.0], [1.0], 0.0, 0.5)
+    with pytest.raises(ValueError, match="time_s and values must have the same length, got 3 and 2"):
+        contact_samples([0.0, 1.0, 2.0], [0.0, 1.0], 0.5, 1.5)
+
+
+@pytest.mark.parametrize("n", [3, 101])
+def test_contact_samples_accept_only_rounding_outside_the_trace(n):
+    # A contact end may lie outside the trace by rounding of the time axis only: 1e-6 of a
+    # sample interval. Here a 10 kHz trace starting at 5 s, so the interval is 1e-4 s and
+    # the rounding 1e-10 s; 0.5e-10 s outside is accepted, 1.5e-10 s is not.
+    dt = 1e-4
+    t = 5.0 + np.arange(n) * dt
+    v = np.linspace(1.0, 2.0, n)
+    rounding = 1e-6 * dt
+    t_rel, vs = contact_samples(t, v, t[0] - 0.75 * rounding, t[-1] + 0.75 * rounding)
+    assert_allclose([t_rel[0], t_rel[-1]], [0.0, t[-1] - t[0]], atol=1e-12)
+    assert_allclose(vs[[0, -1]], [1.0, 2.0], rtol=1e-12)
+    with pytest.raises(ValueError, match="lies outside the trace"):
+        contact_samples(t, v, t[0] - 1.5 * rounding, t[-1])
+    with pytest.raises(ValueError, match="lies outside the trace"):
+        contact_samples(t, v, t[0], t[-1] + 1.5 * rounding)
+    span = f"{t[-1]:.6g}"
+    with pytest.raises(ValueError, match=rf"s lies outside the trace \[5, {re.escape(span)}\] s"):
+        contact_samples(t, v, t[0], t[-1] + 1e-3)
+
+
+def test_contact_samples_ends_between_the_first_and_last_two_samples():
+    # start between samples 0 and 1, end between the last two: the interpolated ends are the
+    # contact's own, not moved to a sample
+    t = np.arange(5) * 0.1
+    v = 10.0 * t
+    t_rel, vs = contact_samples(t, v, 0.03, 0.37)
+    assert_allclose(t_rel, [0.0, 0.07, 0.17, 0.27, 0.34], atol=1e-12)
+    assert_allclose(vs, [0.3, 1.0, 2.0, 3.0, 3.7], atol=1e-12)
+
+
+def test_contact_samples_on_a_sample_are_not_doubled():
+    # a contact that starts and ends exactly on samples: time strictly increasing, each
+    # sample once (a doubled sample would double its weight in nothing but would break
+    # the strictly increasing time axis of the series)
+    t = np.arange(6) * 0.5
+    t_rel, vs = contact_samples(t, t**2, 0.5, 2.0)
+    assert_allclose(t_rel, [0.0, 0.5, 1.0, 1.5])
+    assert_allclose(vs, [0.25, 1.0, 2.25, 4.0])
+
+
+@pytest.mark.parametrize("ta, tp, tb", [(0.1003, 0.1403, 0.2207), (0.05071, 0.0601, 0.0902)])
+def test_triangular_force_edges_and_ends_at_its_zero_crossings(ta, tp, tb):
+    # A noise-free triangular force (linear rise from ta to the peak at tp, linear fall to
+    # zero at tb, off the sample grid): the force acts exactly from ta to tb, and the lines
+    # through the edges cross zero there too (ContactResult: start/end and edge_start/end)
+    fs = 1000.0
+    t = np.arange(400) / fs
+    x = np.clip(np.minimum((t - ta) / (tp - ta), (tb - t) / (tb - tp)), 0.0, None)
+    c = detect_contact(3.0 * x, fs)
+    assert c.found and c.flags == ()
+    assert_allclose([c.start_s, c.edge_start_s], ta, atol=1e-9)
+    assert_allclose([c.end_s, c.edge_end_s], tb, atol=1e-9)
+    assert_allclose(c.contact_time_s, tb - ta, atol=1e-9)
+
+
+def test_steep_edge_line_through_the_two_samples_around_the_band():
+    # A rise so steep that no sample falls inside the edge band (3-20 % of the peak): the
+    # line through the two samples around it (2 % and 50 % of the peak, both on the linear
+    # rise) still crosses zero where the force starts (flag "edge_fallback")
+    fs = 1000.0
+    t = np.arange(400) / fs
+    ta = 0.1 - 0.02 / 0.48 * 1e-3  # the sample at 0.100 s is at 2 % of the peak, the next at 50 %
+    tp, tb = ta + 1e-3 / 0.48, 0.18
+    x = np.clip(np.minimum((t - ta) / (tp - ta), (tb - t) / (tb - tp)), 0.0, None)
+    c = detect_contact(3.0 * x, fs)
+    assert "edge_fallback" in c.flags
+    assert_allclose([c.edge_start_s, c.start_s], ta, atol=1e-9)
+
+
+def test_clipped_trace_without_contact_still_says_clipped():
+    c = detect_contact(np.zeros(500), 1000.0, raw_voltage_V=np.full(500, 10.0), adc_range_V=(-10.0, 10.0))
+    assert c.found is False and c.clipped is True and c.flags == ("clipped", "no_contact")
 
 
 # ------------------------------------------------------------------ a force that jumps from zero (issue 9)

@@ -16,7 +16,7 @@ import re
 import shutil
 import signal
 import subprocess
-import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -143,25 +143,54 @@ def test_report_pages(demo_run):
     assert len(list((out / "figures" / "qc").glob("*.png"))) == n_excluded
 
 
+# Loaded by every Python process of the interrupted run (PYTHONPATH): the first os.replace
+# onto a file named KILL_AT_REPLACE kills the whole run (Snakemake and its jobs, one process
+# group) at that moment: the writer has filled its temporary file but not renamed it. So the
+# run is always interrupted at the same point, by an event, not by timing.
+_KILL_HOOK = """
+import fnmatch, os, signal
+_pattern = os.environ.get("KILL_AT_REPLACE")
+if _pattern:
+    _replace = os.replace
+
+    def _replace_or_die(src, dst, *args, **kwargs):
+        if fnmatch.fnmatch(os.path.basename(os.fspath(dst)), _pattern):
+            open(os.environ["KILL_MARKER"], "w").write(os.fspath(src))
+            os.killpg(os.getpgrp(), signal.SIGKILL)
+        return _replace(src, dst, *args, **kwargs)
+
+    os.replace = _replace_or_die
+"""
+
+
 def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_path):
     raw = tmp_path / "raw"
     write_session(raw / "cut", SynthConfig(session_id="cut", impacts_per_ball=3, faults_per_kind=1, seed=5))
     for truth in raw.glob("cut.truth.*"):
         truth.unlink()
     results = tmp_path / "results"
+    hook = tmp_path / "hook"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(_KILL_HOOK, encoding="utf-8")
+    marker = tmp_path / "killed_at"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(hook), os.environ.get("PYTHONPATH")])),
+               KILL_AT_REPLACE="impacts.csv", KILL_MARKER=str(marker))
     cmd = [str(SNAKEMAKE), *map(str, _args(tmp_path, raw, results))]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
-    deadline = time.monotonic() + 300
     try:
-        # kill the whole run (snakemake and its jobs) as soon as the first chunk is written
-        while time.monotonic() < deadline and not list((results / "cut" / "work").glob("chunk_*.nc")):
-            if proc.poll() is not None:
-                pytest.fail("the run ended before it could be interrupted")
-            time.sleep(0.05)
-        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=900)  # a generous deadline for a loaded machine: the hook ends the run
     finally:
-        proc.wait()
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert marker.exists(), "the run was not interrupted: no job renamed a file onto impacts.csv"
+    assert proc.returncode == -signal.SIGKILL
+    # killed between the write and the rename of impacts.csv: its temporary file is complete
+    # and still there, the final name absent, and nothing downstream of it was made
+    tmp = Path(marker.read_text(encoding="utf-8"))
+    assert tmp.exists() and tmp.name.startswith(".impacts.csv.") and tmp.parent == results / "cut"
+    assert not (results / "cut" / "impacts.csv").exists()
     # whatever is under a final name is complete (hidden ".<name>.*.tmp*" files are the
     # killed writers' temporaries: never read, removed by the next write of that output)
     final = [p for p in results.rglob("*") if p.is_file() and not p.name.startswith(".")]
