@@ -7,7 +7,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from ballimpact import figures, report
+from ballimpact import archive_read, figures, report
 
 from archive_fixture import make_archive
 
@@ -177,7 +177,7 @@ def test_fit_warnings_and_undetermined_parameters_are_visible(ds, n_balls):
     texts += [cell.get_text().get_text() for table in fig.findobj(match=Table) for cell in table.get_celld().values()]
     assert any(t.endswith("\nnot determined\n(at bound)") for t in texts), texts
     assert not any("[0.300," in t for t in texts)
-    label = figures._label(bad, ball)
+    label = archive_read.ball_label(bad, ball)
     assert any(t.startswith(f"Fit warning 1, {label}: a not determined (at bound); only 41 of 200 bootstrap")
                for t in texts), texts
     assert any(t.endswith("(see fit warning 1)") for t in texts)

@@ -348,12 +348,6 @@ def test_impacts_csv_missing_column_fails_naming_the_file(synth_raw, tmp_path):
 # ------------------------------------------------------------------ ballimpact.pipeline
 
 
-def test_figure_names_agree_with_workflow():
-    text = (REPO / "workflow" / "rules" / "common.smk").read_text(encoding="utf-8")
-    block = re.search(r"FIGURES = \((.*?)\)", text, re.S).group(1)
-    assert tuple(re.findall(r'"(\w+)"', block)) == pipeline.FIGURE_STEMS == FINAL_FIGURES
-
-
 def test_snapshot_session_hashes_every_raw_file(synth_raw, tmp_path):
     session = synth_raw / "s1"
     out = tmp_path / "work" / "session.json"

@@ -7,20 +7,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from ballimpact.figure_registry import FIGURE_STEMS
+
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SNAKEMAKE = BIN / "snakemake"
 BALLIMPACT = BIN / "ballimpact"
 
-FINAL_FIGURES = (
-    "fig7_contact_time_cor",
-    "cor_speed_itf",
-    "fig8_stiffness",
-    "fig9_force_curves",
-    "fig10_components",
-    "fig2b_kelvin_voigt",
-    "kcal",
-)
+FINAL_FIGURES = FIGURE_STEMS  # the PNG stems of every session, from the figure registry
 IMPACTS_CSV_COLUMNS = [  # docs/outputs.md, in order
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",

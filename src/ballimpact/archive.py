@@ -1,6 +1,6 @@
-"""The session archive: per-impact results and ball fits as one CF/ACDD netCDF4 file (xarray at the edge).
+"""The session archive file: its variables, CF/ACDD attributes, assembly and netCDF4 read and write (xarray at the edge).
 
-Layout (one root group, see the shared brief "Intermediate files and the archive"):
+Layout (one root group, see docs/outputs.md):
 
 * dims ``impact``, ``sample`` (contact series, NaN padded), ``raw_sample`` (whole
   trace, NaN padded), ``ball``, ``speed``, ``model_time``, ``stiffness_x``;
@@ -13,10 +13,11 @@ Layout (one root group, see the shared brief "Intermediate files and the archive
   ``ball_label``, ``fit_message``, ``ak_a_correlation`` and the paper's Table 2
   values ``paper_*``;
 * model curves over ``speed``, force components over ``model_time`` (20 m/s) and
-  the stiffness law over ``stiffness_x``.
+  the stiffness law over ``stiffness_x`` (computed by :mod:`ballimpact.model_data`).
 
 Every variable carries ``units`` and ``long_name`` (:data:`VARIABLE_ATTRS`); text
-variables are stored as netCDF variable-length strings.
+variables are stored as netCDF variable-length strings. The CSV tables are made by
+:mod:`ballimpact.tables`, reading an archive by :mod:`ballimpact.archive_read`.
 """
 
 from __future__ import annotations
@@ -29,10 +30,26 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from .atomic import atomic_path
+# The model-derived data and the CSV tables have their own modules; their names stay
+# importable from here for the callers of the archive.
+from .model_data import (  # noqa: F401
+    AGREEMENT_START_S,
+    AGREEMENT_TOLERANCE,
+    COMPONENT_SPEED_M_S,
+    MODEL_TIME_STEPS,
+    SPEED_GRID_M_S,
+    STIFFNESS_X_M,
+    add_model_forces,
+    force_components,
+    itf_drop_test,
+    kelvin_voigt_force,
+    speed_curves,
+    stiffness_curve,
+)
+from .tables import IMPACT_COLUMNS, PARAMETER_COLUMNS, impacts_table, parameters_table  # noqa: F401
 
 __all__ = [
     "IMPACT_COLUMNS",
@@ -58,87 +75,12 @@ __all__ = [
     "open_dataset",
 ]
 
-#: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
-IMPACT_COLUMNS = [
-    "impact_id",
-    "ball",
-    "status",
-    "reason",
-    "vin_m_s",
-    "vout_m_s",
-    "cor",
-    "contact_time_ms",
-    "kcal_N_per_V",
-    "impulse_N_s",
-    "peak_force_N",
-    "time_to_peak_ms",
-    "max_displacement_mm",
-    "kv_stiffness_kN_m",
-    "kv_damping_N_s_m",
-    "used_in_fit",
-    "fit_note",
-    "vin_gate_m_s",
-    "vout_gate_m_s",
-]
-
-#: Columns of results/<session>/parameters.csv, in order: identification (ball,
-#: n_impacts, mass_kg), the parameters in Table 2 units (kb0_kN_m, kb0_source,
-#: ak_kN_m, a, ac_kN_s_m3), the 95 % intervals of the fitted ones (ak, a, ac, then
-#: kb0, NaN when kB(0) came from the config), then the relative fit residuals.
-PARAMETER_COLUMNS = [
-    "ball",
-    "n_impacts",
-    "mass_kg",
-    "kb0_kN_m",
-    "kb0_source",
-    "ak_kN_m",
-    "a",
-    "ac_kN_s_m3",
-    "ak_lo",
-    "ak_hi",
-    "a_lo",
-    "a_hi",
-    "ac_lo",
-    "ac_hi",
-    "kb0_lo",
-    "kb0_hi",
-    "contact_time_rmse_pct",
-    "cor_rmse_pct",
-    "kb_10mm_kN_m",
-    "kb_10mm_lo",
-    "kb_10mm_hi",
-    "kb_20mm_kN_m",
-    "kb_20mm_lo",
-    "kb_20mm_hi",
-    "itf_rebound_pred_cm",  # v1.1: the ITF 254 cm drop test predicted by the fitted model (ballimpact.itf)
-    "itf_rebound_pred_cm_lo",
-    "itf_rebound_pred_cm_hi",
-    "itf_rebound_cm",  # v1.1: the measured rebound from session.yaml, when given
-    "fit_warnings",  # issue 14: empty when all is well (ballimpact.summary.parameter_fit_warnings)
-]
-
 #: Citation of the paper the model comes from (ACDD ``references``).
 PAPER_REFERENCE = (
     "Goodwill S R, Haake S J (2004) Modelling of tennis ball impacts on a rigid surface. "
     "Proc. IMechE Part C 218:1139-1153, doi:10.1243/0954406042369125"
 )
 
-#: Start of the window in which model and measured force are compared [s]
-#: (after the shell buckles, section 4 of Goodwill & Haake 2004).
-AGREEMENT_START_S = 0.2e-3
-#: Model and measurement "agree" when within this fraction of the measured peak force [-].
-AGREEMENT_TOLERANCE = 0.10
-
-#: Inbound speeds of the model curves (Fig. 7) [m/s]: 3-40 m/s, from below the ITF drop test
-#: (about 7 m/s) to above a serve; outside the fitted speeds (``fit_vin_min_m_s`` to
-#: ``fit_vin_max_m_s``) the curves are extrapolations.
-SPEED_GRID_M_S = np.round(np.arange(3.0, 40.0 + 1e-9, 0.5), 10)
-#: Number of 0.01 ms steps of the force components (10 ms, longer than any contact at 20 m/s).
-MODEL_TIME_STEPS = 1000
-#: Inbound speed of the force components (Fig. 10) [m/s].
-COMPONENT_SPEED_M_S = 20.0
-#: Displacements of the stiffness curve (Fig. 8) [m].
-STIFFNESS_X_M = np.linspace(0.0, 0.03, 61)
 
 _AK_UNITS = "kN m-(1+a)"
 #: ACDD-1.3 ``keywords`` of every archive.
@@ -382,24 +324,6 @@ def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset
     return ds
 
 
-def _kelvin_voigt_force(time_s: np.ndarray, vin, mass, kv_kN_m, kv_N_s_m) -> np.ndarray:
-    """Kelvin-Voigt force on the impact's own time samples (NaN where undefined)."""
-    from .model import simulate_kelvin_voigt
-
-    out = np.full(time_s.shape, np.nan)
-    kb = kv_kN_m * 1e3
-    ok = np.isfinite(time_s)
-    values = (vin, mass, kb, kv_N_s_m)
-    if not ok.any() or not all(np.isfinite(v) for v in values) or min(vin, mass, kb) <= 0 or kv_N_s_m < 0:
-        return out
-    try:
-        _, _, force = simulate_kelvin_voigt(time_s[ok], vin, mass, kb, kv_N_s_m)
-    except ValueError:  # overdamped or otherwise outside the analytic solution
-        return out
-    out[ok] = force
-    return out
-
-
 def impacts_dataset(
     results: Iterable,
     *,
@@ -434,16 +358,28 @@ def impacts_dataset(
     if max_raw_samples is not None and (int(max_raw_samples) != max_raw_samples or max_raw_samples < 2):
         raise ValueError(f"max_raw_samples must be an integer >= 2 or None, got {max_raw_samples!r}")
     trace_info = {} if trace_info is None else dict(trace_info)
-
-    ids, text = [], {k: [] for k in _TEXT_PER_IMPACT}
-    scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
-    series = {k: [] for k in _SERIES}
-    raw_t, raw_v = [], []
+    columns = _ImpactColumns()
     for r in results:
+        columns.add(r, trace_info, max_raw_samples)
+    return set_variable_attrs(columns.dataset())
+
+
+class _ImpactColumns:
+    """The per-impact variables of the archive, filled one processed impact at a time."""
+
+    def __init__(self):
+        self.ids = []
+        self.text = {k: [] for k in _TEXT_PER_IMPACT}
+        self.scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
+        self.series = {k: [] for k in _SERIES}
+        self.raw_t, self.raw_v = [], []
+
+    def add(self, r, trace_info, max_raw_samples) -> None:
+        """Append one ImpactResult-like object (validated: unique id, status, series lengths)."""
         impact_id = str(r.impact_id)
-        if impact_id in ids:
+        if impact_id in self.ids:
             raise ValueError(f"duplicate impact_id {impact_id!r} in the results")
-        ids.append(impact_id)
+        self.ids.append(impact_id)
         status = str(r.status)
         if status not in ("ok", "excluded"):
             raise ValueError(f"impact {impact_id}: status must be 'ok' or 'excluded', got {status!r}")
@@ -451,13 +387,17 @@ def impacts_dataset(
             impact_id,
             (getattr(r, "trace_file", None) or getattr(r, "trace", None) or "", getattr(r, "trace_sha256", "") or ""),
         )
-        text["impact_ball"].append(r.ball)
-        text["status"].append(status)
-        text["reason"].append("" if status == "ok" else (r.reason or ""))
-        text["trace_file"].append(trace_file)
-        text["trace_sha256"].append(trace_sha)
+        self.text["impact_ball"].append(r.ball)
+        self.text["status"].append(status)
+        self.text["reason"].append("" if status == "ok" else (r.reason or ""))
+        self.text["trace_file"].append(trace_file)
+        self.text["trace_sha256"].append(trace_sha)
         for name, attr in _PER_IMPACT_SCALARS:
-            scalars[name].append(_float(getattr(r, attr, math.nan)))
+            self.scalars[name].append(_float(getattr(r, attr, math.nan)))
+        self._add_series(r, impact_id)
+        self._add_raw(r, impact_id, max_raw_samples)
+
+    def _add_series(self, r, impact_id) -> None:
         n = _as_1d(getattr(r, "time_s", None)).size
         for k in _SERIES:
             arr = _as_1d(getattr(r, k, None))
@@ -465,7 +405,9 @@ def impacts_dataset(
                 raise ValueError(
                     f"impact {impact_id}: series {k} has {arr.size} samples but time_s has {n}"
                 )
-            series[k].append(arr)
+            self.series[k].append(arr)
+
+    def _add_raw(self, r, impact_id, max_raw_samples) -> None:
         rt, rv = _as_1d(getattr(r, "raw_time_s", None)), _as_1d(getattr(r, "raw_voltage_V", None))
         if rt.size != rv.size:
             raise ValueError(
@@ -474,31 +416,33 @@ def impacts_dataset(
         if max_raw_samples is not None and rv.size > max_raw_samples:
             step = math.ceil(rv.size / max_raw_samples)
             rt, rv = rt[::step], rv[::step]
-        raw_t.append(rt)
-        raw_v.append(rv)
+        self.raw_t.append(rt)
+        self.raw_v.append(rv)
 
-    n_sample = max([s.size for s in series["time_s"]] + [1])
-    n_raw = max([s.size for s in raw_v] + [1])
-    dims, raw_dims = ("impact", "sample"), ("impact", "raw_sample")
-    data_vars = {k: ("impact", _text_array(v)) for k, v in text.items()}
-    data_vars.update({k: ("impact", np.asarray(v, dtype=float)) for k, v in scalars.items()})
-    for k in _SERIES:
-        data_vars[k] = (dims, _pad(series[k], n_sample, np.float64))
-    kv = [
-        _kelvin_voigt_force(
-            t, scalars["vin_m_s"][i], scalars["impact_mass_kg"][i],
-            scalars["kv_stiffness_kN_m"][i], scalars["kv_damping_N_s_m"][i],
-        )
-        for i, t in enumerate(series["time_s"])
-    ]
-    data_vars["kv_force_N"] = (dims, _pad(kv, n_sample, np.float64))
-    data_vars["model_force_N"] = (dims, np.full((len(ids), n_sample), np.nan))
-    data_vars["model_agreement_fraction"] = ("impact", np.full(len(ids), np.nan))
-    data_vars["model_rms_N"] = ("impact", np.full(len(ids), np.nan))
-    data_vars["raw_time_s"] = (raw_dims, _pad(raw_t, n_raw, np.float32))
-    data_vars["raw_voltage_V"] = (raw_dims, _pad(raw_v, n_raw, np.float32))
-    ds = xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(ids))})
-    return set_variable_attrs(ds)
+    def dataset(self) -> xr.Dataset:
+        """The per-impact dataset (series NaN padded, model forces NaN until fitted)."""
+        scalars, n_impact = self.scalars, len(self.ids)
+        n_sample = max([s.size for s in self.series["time_s"]] + [1])
+        n_raw = max([s.size for s in self.raw_v] + [1])
+        dims, raw_dims = ("impact", "sample"), ("impact", "raw_sample")
+        data_vars = {k: ("impact", _text_array(v)) for k, v in self.text.items()}
+        data_vars.update({k: ("impact", np.asarray(v, dtype=float)) for k, v in scalars.items()})
+        for k in _SERIES:
+            data_vars[k] = (dims, _pad(self.series[k], n_sample, np.float64))
+        kv = [
+            kelvin_voigt_force(
+                t, scalars["vin_m_s"][i], scalars["impact_mass_kg"][i],
+                scalars["kv_stiffness_kN_m"][i], scalars["kv_damping_N_s_m"][i],
+            )
+            for i, t in enumerate(self.series["time_s"])
+        ]
+        data_vars["kv_force_N"] = (dims, _pad(kv, n_sample, np.float64))
+        data_vars["model_force_N"] = (dims, np.full((n_impact, n_sample), np.nan))
+        data_vars["model_agreement_fraction"] = ("impact", np.full(n_impact, np.nan))
+        data_vars["model_rms_N"] = ("impact", np.full(n_impact, np.nan))
+        data_vars["raw_time_s"] = (raw_dims, _pad(self.raw_t, n_raw, np.float32))
+        data_vars["raw_voltage_V"] = (raw_dims, _pad(self.raw_v, n_raw, np.float32))
+        return xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(self.ids))})
 
 
 def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:
@@ -583,93 +527,27 @@ def fit_dataset(
     -------
     xarray.Dataset
     """
-    from .model import TIME_STEP_S, simulate_impact, structural_stiffness
+    from .model import TIME_STEP_S
 
     if not isinstance(ball, str) or not ball:
         raise ValueError(f"ball must be a non-empty ball type key, got {ball!r}")
-    nan = math.nan
-    n_speed, n_x = SPEED_GRID_M_S.size, STIFFNESS_X_M.size
-    curves = {k: np.full(n_speed, nan) for k in (
-        "model_contact_time_ms", "model_contact_time_ms_lo", "model_contact_time_ms_hi",
-        "model_cor", "model_cor_lo", "model_cor_hi", "model_peak_force_N",
-        "model_contact_time_ms_pred_lo", "model_contact_time_ms_pred_hi", "model_cor_pred_lo", "model_cor_pred_hi")}
-    comps = {k: np.full(MODEL_TIME_STEPS, nan) for k in (
-        "comp_total_force_N", "comp_stiffness_force_N", "comp_damping_force_N",
-        "comp_momentum_flux_force_N", "comp_displacement_m")}
-    stiffness = np.full(n_x, nan)
-    params = {k: nan for k in (
-        "kb0_kN_m", "kb0_lo", "kb0_hi", "ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi",
-        "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct",
-        "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m", "kb_20mm_lo", "kb_20mm_hi",
-        "contact_time_scatter_pct", "cor_scatter_pct", "bootstrap_dropped")}
     if fit is None:
+        params = dict.fromkeys(_FIT_PARAMETERS, math.nan)
         text = {"kb0_source": kb0_source, "fit_message": message or "no fit", "interval_method": "none"}
         mass, n_used = float(mass_kg), int(n_impacts)
     else:
-        from .fitting import model_curves
-
-        kn = 1e3
-        params.update(
-            kb0_kN_m=fit.kb0_N_m / kn, kb0_lo=fit.kb0_lo / kn, kb0_hi=fit.kb0_hi / kn,
-            ak_kN_m=fit.ak / kn, ak_lo=fit.ak_lo / kn, ak_hi=fit.ak_hi / kn,
-            a=fit.a, a_lo=fit.a_lo, a_hi=fit.a_hi,
-            ac_kN_s_m3=fit.ac / kn, ac_lo=fit.ac_lo / kn, ac_hi=fit.ac_hi / kn,
-            ak_a_correlation=fit.ak_a_correlation,
-            contact_time_rmse_pct=fit.contact_time_rmse_pct, cor_rmse_pct=fit.cor_rmse_pct,
-        )
-        # v1.1: the well-determined stiffness at 10 and 20 mm, scatter and bootstrap drops
-        # (getattr: a fit object without them leaves NaN)
-        for mm in (10, 20):
-            for name, attr in ((f"kb_{mm}mm_kN_m", f"kb_{mm}mm_N_m"), (f"kb_{mm}mm_lo", f"kb_{mm}mm_lo"),
-                               (f"kb_{mm}mm_hi", f"kb_{mm}mm_hi")):
-                params[name] = float(getattr(fit, attr, nan)) / kn
-        params["contact_time_scatter_pct"] = 100.0 * float(getattr(fit, "contact_time_scatter", nan))
-        params["cor_scatter_pct"] = 100.0 * float(getattr(fit, "cor_scatter", nan))
-        params["bootstrap_dropped"] = float(getattr(fit, "bootstrap_dropped", nan))
-        notes = list(getattr(fit, "messages", None) or [])
-        if message:
-            notes.append(message)
-        text = {
-            "kb0_source": fit.kb0_source,
-            "fit_message": "; ".join(["ok"] + notes),
-            "interval_method": str(getattr(fit, "interval_method", "") or "none"),
-        }
+        params, text = _fit_parameters(fit), _fit_text(fit, message)
         mass, n_used = float(fit.mass_kg), int(fit.n_impacts)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            mc = model_curves(fit, SPEED_GRID_M_S)
-            comp = simulate_impact(COMPONENT_SPEED_M_S, fit.mass_kg, fit.kb0_N_m, fit.ak, fit.a, fit.ac,
-                                   record=True)
-        for key, src, scale in (
-            ("model_contact_time_ms", "contact_time_s", 1e3), ("model_contact_time_ms_lo", "contact_time_s_lo", 1e3),
-            ("model_contact_time_ms_hi", "contact_time_s_hi", 1e3), ("model_cor", "cor", 1.0),
-            ("model_cor_lo", "cor_lo", 1.0), ("model_cor_hi", "cor_hi", 1.0),
-            ("model_peak_force_N", "peak_force_N", 1.0),
-            ("model_contact_time_ms_pred_lo", "contact_time_s_pred_lo", 1e3),
-            ("model_contact_time_ms_pred_hi", "contact_time_s_pred_hi", 1e3),
-            ("model_cor_pred_lo", "cor_pred_lo", 1.0), ("model_cor_pred_hi", "cor_pred_hi", 1.0),
-        ):
-            if src in mc:
-                curves[key] = np.asarray(mc[src], dtype=float) * scale
-        m = min(comp.time_s.size, MODEL_TIME_STEPS)
-        for key, arr in (
-            ("comp_total_force_N", comp.force_N), ("comp_stiffness_force_N", comp.stiffness_force_N),
-            ("comp_damping_force_N", comp.damping_force_N),
-            ("comp_momentum_flux_force_N", comp.momentum_flux_force_N),
-            ("comp_displacement_m", comp.displacement_m),
-        ):
-            comps[key][:m] = np.asarray(arr, dtype=float)[:m]
-        stiffness = structural_stiffness(STIFFNESS_X_M, fit.kb0_N_m, fit.ak, fit.a) / 1e3
     data = {k: ("ball", np.array([v], dtype=float)) for k, v in params.items()}
     data.update({k: ("ball", _text_array([v])) for k, v in text.items()})
     data["ball_label"] = ("ball", _text_array([label or ball]))
     data["mass_kg"] = ("ball", np.array([mass], dtype=float))
     data["n_impacts"] = ("ball", np.array([n_used], dtype=np.int64))
-    data.update({k: ("ball", np.array([v], dtype=float)) for k, v in _itf_and_range(
+    data.update({k: ("ball", np.array([v], dtype=float)) for k, v in itf_drop_test(
         fit, mass, fit_vin_range_m_s, itf_rebound_cm, diameter_m, air_density_kg_m3).items()})
-    data.update({k: (("ball", "speed"), v[None, :]) for k, v in curves.items()})
-    data.update({k: (("ball", "model_time"), v[None, :]) for k, v in comps.items()})
-    data["model_stiffness_kN_m"] = (("ball", "stiffness_x"), np.asarray(stiffness, dtype=float)[None, :])
+    data.update({k: (("ball", "speed"), v[None, :]) for k, v in speed_curves(fit).items()})
+    data.update({k: (("ball", "model_time"), v[None, :]) for k, v in force_components(fit).items()})
+    data["model_stiffness_kN_m"] = (("ball", "stiffness_x"), stiffness_curve(fit)[None, :])
     ds = xr.Dataset(
         data,
         coords={
@@ -683,85 +561,47 @@ def fit_dataset(
     return set_variable_attrs(ds)
 
 
-def _fitted_si(ds: xr.Dataset, ball: str) -> tuple[float, float, float, float, float] | None:
-    """(mass_kg, kb0_N_m, ak, a, ac) in SI for one ball, None when any is missing or NaN."""
-    names = ("mass_kg", "kb0_kN_m", "ak_kN_m", "a", "ac_kN_s_m3")
-    if "ball" not in ds.coords or any(n not in ds for n in names):
-        return None
-    idx = np.flatnonzero(ds["ball"].values.astype(str) == ball)
-    if idx.size == 0:
-        return None
-    m, kb0, ak, a, ac = (float(ds[n].values[idx[0]]) for n in names)
-    values = (m, kb0 * 1e3, ak * 1e3, a, ac * 1e3)
-    if not all(np.isfinite(values)) or m <= 0 or a <= 0 or min(values) < 0:
-        return None
-    return values
+#: Per-ball numbers of :func:`fit_dataset`, in archive order (NaN without a fit).
+_FIT_PARAMETERS = (
+    "kb0_kN_m", "kb0_lo", "kb0_hi", "ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi",
+    "ac_kN_s_m3", "ac_lo", "ac_hi", "ak_a_correlation", "contact_time_rmse_pct", "cor_rmse_pct",
+    "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m", "kb_20mm_lo", "kb_20mm_hi",
+    "contact_time_scatter_pct", "cor_scatter_pct", "bootstrap_dropped")
 
 
-def add_model_forces(ds: xr.Dataset) -> xr.Dataset:
-    """Fill ``model_force_N``, ``model_agreement_fraction`` and ``model_rms_N`` from the fitted parameters.
+def _fit_parameters(fit) -> dict[str, float]:
+    """The numbers of :data:`_FIT_PARAMETERS` from a fit, in Table 2 units (kN, %)."""
+    nan, kn = math.nan, 1e3
+    params = dict(
+        kb0_kN_m=fit.kb0_N_m / kn, kb0_lo=fit.kb0_lo / kn, kb0_hi=fit.kb0_hi / kn,
+        ak_kN_m=fit.ak / kn, ak_lo=fit.ak_lo / kn, ak_hi=fit.ak_hi / kn,
+        a=fit.a, a_lo=fit.a_lo, a_hi=fit.a_hi,
+        ac_kN_s_m3=fit.ac / kn, ac_lo=fit.ac_lo / kn, ac_hi=fit.ac_hi / kn,
+        ak_a_correlation=fit.ak_a_correlation,
+        contact_time_rmse_pct=fit.contact_time_rmse_pct, cor_rmse_pct=fit.cor_rmse_pct,
+    )
+    # v1.1: the well-determined stiffness at 10 and 20 mm, scatter and bootstrap drops
+    # (getattr: a fit object without them leaves NaN)
+    for mm in (10, 20):
+        for name, attr in ((f"kb_{mm}mm_kN_m", f"kb_{mm}mm_N_m"), (f"kb_{mm}mm_lo", f"kb_{mm}mm_lo"),
+                           (f"kb_{mm}mm_hi", f"kb_{mm}mm_hi")):
+            params[name] = float(getattr(fit, attr, nan)) / kn
+    params["contact_time_scatter_pct"] = 100.0 * float(getattr(fit, "contact_time_scatter", nan))
+    params["cor_scatter_pct"] = 100.0 * float(getattr(fit, "cor_scatter", nan))
+    params["bootstrap_dropped"] = float(getattr(fit, "bootstrap_dropped", nan))
+    return {k: params[k] for k in _FIT_PARAMETERS}
 
-    For every impact with a contact series, a finite inbound speed and a ball with
-    finite fitted parameters, the improved model (Eq. (14) in Goodwill & Haake
-    2004, :func:`ballimpact.model.simulate_impact`) is run at the impact's inbound
-    speed and mass and interpolated onto its ``time_s``; after the model's end of
-    contact its force is 0. The agreement fraction is the share of samples with
-    ``time_s`` >= :data:`AGREEMENT_START_S` where the model is within
-    :data:`AGREEMENT_TOLERANCE` of the measured peak force (section 4 of the paper);
-    the RMS difference is taken over the whole contact.
 
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        Archive holding the per-impact part and the per-ball fitted parameters.
-
-    Returns
-    -------
-    xarray.Dataset
-        A copy with the three variables filled (NaN where no model applies).
-    """
-    from .model import simulate_impact
-
-    ds = ds.copy()
-    n_impact, n_sample = ds.sizes.get("impact", 0), ds.sizes.get("sample", 0)
-    model_force = np.full((n_impact, n_sample), np.nan)
-    agreement = np.full(n_impact, np.nan)
-    rms = np.full(n_impact, np.nan)
-    balls = ds["impact_ball"].values.astype(str) if n_impact else np.array([], dtype=str)
-    for ball in np.unique(balls):
-        params = _fitted_si(ds, ball)
-        if params is None:
-            continue
-        _, kb0, ak, a, ac = params
-        for i in np.flatnonzero(balls == ball):
-            t = ds["time_s"].values[i]
-            f_meas = ds["force_N"].values[i]
-            vin = float(ds["vin_m_s"].values[i])
-            mass = float(ds["impact_mass_kg"].values[i]) if "impact_mass_kg" in ds else params[0]
-            if not np.isfinite(mass) or mass <= 0:
-                mass = params[0]
-            ok = np.isfinite(t) & np.isfinite(f_meas)
-            if ok.sum() < 2 or not np.isfinite(vin) or vin <= 0:
-                continue
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                sim = simulate_impact(vin, mass, kb0, ak, a, ac, record=True)
-            ts, fs = sim.time_s, np.asarray(sim.force_N)
-            good = np.isfinite(fs)
-            if good.sum() < 2:
-                continue
-            f_model = np.interp(t[ok], ts[good], fs[good], right=0.0)
-            model_force[i, ok] = f_model
-            diff = f_model - f_meas[ok]
-            rms[i] = float(np.sqrt(np.mean(diff**2)))
-            peak = np.nanmax(f_meas[ok])
-            late = t[ok] >= AGREEMENT_START_S
-            if late.any() and peak > 0:
-                agreement[i] = float(np.mean(np.abs(diff[late]) <= AGREEMENT_TOLERANCE * peak))
-    ds["model_force_N"] = (("impact", "sample"), model_force)
-    ds["model_agreement_fraction"] = ("impact", agreement)
-    ds["model_rms_N"] = ("impact", rms)
-    return set_variable_attrs(ds)
+def _fit_text(fit, message: str) -> dict[str, str]:
+    """kb0_source, fit_message and interval_method of a fit."""
+    notes = list(getattr(fit, "messages", None) or [])
+    if message:
+        notes.append(message)
+    return {
+        "kb0_source": fit.kb0_source,
+        "fit_message": "; ".join(["ok"] + notes),
+        "interval_method": str(getattr(fit, "interval_method", "") or "none"),
+    }
 
 
 def assemble_archive(impacts: xr.Dataset, fits: Iterable[xr.Dataset]) -> xr.Dataset:
@@ -805,115 +645,6 @@ def assemble_archive(impacts: xr.Dataset, fits: Iterable[xr.Dataset]) -> xr.Data
         ds = ds.assign_coords(ball=_text_array(ds["ball"].values))
     ds = add_model_forces(ds) if "ball" in ds.coords else ds
     return set_variable_attrs(ds)
-
-
-def _itf_and_range(fit, mass_kg, fit_vin_range_m_s, itf_rebound_cm, diameter_m, air_density_kg_m3) -> dict:
-    """Per-ball fitted speed range and ITF drop test (predicted by ``fit``, and measured), archive units."""
-    from .flight import AIR_DENSITY_KG_M3, BALL_DIAMETER_M
-    from .itf import drop_impact_speed, drop_test_cor, predict_itf_rebound, predict_itf_rebound_interval
-
-    lo, hi = (float(v) for v in fit_vin_range_m_s)
-    flight_kw = {"diameter_m": BALL_DIAMETER_M if diameter_m is None else float(diameter_m),
-                 "air_density_kg_m3": AIR_DENSITY_KG_M3 if air_density_kg_m3 is None else float(air_density_kg_m3)}
-    out = {k: math.nan for k in ("itf_impact_speed_m_s", "itf_model_cor", "itf_rebound_pred_cm",
-                                 "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm",
-                                 "itf_drop_test_cor")}
-    out.update(fit_vin_min_m_s=lo, fit_vin_max_m_s=hi)
-    mass_ok = math.isfinite(mass_kg) and mass_kg > 0
-    if mass_ok:
-        out["itf_impact_speed_m_s"] = float(drop_impact_speed(mass_kg, **flight_kw))
-    if itf_rebound_cm is not None and math.isfinite(float(itf_rebound_cm)):
-        out["itf_rebound_cm"] = float(itf_rebound_cm)
-        if mass_ok:
-            out["itf_drop_test_cor"] = float(drop_test_cor(float(itf_rebound_cm) / 100.0, mass_kg, **flight_kw))
-    if fit is not None and mass_ok:
-        params = (fit.kb0_N_m, fit.ak, fit.a, fit.ac)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            best, p_lo, p_hi = predict_itf_rebound_interval(mass_kg, params, getattr(fit, "bootstrap", None),
-                                                            **flight_kw)
-            out["itf_model_cor"] = float(predict_itf_rebound(mass_kg, *params, **flight_kw).cor)
-        out.update(itf_rebound_pred_cm=best * 100.0, itf_rebound_pred_cm_lo=p_lo * 100.0,
-                   itf_rebound_pred_cm_hi=p_hi * 100.0)
-    return out
-
-
-def _column(ds: xr.Dataset, name: str, n: int, *, text: bool = False):
-    if name in ds.variables:
-        values = ds[name].values
-        return [("" if v is None else str(v)) for v in values] if text else values
-    return [""] * n if text else np.full(n, np.nan)
-
-
-def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
-    """The impacts.csv table: one row per impact in raw order, columns :data:`IMPACT_COLUMNS`.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        Archive (or its per-impact part).
-
-    Returns
-    -------
-    pandas.DataFrame
-        SI columns as named in docs/outputs.md; ``reason`` is empty for ok impacts.
-    """
-    n = ds.sizes.get("impact", 0)
-    data = {}
-    for col in IMPACT_COLUMNS:
-        if col == "impact_id":
-            data[col] = _column(ds, "impact_id", n, text=True)
-        elif col == "ball":
-            data[col] = _column(ds, "impact_ball", n, text=True)
-        elif col in ("status", "reason"):
-            data[col] = _column(ds, col, n, text=True)
-        elif col == "used_in_fit":
-            # v1.1: set by the fit-outlier search; without it every ok impact is used
-            ok = np.array(_column(ds, "status", n, text=True)) == "ok"
-            if "used_in_fit" in ds.variables:
-                ok &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
-            data[col] = np.where(ok, "true", "false")
-        elif col == "fit_note":
-            data[col] = _column(ds, col, n, text=True)
-        else:
-            data[col] = np.asarray(_column(ds, col, n), dtype=float)
-    table = pd.DataFrame(data, columns=IMPACT_COLUMNS)
-    table.loc[table["status"] == "ok", "reason"] = ""
-    return table
-
-
-def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
-    """The parameters.csv table: one row per ball type, columns :data:`PARAMETER_COLUMNS`.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        Archive with the per-ball variables (missing ones give NaN / empty cells).
-
-    Returns
-    -------
-    pandas.DataFrame
-        Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
-        a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
-    """
-    from .summary import parameter_fit_warnings
-
-    n = ds.sizes.get("ball", 0)
-    data = {}
-    for col in PARAMETER_COLUMNS:
-        if col == "fit_warnings":
-            data["fit_message"] = _column(ds, "fit_message", n, text=True)
-        elif col in ("ball", "kb0_source"):
-            data[col] = _column(ds, col, n, text=True)
-        elif col == "n_impacts":
-            values = np.asarray(_column(ds, col, n), dtype=float)
-            data[col] = pd.array(
-                [int(v) if np.isfinite(v) else pd.NA for v in values], dtype="Int64"
-            )
-        else:
-            data[col] = np.asarray(_column(ds, col, n), dtype=float)
-    table = pd.DataFrame(data, columns=[c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS])
-    return parameter_fit_warnings(table)[PARAMETER_COLUMNS]
 
 
 def _utc_now() -> str:
@@ -963,25 +694,10 @@ def add_metadata(
     bad = [k for k, v in dict(raw_sha256).items() if not isinstance(k, str) or not isinstance(v, str)]
     if bad:
         raise ValueError(f"raw_sha256 must map str paths to str digests; bad key(s): {bad[:3]}")
-    meta = {}
-    try:
-        import yaml
-
-        parsed = yaml.safe_load(session_yaml_text) or {}
-        meta = parsed if isinstance(parsed, dict) else {}
-    except Exception:  # the text is archived as is; a parse failure only loses the summary fields
-        meta = {}
+    meta = _session_meta(session_yaml_text)
     created = _utc_now()
     description = str(meta.get("description", "") or "")
-    kind = "synthetic session from the ballimpact generator" if synthetic else "laboratory session"
-    summary = (
-        f"Normal impacts of tennis balls on a rigid force platform ({kind} {session_id}): "
-        "per-impact light-gate speeds, COR, contact time, calibrated force, centre-of-mass "
-        "velocity and displacement, and the Goodwill & Haake (2004) viscoelastic ball model "
-        "fitted per ball type."
-    )
-    if description:
-        summary += f" Session description: {description}"
+    summary = _acdd_summary(session_id, synthetic, description)
     out = ds.copy()
     out.attrs = dict(ds.attrs)
     out.attrs.update(
@@ -1010,6 +726,31 @@ def add_metadata(
         }
     )
     return out
+
+
+def _session_meta(session_yaml_text: str) -> dict:
+    """The session.yaml mapping, or {} when the text does not parse (it is archived as is)."""
+    try:
+        import yaml
+
+        parsed = yaml.safe_load(session_yaml_text) or {}
+        return parsed if isinstance(parsed, dict) else {}
+    except Exception:  # the text is archived as is; a parse failure only loses the summary fields
+        return {}
+
+
+def _acdd_summary(session_id: str, synthetic: bool, description: str) -> str:
+    """The ACDD ``summary`` attribute: what the archive holds, and the session's description."""
+    kind = "synthetic session from the ballimpact generator" if synthetic else "laboratory session"
+    summary = (
+        f"Normal impacts of tennis balls on a rigid force platform ({kind} {session_id}): "
+        "per-impact light-gate speeds, COR, contact time, calibrated force, centre-of-mass "
+        "velocity and displacement, and the Goodwill & Haake (2004) viscoelastic ball model "
+        "fitted per ball type."
+    )
+    if description:
+        summary += f" Session description: {description}"
+    return summary
 
 
 def _encoding(ds: xr.Dataset) -> dict:

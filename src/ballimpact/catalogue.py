@@ -564,13 +564,44 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
 
     from . import archive
 
-    pooled_balls = dict(pooled_balls or {})
     session_ids = list(dict.fromkeys(table["session_id"])) if len(table) else []
     ball_keys = list(dict.fromkeys(table["ball"])) if len(table) else []
-    ns, nb = len(session_ids), len(ball_keys)
     speeds = np.asarray(archive.SPEED_GRID_M_S, dtype=float)
     si = {s: i for i, s in enumerate(session_ids)}
     bi = {b: i for i, b in enumerate(ball_keys)}
+    data = _table_variables(table, si, bi)
+    data.update(_curve_variables(sessions, dict(pooled_balls or {}), si, bi, speeds))
+    dates = dict(zip(table["session_id"], table["session_date"]))
+    pooled_of = dict(zip(table["session_id"], table["pooled_sessions"]))
+    data["session_date"] = ("session", np.array([str(dates[s]) for s in session_ids], dtype=object))
+    data["pooled_sessions"] = ("session", np.array([str(pooled_of[s]) for s in session_ids], dtype=object))
+    data.update(_per_ball_variables(tests, ranking, bi))
+    ds = xr.Dataset(data, coords={
+        "session": np.array(session_ids, dtype=object),
+        "ball": np.array(ball_keys, dtype=object),
+        "speed_m_s": ("speed", speeds),
+    })
+    for name, (units, long_name) in _catalogue_variable_attrs().items():
+        ds[name].attrs.update(units=units, long_name=long_name)
+    for name in ds.variables:  # parameters.csv columns this version does not know (added later)
+        if name not in archive.VARIABLE_ATTRS and "units" not in ds[name].attrs:
+            ds[name].attrs.update(units="1", long_name=name.replace("_", " "))
+    ds = archive.set_variable_attrs(ds)
+    ds.attrs.update({
+        "title": "Catalogue of tennis ball impact sessions",
+        "summary": "Fitted Goodwill & Haake (2004) ball model parameters of every session x ball type, "
+                   "pooled fits, change tests between sessions and a ranking of the ball types.",
+        "Conventions": "CF-1.10, ACDD-1.3",
+        "references": archive.PAPER_REFERENCE,
+        "reference_speed_m_s": REFERENCE_SPEED_M_S,
+        "change_alpha": CHANGE_ALPHA,
+    })
+    return ds
+
+
+def _table_variables(table: pd.DataFrame, si: Mapping[str, int], bi: Mapping[str, int]) -> dict:
+    """Every column of catalogue.csv (but the ids) on (session, ball): text or float, units of the table."""
+    ns, nb = len(si), len(bi)
     data = {}
     for col in table.columns:
         if col in ("session_id", "ball", "session_date", "pooled_sessions"):
@@ -589,7 +620,12 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
             else:
                 arr[si[row["session_id"]], bi[row["ball"]]] = float(value) if pd.notna(value) else np.nan
         data[col] = (("session", "ball"), arr)
-    curves = {name: np.full((ns, nb, speeds.size), np.nan) for name in _CURVES}
+    return data
+
+
+def _curve_variables(sessions, pooled_balls, si, bi, speeds: np.ndarray) -> dict:
+    """The model curves (TC [ms], COR [-], peak force [N]) on (session, ball, speed [m/s])."""
+    curves = {name: np.full((len(si), len(bi), speeds.size), np.nan) for name in _CURVES}
     sources = {s.session_id: s.balls for s in sessions}
     sources.update(pooled_balls)
     for sid, balls in sources.items():
@@ -604,12 +640,12 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
             for name in _CURVES:
                 if name in balls:
                     curves[name][si[sid], bi[ball]] = np.asarray(balls[name].sel(ball=ball).values, dtype=float)
-    for name, arr in curves.items():
-        data[name] = (("session", "ball", "speed"), arr)
-    dates = dict(zip(table["session_id"], table["session_date"]))
-    pooled_of = dict(zip(table["session_id"], table["pooled_sessions"]))
-    data["session_date"] = ("session", np.array([str(dates[s]) for s in session_ids], dtype=object))
-    data["pooled_sessions"] = ("session", np.array([str(pooled_of[s]) for s in session_ids], dtype=object))
+    return {name: (("session", "ball", "speed"), arr) for name, arr in curves.items()}
+
+
+def _per_ball_variables(tests: Mapping[str, ChangeTest], ranking: pd.DataFrame, bi: Mapping[str, int]) -> dict:
+    """The change test and the ranking of each ball type, on ``ball``."""
+    nb = len(bi)
     per_ball = {k: np.full(nb, np.nan) for k in (
         "change_p_value", "change_f_statistic", "tc_change_ms", "cor_change", "ranking_cor",
         "ranking_stiffness_kN_m", "cor_rank", "stiffness_rank")}
@@ -629,15 +665,14 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
             per_ball["ranking_stiffness_kN_m"][j] = row["stiffness_kN_m"]
             per_ball["cor_rank"][j] = float(row["cor_rank"]) if pd.notna(row["cor_rank"]) else np.nan
             per_ball["stiffness_rank"][j] = float(row["stiffness_rank"]) if pd.notna(row["stiffness_rank"]) else np.nan
-    for k, v in per_ball.items():
-        data[k] = ("ball", v)
+    data = {k: ("ball", v) for k, v in per_ball.items()}
     data["changed"] = ("ball", changed)
-    ds = xr.Dataset(data, coords={
-        "session": np.array(session_ids, dtype=object),
-        "ball": np.array(ball_keys, dtype=object),
-        "speed_m_s": ("speed", speeds),
-    })
-    extra = {
+    return data
+
+
+def _catalogue_variable_attrs() -> dict[str, tuple[str, str]]:
+    """units and long_name of the catalogue's own variables (the rest come from the archive's)."""
+    return {
         "session": ("1", "session id (pooled rows: pooled:<s1>+<s2>...)"),
         "session_date": ("1", "session date from session.yaml (pooled rows: the latest)"),
         "pooled_sessions": ("1", "sessions of a pooled fit joined by +, empty for a session"),
@@ -652,22 +687,6 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
         "cor_rank": ("1", "rank by COR (1 = highest)"),
         "stiffness_rank": ("1", "rank by stiffness (1 = stiffest)"),
     }
-    for name, (units, long_name) in extra.items():
-        ds[name].attrs.update(units=units, long_name=long_name)
-    for name in ds.variables:  # parameters.csv columns this version does not know (added later)
-        if name not in archive.VARIABLE_ATTRS and "units" not in ds[name].attrs:
-            ds[name].attrs.update(units="1", long_name=name.replace("_", " "))
-    ds = archive.set_variable_attrs(ds)
-    ds.attrs.update({
-        "title": "Catalogue of tennis ball impact sessions",
-        "summary": "Fitted Goodwill & Haake (2004) ball model parameters of every session x ball type, "
-                   "pooled fits, change tests between sessions and a ranking of the ball types.",
-        "Conventions": "CF-1.10, ACDD-1.3",
-        "references": archive.PAPER_REFERENCE,
-        "reference_speed_m_s": REFERENCE_SPEED_M_S,
-        "change_alpha": CHANGE_ALPHA,
-    })
-    return ds
 
 
 def write_catalogue(session_results_dirs: Sequence, out_csv, out_nc, out_pdf, *,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import re
 import textwrap
-import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -13,8 +12,11 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from . import archive as _archive
+from . import archive_read as ar
+from .archive_read import excluded_impacts
 from .atomic import atomic_path
+from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
+from .model_data import COMPONENT_SPEED_M_S, impact_model_curve, kelvin_voigt_contact
 
 __all__ = [
     "DPI",
@@ -33,25 +35,27 @@ __all__ = [
     "kcal_band",
     "save_figure",
     "save_all",
+    "figure_style",
+    "render",
+    "qc_file_stem",
+    "draw_contact_time_cor",
+    "draw_cor_speed_itf",
+    "draw_stiffness",
+    "draw_force_curves",
+    "draw_components",
+    "draw_kelvin_voigt",
+    "draw_kcal",
+    "draw_qc",
 ]
 
 #: Resolution of the PNG files [dots per inch].
 DPI = 150
-#: File name of each report figure, in report order, with the function that draws it.
-FIGURE_FILES = {
-    "fig7_contact_time_cor.png": "fig_contact_time_cor",
-    "cor_speed_itf.png": "fig_cor_speed_itf",
-    "fig8_stiffness.png": "fig_stiffness",
-    "fig9_force_curves.png": "fig_force_curves",
-    "fig10_components.png": "fig_components",
-    "fig2b_kelvin_voigt.png": "fig_kelvin_voigt",
-    "kcal.png": "fig_kcal",
-}
+#: PNG file name of each report figure, in report order, with the function of this module that
+#: draws it into a matplotlib figure (from :data:`ballimpact.figure_registry.REPORT_FIGURES`).
+FIGURE_FILES = {f.file_name: f.draw_name for f in REPORT_FIGURES}
 #: Half width of the kCAL band around the session median, in robust standard
 #: deviations (1.4826 x median absolute deviation of the good impacts) [-].
 KCAL_BAND_ROBUST_SD = 3.0
-#: Inbound speed of the force-component figure (Fig. 10 of the paper) [m/s].
-COMPONENT_SPEED_M_S = _archive.COMPONENT_SPEED_M_S
 #: A measured impact is overlaid on Fig. 10 when its speed is this close to 20 m/s [m/s].
 COMPONENT_SPEED_TOLERANCE_M_S = 2.5
 #: Width of the figures [in]; they are read on A4 paper.
@@ -75,9 +79,20 @@ _NO_GOOD = "no good impacts"
 
 
 @contextmanager
-def _style():
+def figure_style():
+    """Context in which every figure of this module is drawn: font sizes [pt], grid and line widths."""
     with matplotlib.rc_context(_STYLE):
         yield
+
+
+def render(draw, ds) -> Figure:
+    """A report figure drawn by ``draw(fig, ds)``: :data:`FIGURE_WIDTH_IN` wide, as high as the
+    registry (:mod:`ballimpact.figure_registry`) says for the archive's number of ball types."""
+    with figure_style():
+        fig = _new_figure(FIGURE_WIDTH_IN, report_figure(draw.__name__).figure_height_in(len(ar.balls(ds))))
+        draw(fig, ds)
+        _finish(fig, ds)
+    return fig
 
 
 def _new_figure(width_in: float, height_in: float) -> Figure:
@@ -138,101 +153,12 @@ def _finish(fig, ds) -> None:
     _fit_titles(fig)
 
 
-# ----------------------------------------------------------------------------- archive access
-
-
-def _text(values) -> np.ndarray:
-    return np.array(["" if v is None else str(v) for v in np.asarray(values).ravel()], dtype=object)
-
-
-def _balls(ds) -> list[str]:
-    """Ball keys: the ``ball`` coordinate, then any ball seen only in the impacts."""
-    balls = list(_text(ds["ball"].values)) if "ball" in ds.coords else []
-    if "impact_ball" in ds:
-        for b in _text(ds["impact_ball"].values):
-            if b not in balls:
-                balls.append(b)
-    return balls
-
-
-def _ball_index(ds, ball) -> int | None:
-    if "ball" not in ds.coords:
-        return None
-    idx = np.flatnonzero(_text(ds["ball"].values) == ball)
-    return int(idx[0]) if idx.size else None
-
-
-def _ball_value(ds, name, ball, default=np.nan):
-    i = _ball_index(ds, ball)
-    if i is None or name not in ds:
-        return default
-    return ds[name].values[i]
-
-
-def _ball_array(ds, name, ball) -> np.ndarray | None:
-    i = _ball_index(ds, ball)
-    if i is None or name not in ds:
-        return None
-    return np.asarray(ds[name].values[i], dtype=float)
-
-
-def _label(ds, ball) -> str:
-    label = _ball_value(ds, "ball_label", ball, default="")
-    label = "" if label is None else str(label)
-    return label if label and label != "nan" else str(ball)
+# ----------------------------------------------------------------------------- notes and layout
 
 
 def _colors(ds) -> dict[str, str]:
-    return {b: f"C{i % 10}" for i, b in enumerate(_balls(ds))}
-
-
-def _impacts(ds, ball=None, status=None) -> np.ndarray:
-    """Indices of impacts (raw order) of a ball and/or status."""
-    n = ds.sizes.get("impact", 0)
-    keep = np.ones(n, dtype=bool)
-    if ball is not None:
-        keep &= _text(ds["impact_ball"].values) == ball
-    if status is not None:
-        keep &= _text(ds["status"].values) == status
-    return np.flatnonzero(keep)
-
-
-def _impact_value(ds, name, i, default=np.nan):
-    return float(ds[name].values[i]) if name in ds else default
-
-
-def _series(ds, i, *names):
-    """Finite part of the contact series of impact i (rows where time_s is finite)."""
-    t = np.asarray(ds["time_s"].values[i], dtype=float) if "time_s" in ds else np.empty(0)
-    keep = np.isfinite(t)
-    out = [t[keep]]
-    for name in names:
-        out.append(np.asarray(ds[name].values[i], dtype=float)[keep] if name in ds else np.full(keep.sum(), np.nan))
-    return out
-
-
-def _fitted(ds, ball):
-    """(mass_kg, kb0_N_m, ak, a, ac) in SI, None when the fit is missing or failed."""
-    return _archive._fitted_si(ds, ball)
-
-
-def _simulate(ds, ball, vin, mass=None):
-    """Improved model at one speed with the fitted parameters, or None."""
-    from .model import simulate_impact
-
-    params = _fitted(ds, ball)
-    if params is None or not np.isfinite(vin) or vin <= 0:
-        return None
-    m, kb0, ak, a, ac = params
-    if mass is not None and np.isfinite(mass) and mass > 0:
-        m = mass
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        sim = simulate_impact(vin, m, kb0, ak, a, ac, record=True)
-    good = np.isfinite(sim.force_N)
-    if good.sum() < 2:
-        return None
-    return sim.time_s[good], np.asarray(sim.force_N)[good], np.asarray(sim.displacement_m)[good]
+    """Matplotlib colour of each ball type, in archive order."""
+    return {b: f"C{i % 10}" for i, b in enumerate(ar.balls(ds))}
 
 
 def _note(ax, text, *, color="0.35"):
@@ -260,14 +186,6 @@ def _legend_with_headroom(ax, *, ncols=2, headroom=0.45, loc="upper left"):
     ax.legend(loc=loc, ncols=ncols, fontsize=7, handlelength=1.8, columnspacing=1.0, borderaxespad=0.3)
 
 
-def excluded_impacts(ds) -> list[tuple[str, str, str]]:
-    """(impact_id, ball, reason) of every excluded impact, in raw order."""
-    if ds.sizes.get("impact", 0) == 0:
-        return []
-    ids, balls, reasons = (_text(ds[n].values) for n in ("impact_id", "impact_ball", "reason"))
-    return [(ids[i], balls[i], reasons[i]) for i in _impacts(ds, status="excluded")]
-
-
 def _grid(fig, n, ncols):
     nrows = max(1, -(-n // ncols))
     axes = np.atleast_2d(fig.subplots(nrows, ncols, squeeze=False))
@@ -277,15 +195,14 @@ def _grid(fig, n, ncols):
     return flat[:n]
 
 
-def _rows_height(n_rows, per_row, extra=0.7, cap=10.0):
-    return min(per_row * max(n_rows, 1) + extra, cap)
-
-
 # ----------------------------------------------------------------------------- Fig. 7
 
 
-def _draw_contact_time_cor(fig, ds):
-    balls = _balls(ds)
+def draw_contact_time_cor(fig, ds):
+    """Draw TC [ms] and COR [-] against inbound speed [m/s] with the fitted model, Eq. (14)
+    (:func:`fig_contact_time_cor`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session
+    archive."""
+    balls = ar.balls(ds)
     colors = _colors(ds)
     if not balls:
         _empty(fig)
@@ -294,7 +211,7 @@ def _draw_contact_time_cor(fig, ds):
     speed = np.asarray(ds["speed_m_s"].values, dtype=float) if "speed_m_s" in ds else None
     for row, ball in enumerate(balls):
         ax_tc, ax_cor = axes[row]
-        good = _impacts(ds, ball, "ok")
+        good = ar.impacts(ds, ball, "ok")
         c = colors[ball]
         for ax, meas, model, unit_label in (
             (ax_tc, "contact_time_ms", "model_contact_time_ms", "Contact time TC [ms]"),
@@ -310,9 +227,9 @@ def _draw_contact_time_cor(fig, ds):
                 ax.plot(vin[~outl], y[~outl], "o", color=c, ms=4.5, mfc="none", mew=1.2, label="measured")
             if outl.any():
                 ax.plot(vin[outl], y[outl], "x", color="crimson", ms=7, mew=1.8, label="fit outlier (left out)")
-            curve = _ball_array(ds, model, ball)
-            lo, hi = _ball_array(ds, model + "_lo", ball), _ball_array(ds, model + "_hi", ball)
-            plo, phi = _ball_array(ds, model + "_pred_lo", ball), _ball_array(ds, model + "_pred_hi", ball)
+            curve = ar.ball_array(ds, model, ball)
+            lo, hi = ar.ball_array(ds, model + "_lo", ball), ar.ball_array(ds, model + "_hi", ball)
+            plo, phi = ar.ball_array(ds, model + "_pred_lo", ball), ar.ball_array(ds, model + "_pred_hi", ball)
             if speed is not None and curve is not None and np.isfinite(curve).any():
                 _plot_model_curve(ax, ds, ball, speed, curve, color="k")
                 if lo is not None and hi is not None and np.isfinite(lo).any():
@@ -327,10 +244,10 @@ def _draw_contact_time_cor(fig, ds):
             ax.set_ylabel(unit_label)
             if good.size or (curve is not None and np.isfinite(curve).any()):
                 ax.legend(loc="upper right" if meas == "contact_time_ms" else "upper right", frameon=True)
-        n_used = _ball_value(ds, "n_impacts", ball)
+        n_used = ar.ball_value(ds, "n_impacts", ball)
         n_used = f", {int(n_used)} in fit" if np.isfinite(float(n_used)) else ""
-        ax_tc.set_title(f"{_label(ds, ball)}: TC ({good.size} good{n_used})", loc="left")
-        ax_cor.set_title(f"{_label(ds, ball)}: COR", loc="left")
+        ax_tc.set_title(f"{ar.ball_label(ds, ball)}: TC ({good.size} good{n_used})", loc="left")
+        ax_cor.set_title(f"{ar.ball_label(ds, ball)}: COR", loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("Inbound speed VB [m/s]")
     fig.suptitle("Contact time and COR against inbound speed (cf. Fig. 7 of Goodwill & Haake 2004)")
@@ -338,7 +255,7 @@ def _draw_contact_time_cor(fig, ds):
 
 def _fitted_range(ds, ball) -> tuple[float, float]:
     """Slowest and fastest inbound speed fitted [m/s] (NaN when the archive predates v1.1 or there is no fit)."""
-    return (float(_ball_value(ds, "fit_vin_min_m_s", ball)), float(_ball_value(ds, "fit_vin_max_m_s", ball)))
+    return (float(ar.ball_value(ds, "fit_vin_min_m_s", ball)), float(ar.ball_value(ds, "fit_vin_max_m_s", ball)))
 
 
 def _plot_model_curve(ax, ds, ball, speed, curve, *, color, label="fitted model"):
@@ -373,20 +290,18 @@ def fig_contact_time_cor(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.3))
-        _draw_contact_time_cor(fig, ds)
-        _finish(fig, ds)
-    return fig
+    return render(draw_contact_time_cor, ds)
 
 
 # ----------------------------------------------------------------------------- COR from 3 to 40 m/s, ITF
 
 
-def _draw_cor_speed_itf(fig, ds):
+def draw_cor_speed_itf(fig, ds):
+    """Draw COR [-] from 3 to 40 m/s with the ITF drop test (:func:`fig_cor_speed_itf`) into ``fig``, a
+    matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from .itf import ITF_REBOUND_MAX_M, ITF_REBOUND_MIN_M, drop_test_cor
 
-    balls = _balls(ds)
+    balls = ar.balls(ds)
     colors = _colors(ds)
     if not balls:
         _empty(fig)
@@ -395,21 +310,21 @@ def _draw_cor_speed_itf(fig, ds):
     axes = _grid(fig, len(balls), 2 if len(balls) > 1 else 1)
     for ax, ball in zip(axes, balls):
         c = colors[ball]
-        good = _impacts(ds, ball, "ok")
+        good = ar.impacts(ds, ball, "ok")
         if good.size:
             ax.plot(ds["vin_m_s"].values[good], ds["cor"].values[good], "o", color=c, ms=4, mfc="none", mew=1.1,
                     label="impacts (good)")
-        curve = _ball_array(ds, "model_cor", ball)
+        curve = ar.ball_array(ds, "model_cor", ball)
         has_model = speed is not None and curve is not None and np.isfinite(curve).any()
         if has_model:
             _plot_model_curve(ax, ds, ball, speed, curve, color="k")
-            lo, hi = _ball_array(ds, "model_cor_lo", ball), _ball_array(ds, "model_cor_hi", ball)
+            lo, hi = ar.ball_array(ds, "model_cor_lo", ball), ar.ball_array(ds, "model_cor_hi", ball)
             if lo is not None and hi is not None and np.isfinite(lo).any():
                 ax.fill_between(speed, lo, hi, color=c, alpha=0.25, lw=0, label="95 % band")
-        v_itf = float(_ball_value(ds, "itf_impact_speed_m_s", ball))
-        pred = float(_ball_value(ds, "itf_model_cor", ball))
-        meas = float(_ball_value(ds, "itf_drop_test_cor", ball))
-        mass = float(_ball_value(ds, "mass_kg", ball))
+        v_itf = float(ar.ball_value(ds, "itf_impact_speed_m_s", ball))
+        pred = float(ar.ball_value(ds, "itf_model_cor", ball))
+        meas = float(ar.ball_value(ds, "itf_drop_test_cor", ball))
+        mass = float(ar.ball_value(ds, "mass_kg", ball))
         if np.isfinite(v_itf) and np.isfinite(mass) and mass > 0:
             band = drop_test_cor(np.array([ITF_REBOUND_MIN_M, ITF_REBOUND_MAX_M]), mass)
             ax.plot([v_itf, v_itf], band, "-", color="tab:green", lw=5, alpha=0.45, solid_capstyle="butt",
@@ -423,7 +338,7 @@ def _draw_cor_speed_itf(fig, ds):
         ax.set_xlim(0, 42)
         ax.set_xlabel("Inbound speed VB [m/s]")
         ax.set_ylabel("COR [-]")
-        ax.set_title(_label(ds, ball), loc="left")
+        ax.set_title(ar.ball_label(ds, ball), loc="left")
         if ax.get_legend_handles_labels()[0]:
             _legend_with_headroom(ax, ncols=2, headroom=0.55, loc="upper right")
     fig.suptitle("COR from 3 to 40 m/s: the fitted model, its extrapolation and the ITF drop test")
@@ -448,21 +363,18 @@ def fig_cor_speed_itf(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    with _style():
-        n = len(_balls(ds))
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
-        _draw_cor_speed_itf(fig, ds)
-        _finish(fig, ds)
-    return fig
+    return render(draw_cor_speed_itf, ds)
 
 
 # ----------------------------------------------------------------------------- Fig. 8
 
 
-def _draw_stiffness(fig, ds):
+def draw_stiffness(fig, ds):
+    """Draw structural stiffness kB [kN/m] against displacement [mm], Eq. (4) (:func:`fig_stiffness`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from .model import structural_stiffness
 
-    if not _balls(ds):
+    if not ar.balls(ds):
         _empty(fig)
         return
     ax = fig.subplots()
@@ -470,11 +382,11 @@ def _draw_stiffness(fig, ds):
     x_m = np.asarray(ds["stiffness_x_m"].values, dtype=float) if "stiffness_x_m" in ds else np.linspace(0, 0.03, 61)
     no_fit = []
     any_line = False
-    for ball in _balls(ds):
+    for ball in ar.balls(ds):
         c = colors[ball]
-        label = _label(ds, ball)
-        curve = _ball_array(ds, "model_stiffness_kN_m", ball)
-        params = _fitted(ds, ball)
+        label = ar.ball_label(ds, ball)
+        curve = ar.ball_array(ds, "model_stiffness_kN_m", ball)
+        params = ar.fitted_parameters(ds, ball)
         if (curve is None or not np.isfinite(curve).any()) and params is not None:
             curve = structural_stiffness(x_m, params[1], params[2], params[3]) / 1e3
         if curve is not None and np.isfinite(curve).any():
@@ -482,7 +394,7 @@ def _draw_stiffness(fig, ds):
             any_line = True
         else:
             no_fit.append(label)
-        paper = [float(_ball_value(ds, n, ball)) for n in ("paper_kb0_kN_m", "paper_ak_kN_m", "paper_a")]
+        paper = [float(ar.ball_value(ds, n, ball)) for n in ("paper_kb0_kN_m", "paper_ak_kN_m", "paper_a")]
         if all(np.isfinite(paper)):
             kb0, ak, a = paper
             ax.plot(x_m * 1e3, structural_stiffness(x_m, kb0, ak, a), "--", color=c, lw=1.2, zorder=3,
@@ -517,11 +429,7 @@ def fig_stiffness(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, 5.2)
-        _draw_stiffness(fig, ds)
-        _finish(fig, ds)
-    return fig
+    return render(draw_stiffness, ds)
 
 
 # ----------------------------------------------------------------------------- Fig. 9
@@ -529,17 +437,20 @@ def fig_stiffness(ds) -> Figure:
 
 def _extreme_good(ds, ball):
     """Good impacts of a ball at the lowest and the highest inbound speed (one if they coincide)."""
-    good = [i for i in _impacts(ds, ball, "ok") if np.isfinite(_impact_value(ds, "vin_m_s", i))]
-    good = [i for i in good if _series(ds, i)[0].size >= 2]
+    good = [i for i in ar.impacts(ds, ball, "ok") if np.isfinite(ar.impact_value(ds, "vin_m_s", i))]
+    good = [i for i in good if ar.contact_series(ds, i)[0].size >= 2]
     if not good:
         return []
-    vin = np.array([_impact_value(ds, "vin_m_s", i) for i in good])
+    vin = np.array([ar.impact_value(ds, "vin_m_s", i) for i in good])
     lo, hi = good[int(np.argmin(vin))], good[int(np.argmax(vin))]
     return [lo] if lo == hi else [lo, hi]
 
 
-def _draw_force_curves(fig, ds):
-    balls = _balls(ds)
+def draw_force_curves(fig, ds):
+    """Draw measured and modelled force [N] against time [ms] and displacement [mm]
+    (:func:`fig_force_curves`) into ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session
+    archive."""
+    balls = ar.balls(ds)
     if not balls:
         _empty(fig)
         return
@@ -548,20 +459,20 @@ def _draw_force_curves(fig, ds):
     for row, ball in enumerate(balls):
         ax_t, ax_x = axes[row]
         picks = _extreme_good(ds, ball)
-        label = _label(ds, ball)
+        label = ar.ball_label(ds, ball)
         ax_t.set_title(f"{label}: force-time", loc="left")
         ax_x.set_title(f"{label}: force-displacement", loc="left")
         if not picks:
             for ax in (ax_t, ax_x):
                 _note(ax, _NO_GOOD)
-        fit_ok = _fitted(ds, ball) is not None
+        fit_ok = ar.fitted_parameters(ds, ball) is not None
         for k, i in enumerate(picks):
             c = speed_colors[k]
-            vin = _impact_value(ds, "vin_m_s", i)
-            t, f, x = _series(ds, i, "force_N", "displacement_m")
+            vin = ar.impact_value(ds, "vin_m_s", i)
+            t, f, x = ar.contact_series(ds, i, "force_N", "displacement_m")
             ax_t.plot(t * 1e3, f, "-", color=c, lw=1.1, label=f"measured {vin:.1f} m/s")
             ax_x.plot(x * 1e3, f, "-", color=c, lw=1.1, label=f"measured {vin:.1f} m/s")
-            sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
+            sim = impact_model_curve(ar.fitted_parameters(ds, ball), vin, ar.impact_value(ds, "impact_mass_kg", i))
             if sim is not None:
                 ts, fs, xs = sim
                 ax_t.plot(ts * 1e3, fs, "--", color="k" if k == 0 else "0.45", lw=1.2, label=f"model {vin:.1f} m/s")
@@ -595,32 +506,30 @@ def fig_force_curves(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(len(_balls(ds)), 2.4))
-        _draw_force_curves(fig, ds)
-        _finish(fig, ds)
-    return fig
+    return render(draw_force_curves, ds)
 
 
 # ----------------------------------------------------------------------------- Fig. 10
 
 
 def _nearest_good(ds, ball, speed, tol):
-    good = [i for i in _impacts(ds, ball, "ok") if _series(ds, i)[0].size >= 2]
+    good = [i for i in ar.impacts(ds, ball, "ok") if ar.contact_series(ds, i)[0].size >= 2]
     if not good:
         return None
-    d = np.array([abs(_impact_value(ds, "vin_m_s", i) - speed) for i in good])
+    d = np.array([abs(ar.impact_value(ds, "vin_m_s", i) - speed) for i in good])
     if not np.isfinite(d).any():
         return None
     j = int(np.nanargmin(d))
     return good[j] if d[j] <= tol else None
 
 
-def _draw_components(fig, ds):
+def draw_components(fig, ds):
+    """Draw force components [N] of Eq. (14) at 20 m/s against time [ms] (:func:`fig_components`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    balls = _balls(ds)
+    balls = ar.balls(ds)
     if not balls:
         _empty(fig)
         return
@@ -637,17 +546,17 @@ def _draw_components(fig, ds):
         drawn = False
         if t_ms is not None:
             for name, _, c, lw in parts:
-                y = _ball_array(ds, name, ball)
+                y = ar.ball_array(ds, name, ball)
                 if y is not None and np.isfinite(y).any():
                     ax.plot(t_ms, y, "-", color=c, lw=lw)
                     drawn = True
         i = _nearest_good(ds, ball, COMPONENT_SPEED_M_S, COMPONENT_SPEED_TOLERANCE_M_S)
-        title = _label(ds, ball)
+        title = ar.ball_label(ds, ball)
         if i is not None:
-            t, f = _series(ds, i, "force_N")
+            t, f = ar.contact_series(ds, i, "force_N")
             ax.plot(t * 1e3, f, "-", color="0.6", lw=1.0, zorder=1)
-            vin = _impact_value(ds, "vin_m_s", i)
-            title += f" (measured: {_text(ds['impact_id'].values)[i]}, {vin:.1f} m/s)"
+            vin = ar.impact_value(ds, "vin_m_s", i)
+            title += f" (measured: {ar.text_values(ds['impact_id'].values)[i]}, {vin:.1f} m/s)"
         ax.set_title(title, loc="left")
         if drawn or i is not None:
             ax.axhline(0.0, color="0.5", lw=0.6)
@@ -664,16 +573,6 @@ def _draw_components(fig, ds):
     handles.append(Patch(color="C3", alpha=0.15, label="first 0.6 ms"))
     fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=8)
     fig.suptitle(f"Force components of the fitted model at {COMPONENT_SPEED_M_S:.0f} m/s (cf. Fig. 10)")
-
-
-def _two_column_figure(ds, draw) -> Figure:
-    """A figure with one panel per ball type in two columns, filled by ``draw(fig, ds)``."""
-    n = len(_balls(ds))
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, _rows_height(-(-n // 2) if n > 1 else 1, 3.2))
-        draw(fig, ds)
-        _finish(fig, ds)
-    return fig
 
 
 def fig_components(ds) -> Figure:
@@ -693,38 +592,31 @@ def fig_components(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    return _two_column_figure(ds, _draw_components)
+    return render(draw_components, ds)
 
 
 # ----------------------------------------------------------------------------- Fig. 2b
 
 
 def _kelvin_voigt_curve(ds, i):
-    """Kelvin-Voigt force of impact i on a fine grid up to its own end (x back to 0)."""
-    from .model import simulate_kelvin_voigt
-
-    vin = _impact_value(ds, "vin_m_s", i)
-    mass = _impact_value(ds, "impact_mass_kg", i)
-    kb = _impact_value(ds, "kv_stiffness_kN_m", i) * 1e3
-    cb = _impact_value(ds, "kv_damping_N_s_m", i)
-    if all(np.isfinite((vin, mass, kb, cb))) and min(vin, mass, kb) > 0 and cb >= 0:
-        wn = np.sqrt(kb / mass)
-        zeta = cb / (2.0 * np.sqrt(kb * mass))
-        if zeta < 1:
-            t_end = np.pi / (wn * np.sqrt(1 - zeta**2))
-            t = np.linspace(0.0, t_end, 400)
-            _, _, f = simulate_kelvin_voigt(t, vin, mass, kb, cb)
-            return t, f
-    t, f = _series(ds, i, "kv_force_N")
+    """Kelvin-Voigt force of impact i up to its own end (x back to 0), else its stored ``kv_force_N``."""
+    curve = kelvin_voigt_contact(ar.impact_value(ds, "vin_m_s", i), ar.impact_value(ds, "impact_mass_kg", i),
+                                 ar.impact_value(ds, "kv_stiffness_kN_m", i) * 1e3,
+                                 ar.impact_value(ds, "kv_damping_N_s_m", i))
+    if curve is not None:
+        return curve
+    t, f = ar.contact_series(ds, i, "kv_force_N")
     keep = np.isfinite(f)
     return (t[keep], f[keep]) if keep.sum() >= 2 else None
 
 
-def _draw_kelvin_voigt(fig, ds):
+def draw_kelvin_voigt(fig, ds):
+    """Draw Kelvin-Voigt force of Eqs. (1)-(3) [N] against the measured one (:func:`fig_kelvin_voigt`) into
+    ``fig``, a matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    balls = _balls(ds)
+    balls = ar.balls(ds)
     if not balls:
         _empty(fig)
         return
@@ -734,15 +626,15 @@ def _draw_kelvin_voigt(fig, ds):
     for ax, ball in zip(axes, balls):
         ax.set_xlabel("Time since first contact [ms]")
         ax.set_ylabel("Force [N]")
-        good = [i for i in _impacts(ds, ball, "ok") if _series(ds, i)[0].size >= 2]
-        vins = [_impact_value(ds, "vin_m_s", i) for i in good]
+        good = [i for i in ar.impacts(ds, ball, "ok") if ar.contact_series(ds, i)[0].size >= 2]
+        vins = [ar.impact_value(ds, "vin_m_s", i) for i in good]
         if not good or not np.isfinite(vins).any():
-            ax.set_title(_label(ds, ball), loc="left")
+            ax.set_title(ar.ball_label(ds, ball), loc="left")
             _note(ax, _NO_GOOD)
             continue
         i = good[int(np.nanargmax(vins))]
-        vin = _impact_value(ds, "vin_m_s", i)
-        t, f = _series(ds, i, "force_N")
+        vin = ar.impact_value(ds, "vin_m_s", i)
+        t, f = ar.contact_series(ds, i, "force_N")
         ax.plot(t * 1e3, f, "-", color=colors[ball], lw=1.4)
         kv = _kelvin_voigt_curve(ds, i)
         if kv is not None:
@@ -753,13 +645,13 @@ def _draw_kelvin_voigt(fig, ds):
                 ax.fill_between(tk * 1e3, fk, 0, where=neg, color="C3", alpha=0.25, lw=0)
                 ax.text(0.03, 0.04, f"tensile tail: min {np.nanmin(fk):.0f} N", transform=ax.transAxes,
                         ha="left", va="bottom", color="C3", fontsize=8)
-        sim = _simulate(ds, ball, vin, _impact_value(ds, "impact_mass_kg", i))
+        sim = impact_model_curve(ar.fitted_parameters(ds, ball), vin, ar.impact_value(ds, "impact_mass_kg", i))
         if sim is not None:
             ax.plot(sim[0] * 1e3, sim[1], ":", color="k", lw=1.4)
         else:
             _corner_note(ax, f"improved model: {_NO_FIT}")
         ax.axhline(0.0, color="0.4", lw=0.7)
-        ax.set_title(f"{_label(ds, ball)}, VB = {vin:.1f} m/s ({_text(ds['impact_id'].values)[i]})", loc="left")
+        ax.set_title(f"{ar.ball_label(ds, ball)}, VB = {vin:.1f} m/s ({ar.text_values(ds['impact_id'].values)[i]})", loc="left")
     handles = [
         Line2D([], [], color="0.25", lw=1.4, label="measured (ball colour)"),
         Line2D([], [], color="C3", ls="--", lw=1.4, label="Kelvin-Voigt, Eqs (1)-(3)"),
@@ -787,7 +679,7 @@ def fig_kelvin_voigt(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    return _two_column_figure(ds, _draw_kelvin_voigt)
+    return render(draw_kelvin_voigt, ds)
 
 
 # ----------------------------------------------------------------------------- kCAL
@@ -799,7 +691,7 @@ def kcal_band(ds) -> tuple[float, float]:
     The half width is :data:`KCAL_BAND_ROBUST_SD` robust standard deviations
     (1.4826 x median absolute deviation). NaN when there is no good impact.
     """
-    good = _impacts(ds, status="ok")
+    good = ar.impacts(ds, status="ok")
     k = np.asarray(ds["kcal_N_per_V"].values[good], dtype=float) if good.size else np.empty(0)
     k = k[np.isfinite(k)]
     if not k.size:
@@ -808,14 +700,16 @@ def kcal_band(ds) -> tuple[float, float]:
     return med, KCAL_BAND_ROBUST_SD * _MAD_TO_SD * float(np.median(np.abs(k - med)))
 
 
-def _draw_kcal(fig, ds):
+def draw_kcal(fig, ds):
+    """Draw kCAL [N/V] of every impact with the session band (:func:`fig_kcal`) into ``fig``, a matplotlib
+    Figure or SubFigure; ``ds`` is the session archive."""
     n = ds.sizes.get("impact", 0)
     if n == 0:
         _empty(fig)
         return
     ax = fig.subplots()
     colors = _colors(ds)
-    ids = _text(ds["impact_id"].values)
+    ids = ar.text_values(ds["impact_id"].values)
     kcal = np.asarray(ds["kcal_N_per_V"].values, dtype=float)
     x = np.arange(n)
     med, half = kcal_band(ds)
@@ -824,15 +718,15 @@ def _draw_kcal(fig, ds):
         if np.isfinite(half) and half > 0:
             ax.axhspan(med - half, med + half, color="0.5", alpha=0.15, lw=0,
                        label=f"median \u00b1 {KCAL_BAND_ROBUST_SD:g} robust SD (\u00b1{half:.1f} N/V)")
-    for ball in _balls(ds):
-        ok = _impacts(ds, ball, "ok")
+    for ball in ar.balls(ds):
+        ok = ar.impacts(ds, ball, "ok")
         if ok.size:
-            ax.plot(x[ok], kcal[ok], "o", color=colors[ball], ms=5, label=_label(ds, ball))
-        ex = _impacts(ds, ball, "excluded")
+            ax.plot(x[ok], kcal[ok], "o", color=colors[ball], ms=5, label=ar.ball_label(ds, ball))
+        ex = ar.impacts(ds, ball, "excluded")
         ex_f = ex[np.isfinite(kcal[ex])]
         if ex_f.size:
             ax.plot(x[ex_f], kcal[ex_f], "o", color=colors[ball], ms=7, mfc="none", mew=1.2)
-    ex = _impacts(ds, status="excluded")
+    ex = ar.impacts(ds, status="excluded")
     ex_f = ex[np.isfinite(kcal[ex])]
     if ex_f.size:
         ax.plot(x[ex_f], kcal[ex_f], "x", color="k", ms=6, mew=1.3, label="excluded (kCAL known)")
@@ -877,39 +771,29 @@ def fig_kcal(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    with _style():
-        fig = _new_figure(FIGURE_WIDTH_IN, 4.6)
-        _draw_kcal(fig, ds)
-        _finish(fig, ds)
-    return fig
+    return render(draw_kcal, ds)
 
 
 # ----------------------------------------------------------------------------- QC
 
 
-def _impact_position(ds, impact_id) -> int:
-    ids = _text(ds["impact_id"].values) if ds.sizes.get("impact", 0) else np.array([], dtype=object)
-    idx = np.flatnonzero(ids == str(impact_id))
-    if not idx.size:
-        raise KeyError(f"impact_id {impact_id!r} is not in the archive")
-    return int(idx[0])
-
-
-def _draw_qc(fig, ds, impact_id, *, wrap=90):
-    i = _impact_position(ds, impact_id)
-    ball = _text(ds["impact_ball"].values)[i]
-    status = _text(ds["status"].values)[i]
-    reason = _text(ds["reason"].values)[i] or "(no reason given)"
+def draw_qc(fig, ds, impact_id, *, wrap=90):
+    """Draw the raw voltage [V] against time [ms] of one impact (:func:`fig_qc_impact`) into ``fig``;
+    the title is wrapped at ``wrap`` characters."""
+    i = ar.impact_position(ds, impact_id)
+    ball = ar.text_values(ds["impact_ball"].values)[i]
+    status = ar.text_values(ds["status"].values)[i]
+    reason = ar.text_values(ds["reason"].values)[i] or "(no reason given)"
     rt = np.asarray(ds["raw_time_s"].values[i], dtype=float) if "raw_time_s" in ds else np.empty(0)
     rv = np.asarray(ds["raw_voltage_V"].values[i], dtype=float) if "raw_voltage_V" in ds else np.empty(0)
     keep = np.isfinite(rt) & np.isfinite(rv)
     rt, rv = rt[keep], rv[keep]
-    t_contact = _series(ds, i)[0]
+    t_contact = ar.contact_series(ds, i)[0]
     contact_known = t_contact.size >= 2
-    tc_ms = _impact_value(ds, "contact_time_ms", i)
+    tc_ms = ar.impact_value(ds, "contact_time_ms", i)
     if contact_known and not np.isfinite(tc_ms):
         tc_ms = float(t_contact[-1]) * 1e3
-    title = f"{impact_id} ({_label(ds, ball)}), {status}: {reason}"
+    title = f"{impact_id} ({ar.ball_label(ds, ball)}), {status}: {reason}"
     fig.suptitle("\n".join(textwrap.wrap(title, wrap)), fontsize=10)
     if not rt.size:
         ax = fig.subplots()
@@ -964,10 +848,10 @@ def fig_qc_impact(ds, impact_id) -> Figure:
     KeyError
         If the impact is not in the archive.
     """
-    _impact_position(ds, impact_id)
-    with _style():
+    ar.impact_position(ds, impact_id)
+    with figure_style():
         fig = _new_figure(FIGURE_WIDTH_IN, 5.0)
-        _draw_qc(fig, ds, impact_id)
+        draw_qc(fig, ds, impact_id)
         _finish(fig, ds)
     return fig
 
@@ -996,17 +880,19 @@ def save_figure(fig: Figure, path, dpi: int = DPI) -> Path:
     return path
 
 
-def _safe_name(impact_id: str) -> str:
+def qc_file_stem(impact_id: str) -> str:
+    """File stem of an impact's QC page: the impact_id with every character outside
+    ``A-Za-z0-9_.-`` replaced by ``_`` ("impact" when empty)."""
     return re.sub(r"[^A-Za-z0-9_.-]", "_", str(impact_id)) or "impact"
 
 
 def save_all(ds, out_dir) -> list[Path]:
-    """Write every figure as PNG (dpi 150) into ``out_dir``, QC traces into ``out_dir/qc``.
+    """Write every report figure as PNG (dpi 150) into ``out_dir``, QC traces into ``out_dir/qc``.
 
-    Files: fig7_contact_time_cor.png, fig8_stiffness.png, fig9_force_curves.png,
-    fig10_components.png, fig2b_kelvin_voigt.png, kcal.png and qc/<impact_id>.png
-    for each excluded impact (the qc folder is always created). Each file is
-    written atomically.
+    Files: ``<stem>.png`` for each figure of
+    :data:`ballimpact.figure_registry.REPORT_FIGURES`, in its order, and
+    ``qc/<impact_id>.png`` for each excluded impact (the qc folder is always
+    created). Each file is written atomically.
 
     Parameters
     ----------
@@ -1021,12 +907,11 @@ def save_all(ds, out_dir) -> list[Path]:
         The files written, report figures first, then the QC pages in raw order.
     """
     out_dir = Path(out_dir)
-    qc_dir = out_dir / "qc"
+    qc_dir = out_dir / QC_DIR_NAME
     qc_dir.mkdir(parents=True, exist_ok=True)
-    funcs = globals()
     written = []
-    for name, func in FIGURE_FILES.items():
-        written.append(save_figure(funcs[func](ds), out_dir / name))
+    for spec in REPORT_FIGURES:
+        written.append(save_figure(render(spec.draw, ds), out_dir / spec.file_name))
     for impact_id, _, _ in excluded_impacts(ds):
-        written.append(save_figure(fig_qc_impact(ds, impact_id), qc_dir / f"{_safe_name(impact_id)}.png"))
+        written.append(save_figure(fig_qc_impact(ds, impact_id), qc_dir / f"{qc_file_stem(impact_id)}.png"))
     return written

@@ -12,9 +12,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.backends.backend_pdf import PdfPages
 from matplotlib.figure import Figure
 
+from . import archive_read as ar
 from . import figures as _fig
 from . import summary as _summary
 from .atomic import atomic_path
+from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "itf_comparison", "write_report", "report_page_count"]
 
@@ -23,71 +25,9 @@ A4_PORTRAIT_IN = (8.27, 11.69)
 _MARGIN_IN = 0.6  # page margin [in]
 _SOURCE_SHORT = {"extrapolated": "extrap.", "fitted": "fitted"}
 
-#: Title and caption of each report figure (keys are the PNG names of figures.FIGURE_FILES).
-FIGURE_CAPTIONS = {
-    "fig7_contact_time_cor.png": (
-        "Contact time and coefficient of restitution against inbound speed",
-        "Each row is one ball type. Circles are the good impacts of this session (contact time TC from "
-        "the force trace, COR = VB'/VB from the light gates); the black line is the improved model "
-        "(Eq. 14 of Goodwill & Haake 2004) with the parameters fitted to these impacts, the shaded "
-        "area its 95 % confidence band (where the curve lies, from the parameter uncertainty) and the "
-        "dashed lines the 95 % prediction band (where the next impact of this ball type will fall: "
-        "parameter uncertainty plus the impacts' own scatter). Red crosses are fit outliers: good "
-        "impacts left out of the fit because they sit far off their siblings' curve (listed with their "
-        "residuals among the excluded impacts). TC is set by the stiffness law (AK, a), COR mainly by "
-        "the damping constant AC. The paper reports agreement within about 5 %. The grey shading marks "
-        "the speeds of the impacts fitted; outside it the curves are dashed: the model extrapolates there.",
-    ),
-    "cor_speed_itf.png": (
-        "COR from 3 to 40 m/s, where the model stops, and the ITF drop test",
-        "Each panel is one ball type. The fitted model COR (Eq. 14) is solid over the speeds of the impacts "
-        "it was fitted on (shaded) and dashed where it extrapolates, with its 95 % band; circles are the "
-        "good impacts. At the impact speed of the ITF drop test (254 cm onto a rigid surface, about 6.9 m/s "
-        "with air drag; Cd 0.55, air density from session.yaml, default 1.2 kg/m³) the diamond is the "
-        "model, the green bar the ITF pass range 134.6-147.3 cm as a COR, and the red star the measured "
-        "drop test when session.yaml gives itf_rebound_cm. The model's material damping cB = AC dCONT² "
-        "vanishes at small deformation, so below the fitted speeds it over-predicts COR; for the paper's "
-        "own Table 2 parameters and Table 1 drop tests the model is 0.07-0.10 too high.",
-    ),
-    "fig8_stiffness.png": (
-        "Structural stiffness against centre-of-mass displacement",
-        "kB = kB(0) + AK x^a (Eq. 4) for every ball type: solid lines use the parameters fitted here, "
-        "dashed lines the values of the paper's Table 2 (Table 2 ball types only). A stiffer ball has a "
-        "higher curve; the pressurised ball is the stiffest in the paper, the punctured ball is soft at "
-        "small displacements and stiffens quickly. Ball types without a fit are listed in the panel.",
-    ),
-    "fig9_force_curves.png": (
-        "Measured and modelled force at the lowest and highest good speed",
-        "For each ball type, the good impacts at the lowest and highest inbound speed: force against time "
-        "(left) and against centre-of-mass displacement (right, from integrating the force twice). "
-        "Solid: measured; dashed: the fitted model simulated at the same speed. The model force is zero "
-        "below 2 mm (cloth) and uses the pre-buckling stiffness for the first 0.2 ms; after that the "
-        "paper finds model and measurement within about 10 %.",
-    ),
-    "fig10_components.png": (
-        "Force components of the fitted model at 20 m/s",
-        "The total model force split into structural stiffness kB x, material damping cB x' and "
-        "momentum flux cM x' (Eq. 14), simulated at 20 m/s with each ball's fitted parameters; grey is "
-        "the measured good impact nearest 20 m/s (within 2.5 m/s). The paper finds the momentum flux "
-        "dominant during the first 0.6 ms (shaded) and the stiffness term dominant at the force peak; "
-        "the damping term turns negative in restitution.",
-    ),
-    "fig2b_kelvin_voigt.png": (
-        "Kelvin-Voigt model against the measured force",
-        "The fastest good impact of each ball type (solid) against the linear Kelvin-Voigt model with "
-        "kB = m pi^2 / TC^2 and cB = -2 m ln(COR) / TC (Eqs 1-3, dashed) and the improved model (dotted). "
-        "The Kelvin-Voigt force starts at cB VB instead of zero and turns tensile (shaded) before the "
-        "ball leaves the plate, the failure shown in Fig. 2b of the paper that motivates the improved model.",
-    ),
-    "kcal.png": (
-        "Per-impact force-plate calibration factor",
-        "kCAL = m (VB + VB') / integral of V dt for every impact in the order of the raw impacts.csv, "
-        "coloured by ball type. The line is the session median over the good impacts and the grey band "
-        "median +- 3 robust standard deviations. A drift or a step suggests a change in the charge "
-        "amplifier or plate; a single outlier points to a bad gate time or trace. Excluded impacts are "
-        "crossed when they have a kCAL and marked on the axis when they do not.",
-    ),
-}
+#: Title and caption of each report figure by PNG file name, in report order
+#: (from :data:`ballimpact.figure_registry.REPORT_FIGURES`).
+FIGURE_CAPTIONS = {f.file_name: (f.title, f.caption) for f in REPORT_FIGURES}
 
 
 MAX_SHOWN_CHARS = 400  # longest text taken from the data onto a page (file names, reasons) [characters]
@@ -186,17 +126,17 @@ def _fmt(value, fmt) -> str:
 
 
 def _ball_values(ds, ball):
-    get = lambda name: _fig._ball_value(ds, name, ball)  # noqa: E731
+    get = lambda name: ar.ball_value(ds, name, ball)  # noqa: E731
     return get
 
 
 def _counts(ds):
-    balls = _fig._balls(ds)
+    balls = ar.balls(ds)
     rows = []
     for ball in balls:
-        total = _fig._impacts(ds, ball).size
-        ok = _fig._impacts(ds, ball, "ok").size
-        used = _fig._ball_value(ds, "n_impacts", ball)
+        total = ar.impacts(ds, ball).size
+        ok = ar.impacts(ds, ball, "ok").size
+        used = ar.ball_value(ds, "n_impacts", ball)
         rows.append((ball, total, ok, total - ok, used))
     return rows
 
@@ -246,11 +186,11 @@ def _force_curve_validation(ds) -> list[str]:
     share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
     rms = np.asarray(ds["model_rms_N"].values, dtype=float)
     lines = []
-    for ball in _fig._balls(ds):
+    for ball in ar.balls(ds):
         use = ok & (balls == ball) & np.isfinite(share) & np.isfinite(rms)
         if use.any():
             lines.append(
-                f"{_fig._label(ds, ball)}: within 10 % of the peak for {100 * share[use].mean():.1f} % of the "
+                f"{ar.ball_label(ds, ball)}: within 10 % of the peak for {100 * share[use].mean():.1f} % of the "
                 f"contact after 0.2 ms (lowest {100 * share[use].min():.1f} %), RMS difference "
                 f"{rms[use].mean():.0f} N, over {int(use.sum())} impacts"
             )
@@ -267,7 +207,7 @@ def itf_comparison(ds) -> list[str]:
     from .itf import ITF_REBOUND_MAX_M, ITF_REBOUND_MIN_M
 
     lines = []
-    for ball in _fig._balls(ds):
+    for ball in ar.balls(ds):
         get = _ball_values(ds, ball)
         pred, lo, hi = (float(get(n)) for n in ("itf_rebound_pred_cm", "itf_rebound_pred_cm_lo",
                                                  "itf_rebound_pred_cm_hi"))
@@ -275,11 +215,11 @@ def itf_comparison(ds) -> list[str]:
         v = float(get("itf_impact_speed_m_s"))
         if not math.isfinite(pred):
             if math.isfinite(meas):
-                lines.append(f"{_fig._label(ds, ball)}: measured {meas:.1f} cm, no model prediction (no fit)")
+                lines.append(f"{ar.ball_label(ds, ball)}: measured {meas:.1f} cm, no model prediction (no fit)")
             continue
         interval = f" [{lo:.1f}, {hi:.1f}]" if math.isfinite(lo) and math.isfinite(hi) else ""
         passes = ITF_REBOUND_MIN_M * 100 <= pred <= ITF_REBOUND_MAX_M * 100
-        text = (f"{_fig._label(ds, ball)}: the model predicts a rebound of {pred:.1f} cm{interval} "
+        text = (f"{ar.ball_label(ds, ball)}: the model predicts a rebound of {pred:.1f} cm{interval} "
                 f"({'inside' if passes else 'outside'} the 134.6-147.3 cm pass range)")
         cor_model = float(get("itf_model_cor")) if "itf_model_cor" in ds else math.nan
         cor_meas = float(get("itf_drop_test_cor")) if "itf_drop_test_cor" in ds else math.nan
@@ -298,8 +238,34 @@ def itf_comparison(ds) -> list[str]:
 
 def _summary_page(ds, info) -> Figure:
     fig = _page()
-    w, h = A4_PORTRAIT_IN
     cur = _Cursor(fig)
+    _summary_header(fig, cur, info)
+    _counts_block(fig, cur, ds)
+    cur.text(_MARGIN_IN, "Fitted model parameters (95 % intervals) beside the paper's Table 2", size=12,
+             weight="bold", dy=0.28)
+    cur.text(
+        _MARGIN_IN,
+        "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
+        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
+        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
+        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
+        "TC and COR over the impacts used in the fit."
+        + _conditional_note(ds),
+        size=8, color="0.25",
+    )
+    cur.skip(0.08)
+    cells, shade, no_fit_notes, fit_notes = _parameter_cells(ds)
+    # room for the fit warnings under the table (issue 14): they must stay visible
+    notes_h = sum(0.19 * min(3, len(textwrap.wrap(note, 110))) for note in fit_notes)
+    _parameter_table(fig, cur, cells, shade, notes_h)
+    _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h)
+    _footer(fig, info, "page 1: summary")
+    return fig
+
+
+def _summary_header(fig, cur, info) -> None:
+    """Title, synthetic-data warning and the session's metadata."""
+    w, h = A4_PORTRAIT_IN
     x0 = _MARGIN_IN
     cur.text(x0, "Tennis ball impacts on a rigid surface", size=17, weight="bold", dy=0.36)
     cur.text(x0, f"Session report: {info['session_id']}", size=13, dy=0.38)
@@ -325,18 +291,21 @@ def _summary_page(ds, info) -> Figure:
     fig.text(x0 / w, 1 - cur.y / h, "Description", fontsize=9.5, va="top", weight="bold")
     cur.text(x0 + 1.35, "\n".join(desc_lines), size=9.5)
 
-    # impact counts
+
+def _counts_block(fig, cur, ds) -> None:
+    """The impact counts: one sentence and a table by ball type."""
+    w, h = A4_PORTRAIT_IN
+    x0 = _MARGIN_IN
     cur.skip(0.15)
     n_total = ds.sizes.get("impact", 0)
-    n_ok = _fig._impacts(ds, status="ok").size if n_total else 0
+    n_ok = ar.impacts(ds, status="ok").size if n_total else 0
     cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
     cur.text(x0, f"{n_total} impacts in the raw impacts.csv: {n_ok} good, {n_total - n_ok} excluded "
              "(listed with their reasons after the figures).", size=9.5)
     cur.skip(0.08)
-    count_rows = _counts(ds)
     cells = [["Ball type", "Impacts", "Good", "Excluded", "Used in fit"]]
-    for ball, total, ok, excl, used in count_rows:
-        cells.append([_fig._label(ds, ball), str(total), str(ok), str(excl), _fmt(used, ".0f")])
+    for ball, total, ok, excl, used in _counts(ds):
+        cells.append([ar.ball_label(ds, ball), str(total), str(ok), str(excl), _fmt(used, ".0f")])
     cells.append(["All", str(n_total), str(n_ok), str(n_total - n_ok), ""])
     row_h = 0.22
     tab_h = row_h * len(cells)
@@ -344,65 +313,18 @@ def _summary_page(ds, info) -> Figure:
     _table(ax, cells, [0.4, 0.15, 0.15, 0.15, 0.15], font_size=8.5, shade_rows=(len(cells) - 1,))
     cur.skip(tab_h + 0.3)
 
-    # parameters
-    cur.text(x0, "Fitted model parameters (95 % intervals) beside the paper's Table 2", size=12, weight="bold",
-             dy=0.28)
-    cur.text(
-        x0,
-        "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
-        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
-        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
-        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
-        "TC and COR over the impacts used in the fit."
-        + _conditional_note(ds),
-        size=8, color="0.25",
-    )
-    cur.skip(0.08)
-    head = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
-            "kB(10 mm)\n[kN/m]", "kB(20 mm)\n[kN/m]", "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
-    cells = [head]
-    shade = []
-    no_fit_notes = []
-    fit_notes = []
-    for ball in _fig._balls(ds):
+
+_PARAMETER_HEAD = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
+                   "kB(10 mm)\n[kN/m]", "kB(20 mm)\n[kN/m]", "TC\nRMSE\n[%]", "COR\nRMSE\n[%]"]
+
+
+def _parameter_cells(ds):
+    """Rows of the parameter table (fitted, then Table 2 when the paper has the ball type), the
+    rows to shade, and the no-fit and fit-warning notes."""
+    cells, shade, no_fit_notes, fit_notes = [_PARAMETER_HEAD], [], [], []
+    for ball in ar.balls(ds):
+        cells.append(_fitted_row(ds, ball, no_fit_notes, fit_notes))
         get = _ball_values(ds, ball)
-        src = _text(get("kb0_source")) if "kb0_source" in ds else ""
-        src = "" if src == "nan" else src
-        kb0_cell = _interval(get("kb0_kN_m"), get("kb0_lo"), get("kb0_hi"), ".1f")
-        # issue 14: a parameter on its search bound gets no interval; the fit's warnings are shown
-        fit_message = _text(get("fit_message")) if "fit_message" in ds else ""
-        undetermined = _summary.undetermined_parameters(
-            {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
-            fit_message)
-        warn_text = _summary.fit_warnings(fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"),
-                                          cor_rmse_pct=get("cor_rmse_pct"))
-        fitted = [
-            "\n".join(textwrap.wrap(_fig._label(ds, ball), 22)[:2]),
-            "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
-            _fmt(get("n_impacts"), ".0f"),
-            kb0_cell,
-            _interval(get("ak_kN_m"), get("ak_lo"), get("ak_hi"), ",.0f"),
-            _interval(get("a"), get("a_lo"), get("a_hi"), ".3f"),
-            _interval(get("ac_kN_s_m3"), get("ac_lo"), get("ac_hi"), ".2f"),
-            _interval(get("kb_10mm_kN_m"), get("kb_10mm_lo"), get("kb_10mm_hi"), ".1f"),
-            _interval(get("kb_20mm_kN_m"), get("kb_20mm_lo"), get("kb_20mm_hi"), ".1f"),
-            _fmt(get("contact_time_rmse_pct"), ".2f"),
-            _fmt(get("cor_rmse_pct"), ".2f"),
-        ]
-        for col, (key, fmt) in zip((4, 5, 6), (("ak_kN_m", ",.0f"), ("a", ".3f"), ("ac_kN_s_m3", ".2f"))):
-            if key.split("_")[0] in undetermined and fitted[col] != "-":
-                fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined\n(at bound)"
-        if warn_text and not all(c == "-" for c in fitted[3:7]):
-            fitted[0] += f"\n(see fit warning {len(fit_notes) + 1})"
-            fit_notes.append(f"Fit warning {len(fit_notes) + 1}, {_fig._label(ds, ball)}: {warn_text}")
-        if all(c == "-" for c in fitted[3:7]):
-            message = _text(get("fit_message")) if "fit_message" in ds else ""
-            fitted[1] = "this session\nno fit"
-            fitted[3:7] = ["no fit"] * 4
-            no_fit_notes.append(
-                f"{_fig._label(ds, ball)}: " + (message if message and message != "nan" else "no fit")
-            )
-        cells.append(fitted)
         paper = [get("paper_kb0_kN_m"), get("paper_ak_kN_m"), get("paper_a"), get("paper_ac_kN_s_m3")]
         if np.isfinite(np.asarray(paper, dtype=float)).any():
             shade.append(len(cells))
@@ -411,8 +333,53 @@ def _summary_page(ds, info) -> Figure:
             cells.append(["", "paper Table 2", "", _fmt(paper[0], ".1f"), _fmt(paper[1], ",.0f"),
                           _fmt(paper[2], ".2f"), _fmt(paper[3], ".1f"), _fmt(kb_paper[0], ".1f"),
                           _fmt(kb_paper[1], ".1f"), "", ""])
-    # room for the fit warnings under the table (issue 14): they must stay visible
-    notes_h = sum(0.19 * min(3, len(textwrap.wrap(note, 110))) for note in fit_notes)
+    return cells, shade, no_fit_notes, fit_notes
+
+
+def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
+    """The table row of one ball type's fit; appends its no-fit or fit-warning note."""
+    get = _ball_values(ds, ball)
+    src = _text(get("kb0_source")) if "kb0_source" in ds else ""
+    src = "" if src == "nan" else src
+
+    def interval(name, fmt):
+        return _interval(*ar.parameter(ds, name, ball), fmt)
+
+    # issue 14: a parameter on its search bound gets no interval; the fit's warnings are shown
+    fit_message = _text(get("fit_message")) if "fit_message" in ds else ""
+    undetermined = _summary.undetermined_parameters(
+        {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
+        fit_message)
+    warn_text = _summary.fit_warnings(fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"),
+                                      cor_rmse_pct=get("cor_rmse_pct"))
+    fitted = [
+        "\n".join(textwrap.wrap(ar.ball_label(ds, ball), 22)[:2]),
+        "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
+        _fmt(get("n_impacts"), ".0f"),
+        interval("kb0_kN_m", ".1f"), interval("ak_kN_m", ",.0f"), interval("a", ".3f"),
+        interval("ac_kN_s_m3", ".2f"), interval("kb_10mm_kN_m", ".1f"), interval("kb_20mm_kN_m", ".1f"),
+        _fmt(get("contact_time_rmse_pct"), ".2f"),
+        _fmt(get("cor_rmse_pct"), ".2f"),
+    ]
+    for col, (key, fmt) in zip((4, 5, 6), (("ak_kN_m", ",.0f"), ("a", ".3f"), ("ac_kN_s_m3", ".2f"))):
+        if key.split("_")[0] in undetermined and fitted[col] != "-":
+            fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined\n(at bound)"
+    if warn_text and not all(c == "-" for c in fitted[3:7]):
+        fitted[0] += f"\n(see fit warning {len(fit_notes) + 1})"
+        fit_notes.append(f"Fit warning {len(fit_notes) + 1}, {ar.ball_label(ds, ball)}: {warn_text}")
+    if all(c == "-" for c in fitted[3:7]):
+        fitted[1] = "this session\nno fit"
+        fitted[3:7] = ["no fit"] * 4
+        no_fit_notes.append(
+            f"{ar.ball_label(ds, ball)}: " + (fit_message if fit_message and fit_message != "nan" else "no fit")
+        )
+    return fitted
+
+
+def _parameter_table(fig, cur, cells, shade, notes_h) -> None:
+    """The parameter table, row heights by their lines of text, shrunk when the page is short."""
+    w, h = A4_PORTRAIT_IN
+    x0 = _MARGIN_IN
     available = h - _MARGIN_IN - 0.9 - cur.y - notes_h
     line_h = 0.17
     heights = [max(c.count("\n") + 1 for c in row) for row in cells]
@@ -437,6 +404,12 @@ def _summary_page(ds, info) -> Figure:
     for (r, c), cell in table.get_celld().items():
         cell.set_y(tops[r])
     cur.skip(total_h + 0.15)
+
+
+def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h) -> None:
+    """The no-fit and fit-warning notes under the table, and the reference."""
+    h = A4_PORTRAIT_IN[1]
+    x0 = _MARGIN_IN
     for note in no_fit_notes:
         if cur.y < h - _MARGIN_IN - 0.9:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
@@ -450,8 +423,6 @@ def _summary_page(ds, info) -> Figure:
             "Proc. IMechE Part C 218:1139-1153"
         )
         cur.text(x0, "\n".join(textwrap.wrap("Reference: " + ref, 110)), size=7.5, color="0.3")
-    _footer(fig, info, "page 1: summary")
-    return fig
 
 
 def _caption_block(fig, top_in, title, caption, *, width_chars=105):
@@ -491,34 +462,9 @@ def _draw_into_page(fig, draw, top_in: float, height_in: float):
         hspace=0, wspace=0,
     )
     sub = fig.add_subfigure(gs[1, 1])
-    with _fig._style():
+    with _fig.figure_style():
         draw(sub)
     return sub
-
-
-def _figure_height(name, ds) -> float:
-    n = len(_fig._balls(ds))
-    rows2 = -(-n // 2) if n > 1 else 1
-    return {
-        "fig7_contact_time_cor.png": _fig._rows_height(n, 2.3),
-        "cor_speed_itf.png": _fig._rows_height(rows2, 3.2),
-        "fig8_stiffness.png": 5.2,
-        "fig9_force_curves.png": _fig._rows_height(n, 2.4),
-        "fig10_components.png": _fig._rows_height(rows2, 3.2),
-        "fig2b_kelvin_voigt.png": _fig._rows_height(rows2, 3.2),
-        "kcal.png": 4.6,
-    }[name]
-
-
-_DRAW = {
-    "fig7_contact_time_cor.png": lambda ds: (lambda f: _fig._draw_contact_time_cor(f, ds)),
-    "cor_speed_itf.png": lambda ds: (lambda f: _fig._draw_cor_speed_itf(f, ds)),
-    "fig8_stiffness.png": lambda ds: (lambda f: _fig._draw_stiffness(f, ds)),
-    "fig9_force_curves.png": lambda ds: (lambda f: _fig._draw_force_curves(f, ds)),
-    "fig10_components.png": lambda ds: (lambda f: _fig._draw_components(f, ds)),
-    "fig2b_kelvin_voigt.png": lambda ds: (lambda f: _fig._draw_kelvin_voigt(f, ds)),
-    "kcal.png": lambda ds: (lambda f: _fig._draw_kcal(f, ds)),
-}
 
 
 def figure_label(name: str) -> str:
@@ -528,13 +474,13 @@ def figure_label(name: str) -> str:
     Parameters
     ----------
     name : str
-        PNG file name of :data:`FIGURE_CAPTIONS`, e.g. ``fig7_contact_time_cor.png``.
+        PNG file name of :data:`FIGURE_CAPTIONS`, e.g. ``fig<N>_<what>.png``.
 
     Returns
     -------
     str
-        "Fig. 7" for fig7_*.png, "Fig. 2b" for fig2b_*.png; "kCAL figure" for kcal.png
-        (the paper has no such figure).
+        "Fig. <N>" for fig<N>_*.png (the paper's numbering, e.g. "Fig. 2b"); "<stem> figure"
+        otherwise (kcal becomes kCAL: the paper has no such figure).
     """
     import re
 
@@ -544,17 +490,24 @@ def figure_label(name: str) -> str:
     return f"{Path(name).stem.replace('kcal', 'kCAL')} figure"
 
 
-def _figure_page(ds, info, name, number, figures_dir) -> Figure:
-    title, caption = FIGURE_CAPTIONS[name]
-    if name.startswith("cor_speed_itf"):
+def _caption_addition(ds, draw_name: str) -> str:
+    """This session's numbers added to a figure's caption: the ITF drop test under the COR
+    figure, the force-curve validation under the force curves (Fig. 9)."""
+    if draw_name == _fig.draw_cor_speed_itf.__name__:
         itf_lines = itf_comparison(ds)
         if itf_lines:
-            caption += " ITF drop test of this session's balls: " + "; ".join(itf_lines) + "."
-    if name.startswith("fig9"):
+            return " ITF drop test of this session's balls: " + "; ".join(itf_lines) + "."
+    if draw_name == _fig.draw_force_curves.__name__:
         validation = _force_curve_validation(ds)
         if validation:
-            caption += (" Force-curve validation over every good impact (section 4 of the paper): "
-                        + "; ".join(validation) + ".")
+            return (" Force-curve validation over every good impact (section 4 of the paper): "
+                    + "; ".join(validation) + ".")
+    return ""
+
+
+def _figure_page(ds, info, name, number, figures_dir) -> Figure:
+    spec = report_figure(name)
+    title, caption = spec.title, spec.caption + _caption_addition(ds, spec.draw_name)
     w, h = A4_PORTRAIT_IN
     top = _MARGIN_IN
     caption_lines = len(textwrap.wrap(caption, 105))
@@ -566,12 +519,12 @@ def _figure_page(ds, info, name, number, figures_dir) -> Figure:
         used = _place_png(fig, png, top, max_fig_h)
         fig_h = used
     else:
-        fig_h = min(_figure_height(name, ds), max_fig_h)
+        fig_h = min(spec.figure_height_in(len(ar.balls(ds))), max_fig_h)
         fig = Figure(figsize=A4_PORTRAIT_IN, layout="constrained")
         FigureCanvasAgg(fig)
         fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04)
-        _draw_into_page(fig, _DRAW[name](ds), top, fig_h)
-    # issue 14: numbered as the PNG files and the paper (fig7_*.png is Fig. 7), not 1-6
+        _draw_into_page(fig, lambda f: spec.draw(f, ds), top, fig_h)
+    # issue 14: numbered as the PNG files and the paper (fig<N>_*.png is Fig. <N>), not 1-6
     label = figure_label(name)
     _caption_block(fig, top + fig_h + 0.2, f"{label} ({name}): {title}", caption)
     _footer(fig, info, label)
@@ -582,7 +535,7 @@ def _conditional_note(ds) -> str:
     """The sentence saying AK and a are conditional on kB(0) from the config, when one is."""
     if "kb0_source" not in ds:
         return ""
-    labels = [_fig._label(ds, b) for b in _fig._balls(ds) if _text(_fig._ball_value(ds, "kb0_source", b, "")) == "config"]
+    labels = [ar.ball_label(ds, b) for b in ar.balls(ds) if _text(ar.ball_value(ds, "kb0_source", b, "")) == "config"]
     if not labels:
         return ""
     text = ("AK and a are conditional on kB(0) from config (" + ", ".join(labels)
@@ -594,15 +547,15 @@ def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
     """(impact_id, ball, note) of every good impact left out of its ball type's fit."""
     if ds.sizes.get("impact", 0) == 0 or "used_in_fit" not in ds:
         return []
-    ids, balls, status = (_fig._text(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
+    ids, balls, status = (ar.text_values(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
     used = np.asarray(ds["used_in_fit"].values, dtype=float) > 0
-    notes = _fig._text(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
+    notes = ar.text_values(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
     return [(ids[i], balls[i], "left out of the fit (status ok): " + (notes[i] or "fit outlier"))
             for i in range(len(ids)) if status[i] == "ok" and not used[i]]
 
 
 def _excluded_pages(ds, info) -> list[Figure]:
-    rows = _fig.excluded_impacts(ds) + _fit_outlier_rows(ds)
+    rows = ar.excluded_impacts(ds) + _fit_outlier_rows(ds)
     w, h = A4_PORTRAIT_IN
     x_id, x_ball, x_reason = _MARGIN_IN, _MARGIN_IN + 1.15, _MARGIN_IN + 2.75
     reason_chars = 78
@@ -634,7 +587,7 @@ def _excluded_pages(ds, info) -> list[Figure]:
         cur.text(_MARGIN_IN, "No impact was excluded.", size=10, style="italic")
     for impact_id, ball, reason in rows:
         lines = textwrap.wrap(reason or "(no reason given)", reason_chars) or [""]
-        ball_lines = textwrap.wrap(_fig._label(ds, ball), 26) or [""]
+        ball_lines = textwrap.wrap(ar.ball_label(ds, ball), 26) or [""]
         n = max(len(lines), len(ball_lines))
         if cur.y + n * line_in > h - _MARGIN_IN - 0.4:
             new_page(True)
@@ -657,10 +610,10 @@ def _hline(fig, y_in):
 
 def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
     w, h = A4_PORTRAIT_IN
-    i = _fig._impact_position(ds, impact_id)
-    ball = _text(_fig._text(ds["impact_ball"].values)[i])
-    reason = _text(_fig._text(ds["reason"].values)[i]) or "(no reason given)"
-    png = Path(figures_dir) / "qc" / f"{_fig._safe_name(impact_id)}.png" if figures_dir is not None else None
+    i = ar.impact_position(ds, impact_id)
+    ball = _text(ar.text_values(ds["impact_ball"].values)[i])
+    reason = _text(ar.text_values(ds["reason"].values)[i]) or "(no reason given)"
+    png = Path(figures_dir) / QC_DIR_NAME / f"{_fig.qc_file_stem(impact_id)}.png" if figures_dir is not None else None
     use_png = png is not None and png.is_file()
     if use_png:
         fig = _page()
@@ -673,9 +626,9 @@ def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
         text = _fmt(ds[name].values[i], fmt) if name in ds else "-"
         return "n/a" if text == "-" else f"{text}{unit}"
 
-    trace = _text(_fig._text(ds["trace_file"].values)[i]) if "trace_file" in ds else ""
+    trace = _text(ar.text_values(ds["trace_file"].values)[i]) if "trace_file" in ds else ""
     facts = [
-        ("Ball type", _fig._label(ds, ball)),
+        ("Ball type", ar.ball_label(ds, ball)),
         ("Reason", "\n".join(textwrap.wrap(reason, 85))),
         ("Trace file", "\n".join(textwrap.wrap(trace, 85)) or "-"),
         ("Gate speeds", f"VB = {value('vin_m_s', '.2f', ' m/s')}, VB' = {value('vout_m_s', '.2f', ' m/s')}, "
@@ -692,7 +645,7 @@ def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
     if use_png:
         _place_png(fig, png, cur.y, fig_h)
     else:
-        _draw_into_page(fig, lambda f: _fig._draw_qc(f, ds, impact_id), cur.y, fig_h)
+        _draw_into_page(fig, lambda f: _fig.draw_qc(f, ds, impact_id), cur.y, fig_h)
     _footer(fig, info, f"QC {number}/{n_total}")
     return fig
 
@@ -703,7 +656,7 @@ def report_page_count(ds) -> int:
     1 summary page + one page per figure + the exclusion list (at least one page)
     + one QC page per excluded impact.
     """
-    return 1 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(_fig.excluded_impacts(ds))
+    return 1 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(ar.excluded_impacts(ds))
 
 
 def write_report(ds, out_pdf, figures_dir=None) -> Path:
@@ -756,7 +709,7 @@ def write_report(ds, out_pdf, figures_dir=None) -> Path:
                 pdf.savefig(_figure_page(ds, info, name, number, figures_dir))
             for page in _excluded_pages(ds, info):
                 pdf.savefig(page)
-            excluded = _fig.excluded_impacts(ds)
+            excluded = ar.excluded_impacts(ds)
             for k, (impact_id, _, _) in enumerate(excluded, 1):
                 pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir))
     return out_pdf

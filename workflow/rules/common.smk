@@ -8,6 +8,7 @@ from snakemake.exceptions import WorkflowError
 from snakemake.logging import logger
 from snakemake.utils import validate
 
+from ballimpact.figure_registry import QC_DIR_NAME, REPORT_FIGURES
 from ballimpact.session import IMPACTS_FILE, SESSION_FILE, plan_session
 
 
@@ -179,18 +180,6 @@ def benchmark_path(name):
     return f"{RESULTS_DIR}/{{session}}/benchmarks/{name}.tsv"
 
 
-# PNG file stems the figures job writes (captions: workflow/report/<stem>.rst)
-FIGURES = (
-    "fig7_contact_time_cor",
-    "cor_speed_itf",
-    "fig8_stiffness",
-    "fig9_force_curves",
-    "fig10_components",
-    "fig2b_kelvin_voigt",
-    "kcal",
-)
-
-
 def session_targets(session):
     """Final outputs of one session (outputs.md); only the snapshot of a faulty session,
     whose rule then fails naming the fault."""
@@ -202,8 +191,8 @@ def session_targets(session):
         f"{base}/parameters.csv",
         f"{base}/{session}.nc",
         f"{base}/report.pdf",
-        *(f"{base}/figures/{stem}.png" for stem in FIGURES),
-        f"{base}/figures/qc",
+        *(f"{base}/figures/{fig.file_name}" for fig in REPORT_FIGURES),
+        f"{base}/figures/{QC_DIR_NAME}",
     ]
 
 

@@ -1,0 +1,147 @@
+"""The CSV tables of a session, read from its archive: impacts.csv (per impact) and parameters.csv (per ball type)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+__all__ = ["IMPACT_COLUMNS", "PARAMETER_COLUMNS", "impacts_table", "parameters_table"]
+
+#: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
+IMPACT_COLUMNS = [
+    "impact_id",
+    "ball",
+    "status",
+    "reason",
+    "vin_m_s",
+    "vout_m_s",
+    "cor",
+    "contact_time_ms",
+    "kcal_N_per_V",
+    "impulse_N_s",
+    "peak_force_N",
+    "time_to_peak_ms",
+    "max_displacement_mm",
+    "kv_stiffness_kN_m",
+    "kv_damping_N_s_m",
+    "used_in_fit",
+    "fit_note",
+    "vin_gate_m_s",
+    "vout_gate_m_s",
+]
+
+#: Columns of results/<session>/parameters.csv, in order: identification (ball,
+#: n_impacts, mass_kg), the parameters in Table 2 units (kb0_kN_m, kb0_source,
+#: ak_kN_m, a, ac_kN_s_m3), the 95 % intervals of the fitted ones (ak, a, ac, then
+#: kb0, NaN when kB(0) came from the config), then the relative fit residuals.
+PARAMETER_COLUMNS = [
+    "ball",
+    "n_impacts",
+    "mass_kg",
+    "kb0_kN_m",
+    "kb0_source",
+    "ak_kN_m",
+    "a",
+    "ac_kN_s_m3",
+    "ak_lo",
+    "ak_hi",
+    "a_lo",
+    "a_hi",
+    "ac_lo",
+    "ac_hi",
+    "kb0_lo",
+    "kb0_hi",
+    "contact_time_rmse_pct",
+    "cor_rmse_pct",
+    "kb_10mm_kN_m",
+    "kb_10mm_lo",
+    "kb_10mm_hi",
+    "kb_20mm_kN_m",
+    "kb_20mm_lo",
+    "kb_20mm_hi",
+    "itf_rebound_pred_cm",  # v1.1: the ITF 254 cm drop test predicted by the fitted model (ballimpact.itf)
+    "itf_rebound_pred_cm_lo",
+    "itf_rebound_pred_cm_hi",
+    "itf_rebound_cm",  # v1.1: the measured rebound from session.yaml, when given
+    "fit_warnings",  # issue 14: empty when all is well (ballimpact.summary.parameter_fit_warnings)
+]
+
+def _column(ds: xr.Dataset, name: str, n: int, *, text: bool = False):
+    if name in ds.variables:
+        values = ds[name].values
+        return [("" if v is None else str(v)) for v in values] if text else values
+    return [""] * n if text else np.full(n, np.nan)
+
+
+def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
+    """The impacts.csv table: one row per impact in raw order, columns :data:`IMPACT_COLUMNS`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive (or its per-impact part).
+
+    Returns
+    -------
+    pandas.DataFrame
+        SI columns as named in docs/outputs.md; ``reason`` is empty for ok impacts.
+    """
+    n = ds.sizes.get("impact", 0)
+    data = {}
+    for col in IMPACT_COLUMNS:
+        if col == "impact_id":
+            data[col] = _column(ds, "impact_id", n, text=True)
+        elif col == "ball":
+            data[col] = _column(ds, "impact_ball", n, text=True)
+        elif col in ("status", "reason"):
+            data[col] = _column(ds, col, n, text=True)
+        elif col == "used_in_fit":
+            # v1.1: set by the fit-outlier search; without it every ok impact is used
+            ok = np.array(_column(ds, "status", n, text=True)) == "ok"
+            if "used_in_fit" in ds.variables:
+                ok &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
+            data[col] = np.where(ok, "true", "false")
+        elif col == "fit_note":
+            data[col] = _column(ds, col, n, text=True)
+        else:
+            data[col] = np.asarray(_column(ds, col, n), dtype=float)
+    table = pd.DataFrame(data, columns=IMPACT_COLUMNS)
+    table.loc[table["status"] == "ok", "reason"] = ""
+    return table
+
+
+def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
+    """The parameters.csv table: one row per ball type, columns :data:`PARAMETER_COLUMNS`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive with the per-ball variables (missing ones give NaN / empty cells).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
+        a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
+    """
+    from .summary import parameter_fit_warnings
+
+    n = ds.sizes.get("ball", 0)
+    data = {}
+    for col in PARAMETER_COLUMNS:
+        if col == "fit_warnings":
+            data["fit_message"] = _column(ds, "fit_message", n, text=True)
+        elif col in ("ball", "kb0_source"):
+            data[col] = _column(ds, col, n, text=True)
+        elif col == "n_impacts":
+            values = np.asarray(_column(ds, col, n), dtype=float)
+            data[col] = pd.array(
+                [int(v) if np.isfinite(v) else pd.NA for v in values], dtype="Int64"
+            )
+        else:
+            data[col] = np.asarray(_column(ds, col, n), dtype=float)
+    table = pd.DataFrame(data, columns=[c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS])
+    return parameter_fit_warnings(table)[PARAMETER_COLUMNS]
+
+
