@@ -118,10 +118,10 @@ def is_synthetic(ds) -> bool:
 
 def _fit_titles(fig) -> None:
     """Wrap every axes title that is wider than its axes onto more lines (no title runs into
-    the next panel); the constrained layout then makes room for the extra lines."""
-    fig.canvas.draw()  # lay out: axes at their final positions
+    the next panel); the constrained layout makes room for the extra lines when the figure
+    is drawn (saved)."""
+    fig.draw_without_rendering()  # lay out (axes at their final positions) without rasterising
     renderer = fig.canvas.get_renderer()
-    changed = False
     for ax in fig.axes:
         if not ax.get_visible():
             continue
@@ -137,9 +137,6 @@ def _fit_titles(fig) -> None:
             chars = max(10, int(longest * width / measured * 0.95))
             title.set_text("\n".join(
                 wrapped for line in text.splitlines() for wrapped in textwrap.wrap(line, chars) or [""]))
-            changed = True
-    if changed:
-        fig.canvas.draw()
 
 
 def _finish(fig, ds) -> None:
