@@ -12,7 +12,7 @@ from archive_fixture import make_archive
 
 FIGURE_FUNCTIONS = [
     figures.fig_contact_time_cor,
-    figures.fig_cor_speed_itf,
+    figures.fig_cor_speed_range,
     figures.fig_stiffness,
     figures.fig_force_curves,
     figures.fig_components,

@@ -110,7 +110,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
     ),
     ReportFigure(
         stem="cor_speed_itf",
-        draw_name="draw_cor_speed_itf",
+        draw_name="draw_cor_speed_range",
         title="COR from 3 to 40 m/s, where the model stops, and the ITF drop test",
         caption=(
             "Each panel is one ball type. The fitted model COR (Eq. 14) is solid over the speeds of the impacts "

@@ -24,7 +24,7 @@ __all__ = [
     "KCAL_BAND_ROBUST_SD",
     "COMPONENT_SPEED_M_S",
     "fig_contact_time_cor",
-    "fig_cor_speed_itf",
+    "fig_cor_speed_range",
     "fig_stiffness",
     "fig_force_curves",
     "fig_components",
@@ -39,7 +39,7 @@ __all__ = [
     "render",
     "qc_file_stem",
     "draw_contact_time_cor",
-    "draw_cor_speed_itf",
+    "draw_cor_speed_range",
     "draw_stiffness",
     "draw_force_curves",
     "draw_components",
@@ -293,8 +293,8 @@ def fig_contact_time_cor(ds) -> Figure:
 # ----------------------------------------------------------------------------- COR from 3 to 40 m/s, ITF
 
 
-def draw_cor_speed_itf(fig, ds):
-    """Draw COR [-] from 3 to 40 m/s with the ITF drop test (:func:`fig_cor_speed_itf`) into ``fig``, a
+def draw_cor_speed_range(fig, ds):
+    """Draw COR [-] from 3 to 40 m/s with the ITF drop test (:func:`fig_cor_speed_range`) into ``fig``, a
     matplotlib Figure or SubFigure; ``ds`` is the session archive."""
     from .itf import ITF_REBOUND_MAX_M, ITF_REBOUND_MIN_M, drop_test_cor
 
@@ -341,7 +341,7 @@ def draw_cor_speed_itf(fig, ds):
     fig.suptitle("COR from 3 to 40 m/s: the fitted model, its extrapolation and the ITF drop test")
 
 
-def fig_cor_speed_itf(ds) -> Figure:
+def fig_cor_speed_range(ds) -> Figure:
     """COR against inbound speed from 3 to 40 m/s with the fitted range, the impacts and the ITF drop test.
 
     One panel per ball type: the fitted model COR (Eq. (14), Goodwill & Haake 2004)
@@ -360,7 +360,7 @@ def fig_cor_speed_itf(ds) -> Figure:
     -------
     matplotlib.figure.Figure
     """
-    return render(draw_cor_speed_itf, ds)
+    return render(draw_cor_speed_range, ds)
 
 
 # ----------------------------------------------------------------------------- Fig. 8

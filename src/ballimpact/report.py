@@ -493,7 +493,7 @@ def figure_label(name: str) -> str:
 def _caption_addition(ds, draw_name: str) -> str:
     """This session's numbers added to a figure's caption: the ITF drop test under the COR
     figure, the force-curve validation under the force curves (Fig. 9)."""
-    if draw_name == _fig.draw_cor_speed_itf.__name__:
+    if draw_name == _fig.draw_cor_speed_range.__name__:
         itf_lines = itf_comparison(ds)
         if itf_lines:
             return " ITF drop test of this session's balls: " + "; ".join(itf_lines) + "."
