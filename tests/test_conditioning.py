@@ -401,6 +401,50 @@ def test_peak_on_plate_ringing_is_a_problem():
     assert not any(p.kind is ProblemKind.PEAK_ON_RINGING for p in condition_voltage(v, fs).problems)
 
 
+@pytest.mark.parametrize("samples_per_period", [2.3, 2.8, 3.6])
+def test_peak_on_ringing_of_two_to_four_samples_per_period_is_a_problem(samples_per_period):
+    # a plate resonance near the Nyquist frequency: its swings are 1 and 2 samples apart, one half-period
+    # (zoo trace 0:552, a 20.7 kHz plate at 58.6 kHz, had its peak 10.5 % high and passed as ok)
+    fs = 58.6e3
+    v, fs, truth = make_trace(sample_rate_hz=fs, seed=7, ringing_fraction=0.10, ringing_hz=fs / samples_per_period,
+                              ringing_decay_s=10e-3, **CHAIN)
+    c = condition_voltage(v, fs)
+    assert any(p.kind is ProblemKind.PEAK_ON_RINGING for p in c.problems), c.problems
+
+
+def _spike_trace(fs, phase):
+    """A half-sine of 3 ms with the ball's pre-buckling spike, a ramp of 1.0 of its scale over 0.1 ms
+    ending in a sudden drop 0.25 ms after the start (the largest force); in volts, and the true peak [V]."""
+    t = np.arange(int(round(40e-3 * fs))) / fs
+    start = (int(20e-3 * fs) + phase) / fs
+    u = (t - start) / 3.0e-3
+    base = np.where((u > 0) & (u < 1), np.sin(np.pi * np.clip(u, 0.0, 1.0)), 0.0)
+    ramp = np.clip((t - start - 0.15e-3) / 0.1e-3, 0.0, 1.0) * (t < start + 0.25e-3)
+    f = base + ramp
+    true_peak = np.sin(np.pi * 0.25e-3 / 3.0e-3) + 1.0
+    return 2.0 * f + np.random.default_rng(2).normal(0.0, 1e-3, t.size), 2.0 * true_peak
+
+
+def test_peak_between_samples_is_a_problem_when_the_samples_do_not_pin_it():
+    # at 25 kHz the spike's ramp rises by 0.4 (32 % of its top) per sample: the largest sample can miss
+    # the top by that much; the phases put the drop just after a sample and just before the next (at
+    # phase 0.5 the spike falls between samples so that the largest sample is the smooth maximum: not seen)
+    for phase in (0.1, 0.9):
+        v, top = _spike_trace(25e3, phase)
+        c = condition_voltage(v, 25e3, mains_hz=None, tau_s=math.inf)
+        assert any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES and p.message.startswith("peak force between samples")
+                   for p in c.problems), (phase, c.problems)
+        assert np.max(c.voltage_V) < 0.95 * top  # the largest sample does miss the true top by more than 5 %
+    # at 400 kHz the ramp rises by 2 % of the top per sample: the largest sample is within it of the top
+    v, top = _spike_trace(400e3, 0.5)
+    c = condition_voltage(v, 400e3, mains_hz=None, tau_s=math.inf)
+    assert not any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in c.problems)
+    assert_allclose(np.max(c.voltage_V), top, rtol=0.02)
+    # a smooth maximum is pinned by its samples even at 20 kHz
+    v, fs, _ = make_trace(sample_rate_hz=20e3, seed=8, **CHAIN)
+    assert not any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in condition_voltage(v, fs).problems)
+
+
 def test_contact_end_fading_into_the_noise_is_a_problem():
     # zoo trace 0:1550 (ideal plate, punctured ball at 34 m/s, 172 kHz): the last 0.3 ms of the
     # force are a tail of 1 % of the peak, 5 noise deviations, that curves into zero; fitted from

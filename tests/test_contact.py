@@ -358,6 +358,23 @@ def test_jump_from_zero_located_to_half_a_sample(fs, phase):
     assert_allclose(c.end_s, start + 3.0e-3, atol=0.2 / fs)
 
 
+@pytest.mark.parametrize("before", [2, 3, 5])
+@pytest.mark.parametrize("fs", [20e3, 50e3])
+def test_spike_just_before_the_start_is_not_the_start(fs, before):
+    # zoo trace 1:523: a single-sample spike (switching equipment) two samples before the force's jump
+    # was joined to the contact by the merging of runs, and the start moved back to it (TC +1.2 %).
+    # A force on the ball cannot drop back to zero and jump again: the start stays at the jump.
+    start = (200 + 0.7) / fs
+    x = _jump_force(fs, start, noise_V=1e-4)
+    x[201 - before] += 0.3  # the spike: 30 % of the peak, before-0.3 sample intervals before the jump
+    # (with a quiet sample between them: a spike on the last quiet sample cannot be told from the jump)
+    clean = detect_contact(_jump_force(fs, start, noise_V=1e-4), fs)
+    c = detect_contact(x, fs)
+    assert abs(c.start_s - start) * fs <= 0.5 + 1e-9
+    assert_allclose(c.start_s, clean.start_s, atol=0.05 / fs)
+    assert_allclose(c.end_s, clean.end_s, atol=0.05 / fs)
+
+
 def test_ramp_start_is_not_a_jump():
     # the same force without the jump (a steep but continuous rise) keeps its hinge-fitted start
     fs, start = 50e3, 200.3 / 50e3

@@ -400,7 +400,11 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
     u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
-    wl = max(i0 - n_pre, 0)
+    # no foot reaches back to a lone sample above the contact threshold between quiet ones: that is a
+    # spike (switching equipment), no force on the ball, and it must not pull the hinge
+    lone = np.flatnonzero(_lone_samples(xs[:max(i0, 0)], sigma))
+    floor = int(lone[-1]) + 1 if lone.size else 0
+    wl = max(i0 - n_pre, floor)
     last = min(i0 + k_max - 1, peak_index)
     wr = min(i0 + FOOT_MIN_SAMPLES - 1, last)
     ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
@@ -410,8 +414,8 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
     # 4 % short). Widen the window back, a pre window at a time, until the corner is
     # free of it. A steep rise never sticks, so it is fitted exactly as before.
     n_widen = 0
-    while ts < wl + 1.0 and wl > 0 and n_widen < FOOT_MAX_WIDENINGS:
-        wl = max(wl - n_pre, 0)
+    while ts < wl + 1.0 and wl > floor and n_widen < FOOT_MAX_WIDENINGS:
+        wl = max(wl - n_pre, floor)
         n_widen += 1
         ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
     if wr > i0:
@@ -539,7 +543,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
 
     u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags)
     spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end) if spread else (math.nan, math.nan)
-    # consistency: the run above threshold lies inside the contact, start < end inside the trace
+    # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
+    # just before (after) the contact that the merging of runs joined to it is no force on the ball.
+    run_a, run_b = _unbroken_run(xs, peak_index, sigma, run_a, run_b)
     u_start = min(max(u_start, 0.0), float(run_a))
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
@@ -564,6 +570,32 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         start_spread_s=spreads[0],
         end_spread_s=spreads[1],
     )
+
+
+def _lone_samples(xs, sigma: float) -> np.ndarray:
+    """Samples above the contact threshold (THRESHOLD_SIGMA noise) whose two neighbours are quiet (FOOT_SIGMA).
+
+    A force on the ball cannot rise from zero and fall back to it within two
+    sample intervals at any sample rate of raw-format v1.1: such a sample is a
+    spike, not a foot or a tail.
+    """
+    xs = np.asarray(xs, dtype=float)
+    out = np.zeros(xs.size, dtype=bool)
+    if xs.size >= 3:
+        quiet = xs <= FOOT_SIGMA * sigma
+        out[1:-1] = (xs[1:-1] > THRESHOLD_SIGMA * sigma) & quiet[:-2] & quiet[2:]
+    return out
+
+
+def _unbroken_run(xs, peak_index: int, sigma: float, run_a: int, run_b: int) -> tuple[int, int]:
+    """The run [run_a, run_b] (merged across short gaps) without the lone samples at its ends (spikes)."""
+    lone = _lone_samples(xs, sigma)
+    above = xs > THRESHOLD_SIGMA * sigma
+    while run_a < peak_index and lone[run_a]:
+        run_a += int(np.flatnonzero(above[run_a + 1:peak_index + 1])[0]) + 1  # the peak is above: found
+    while run_b > peak_index and lone[run_b]:
+        run_b = peak_index + int(np.flatnonzero(above[peak_index:run_b])[-1])
+    return run_a, run_b
 
 
 def _checked_arguments(voltage_V, sample_rate_hz, t0_s):

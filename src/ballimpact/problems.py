@@ -61,6 +61,7 @@ class ProblemKind(enum.Enum):
     CONTACT_JUMP_UNRESOLVED = "contact_jump_unresolved"  # a force jump between samples costs > 0.7 % of TC
     NEGATIVE_FORCE = "negative_force"  # force below zero after the contact
     PEAK_ON_RINGING = "peak_on_ringing"  # the peak is a swing of plate ringing
+    PEAK_BETWEEN_SAMPLES = "peak_between_samples"  # the force may rise above the largest sample by > 5 %
     # physical bounds and calibration (ballimpact.processing)
     SPEED_OUT_OF_BOUNDS = "speed_out_of_bounds"
     COR_OUT_OF_BOUNDS = "cor_out_of_bounds"
