@@ -119,6 +119,13 @@ ZOO_REGRESSION = [
     ("jump-23kHz", 0, 757, "23 kHz, the force jumps from zero between samples: TC +1.2 % (now +0.5 %)", True),
     ("tail-fades-172kHz", 0, 1550, "punctured ball's 1 % tail fades into the noise: TC +1.6 %", False),
     ("tail-fades-50kHz", 0, 567, "punctured ball at 0.5 V peak, tail in the noise: TC +1.5 %", False),
+    # ok but wrong on main at commit 977d5e3 (seeds 0 and 1 of the benchmark)
+    ("plate-20.7kHz-rings-at-2.8-samples", 0, 552, "20.7 kHz plate at 58.6 kHz, its swings 1 and 2 samples apart: "
+     "peak +10.5 %", False),
+    ("spike-top-between-samples-28kHz", 1, 1140, "the spike's top between two samples at 28 kHz: peak -5.7 %", False),
+    ("spike-top-between-samples-25kHz", 0, 618, "the spike's top between two samples at 25 kHz: peak -5.3 %", False),
+    ("lone-spike-before-the-jump", 1, 523, "a lone spike two samples before the force's jump taken as the start: "
+     "TC +1.2 %", True),
 ]
 
 
