@@ -107,6 +107,8 @@ MESSAGES = {
                                 "after its end",
     ProblemKind.PEAK_ON_RINGING: "peak force on plate ringing: the force oscillates at about 20 kHz during the "
                                  "contact",
+    ProblemKind.PEAK_BETWEEN_SAMPLES: "peak force between samples: the force rises by 14 % of the peak in the 43 us "
+                                      "before the largest sample and may go on rising before it drops",
     ProblemKind.SPEED_OUT_OF_BOUNDS: "inbound speed 1.20 m/s outside physical bounds (2.0, 80.0)",
     ProblemKind.COR_OUT_OF_BOUNDS: "COR 1.200 outside physical bounds (0.05, 1.0)",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: "contact time 0.52 ms outside physical bounds (1.0, 12.0)",

@@ -61,7 +61,7 @@ class ProblemKind(enum.Enum):
     CONTACT_JUMP_UNRESOLVED = "contact_jump_unresolved"  # a force jump between samples costs > 0.7 % of TC
     NEGATIVE_FORCE = "negative_force"  # force below zero after the contact
     PEAK_ON_RINGING = "peak_on_ringing"  # the peak is a swing of plate ringing
-    PEAK_BETWEEN_SAMPLES = "peak_between_samples"  # the force may rise above the largest sample by > 5 %
+    PEAK_BETWEEN_SAMPLES = "peak_between_samples"  # the force may rise above the largest sample by > 10 %
     # physical bounds and calibration (ballimpact.processing)
     SPEED_OUT_OF_BOUNDS = "speed_out_of_bounds"
     COR_OUT_OF_BOUNDS = "cor_out_of_bounds"
@@ -134,6 +134,7 @@ _MESSAGE_STARTS = {
     ProblemKind.CONTACT_JUMP_UNRESOLVED: r"contact (start|end|start and end) between two samples",
     ProblemKind.NEGATIVE_FORCE: r"force below zero after the contact",
     ProblemKind.PEAK_ON_RINGING: r"peak force on plate ringing",
+    ProblemKind.PEAK_BETWEEN_SAMPLES: r"peak force between samples",
     ProblemKind.SPEED_OUT_OF_BOUNDS: r"inbound speed \S+ m/s outside physical bounds",
     ProblemKind.COR_OUT_OF_BOUNDS: r"COR \S+ outside physical bounds",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: r"contact time \S+ ms outside physical bounds",
