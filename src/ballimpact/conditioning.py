@@ -110,8 +110,10 @@ TURN_FRACTION = 0.02  # a turning point of the contact force is left by more tha
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
 TURN_MIN_OSCILLATION = 3  # fewest turning points of an oscillation [-]
 TURN_REGULARITY = 1.5  # spacings of an oscillation's turning points within this factor of each other [-]
+TURN_FAST_RUN = 4  # ... or this many before the peak within one sample of each other, at most 3 apart [-]
 PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
 PEAK_SAMPLING_FRACTION = 0.10  # the force may rise above the largest sample by more: the peak is not known to 5 % [-]
+PEAK_RAMP_FLOOR = 0.5  # ... judged on the rises from samples above this fraction of the peak (a ramp, no jump) [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -826,13 +828,8 @@ def _mains_problems(x, fs, fit: _BaselineFit, peak, scale, ambiguous, start_u, e
 
 
 def _alike(a: float, b: float) -> bool:
-    """Two spacings of turning points [samples] alike: within a factor TURN_REGULARITY, or one sample.
-
-    A turning point is located to a sample, so a spacing is known to +-1
-    sample: a ringing of 2-6 samples per period has spacings of 1 and 2 (or 2
-    and 3) samples that are the same half-period.
-    """
-    return max(a, b) <= TURN_REGULARITY * min(a, b) or (max(a, b) <= 3.0 and abs(a - b) <= 1.0)
+    """Two spacings of turning points within a factor TURN_REGULARITY of each other."""
+    return max(a, b) <= TURN_REGULARITY * min(a, b)
 
 
 def _turning_points(y, h) -> list[int]:
@@ -864,7 +861,12 @@ def _peak_on_ringing(xc, fs, noise, peak):
     when the last two or three turning points before it are spaced like the one after
     it (a ringing that began before the peak). Half a period of the
     oscillation is the spacing of the peak to the next turning point; two
-    spacings are alike within a factor TURN_REGULARITY. The ball's own spike
+    spacings are alike within a factor TURN_REGULARITY. A ringing of 2-6
+    samples per period (a resonance near the Nyquist frequency) has turning
+    points located to a sample only, its half-periods read 1 and 2 (or 2 and
+    3) samples: the TURN_FAST_RUN spacings before the peak and the one after
+    it, each at most 3 and within a sample of each other, are such a ringing,
+    of half-period their mean. The ball's own spike
     before buckling comes later, after a rise with no regular turns. It
     matters when, averaged over one period of the oscillation, the peak drops
     by more than PEAK_ON_RINGING_FRACTION of the peak.
@@ -884,11 +886,14 @@ def _peak_on_ringing(xc, fs, noise, peak):
     overshoot = i_peak <= 2.0 * after and spacing.size - j >= 2 and _alike(spacing[j + 1], after)
     # a peak inside a ringing that began before it: the two or three turning points before it at its spacing
     inside = j >= 2 and all(_alike(float(d), after) for d in spacing[max(j - TURN_MIN_OSCILLATION, 0):j])
-    if not (overshoot or inside):
+    # ringing of 2-6 samples per period: its turning points are located to a sample, so its half-periods
+    # read 1 and 2 (or 2 and 3) samples; a longer run of them before the peak, each within a sample
+    fast = spacing[max(j - TURN_FAST_RUN, 0):j + 1]
+    near_nyquist = (j >= TURN_FAST_RUN and float(np.max(fast)) <= 3.0
+                    and float(np.max(fast) - np.min(fast)) <= 1.0)
+    if not (overshoot or inside or near_nyquist):
         return []
-    # half a period: the mean spacing of the turning points around the peak (each known to a sample)
-    around = spacing[max(j - TURN_MIN_OSCILLATION, 0):j + 1] if inside else spacing[j:j + 2]
-    period = 2.0 * float(np.mean(around))
+    period = 2.0 * (float(np.mean(fast)) if near_nyquist and not (overshoot or inside) else after)
     k = max(int(round(period)), 1)
     averaged = np.convolve(xc, np.ones(k) / k, mode="same")
     drop = float(np.max(xc) - np.max(averaged))
@@ -908,16 +913,19 @@ def _peak_between_samples(xc, fs, noise):
     sudden drop (section 3.2 in Goodwill & Haake 2004). It can rise by at most
     the rise over one sample: the larger of the last two rises before the
     largest sample (a plate that smooths the ramp slows the last one), less two
-    noise deviations of the difference. Where in the interval the force drops
-    is not known (any instant alike), so the largest sample misses the top by
-    half that rise on average and by all of it at worst. When that rise is
+    noise deviations of the difference. Only rises from a sample already above
+    PEAK_RAMP_FLOOR of the peak count: the force's jump from zero (at 2 mm of
+    compression in the model) is no ramp and goes on nowhere. Where in the
+    interval the force drops is not known (any instant alike), so the largest
+    sample misses the top by half that rise on average and by all of it at
+    worst. When that rise is
     more than PEAK_SAMPLING_FRACTION (10 %) of the peak, the peak is not known
     to 5 % (the zoo's tolerance for the spike): sample faster.
 
     Not seen: a spike that falls between the samples so wholly that the
-    largest sample is on the smooth part of the contact. Lower maxima cannot be
-    judged alike: after the force's jump from zero (the model's force jumps at
-    2 mm of compression), a sample half-way up the jump looks like a ramp.
+    largest sample is on the smooth part of the contact (lower maxima are not
+    judged: a sample half-way up the force's jump from zero, where the jump
+    straddles it, looks like a ramp).
     """
     if xc.size < 3:
         return []
@@ -925,7 +933,9 @@ def _peak_between_samples(xc, fs, noise):
     if i == 0:
         return []
     peak = float(xc[i])
-    rise = float(max(xc[i] - xc[i - 1], xc[i - 1] - xc[i - 2] if i >= 2 else 0.0)) - 2.0 * math.sqrt(2.0) * noise
+    # a ramp's rises only: from a sample already at PEAK_RAMP_FLOOR of the peak (not the jump from zero)
+    rises = [float(xc[j] - xc[j - 1]) for j in (i, i - 1) if j >= 1 and xc[j - 1] >= PEAK_RAMP_FLOOR * peak]
+    rise = max(rises, default=0.0) - 2.0 * math.sqrt(2.0) * noise
     if peak > 0 and rise > PEAK_SAMPLING_FRACTION * peak:
         return [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES,
                         f"peak force between samples: the force rises by {100 * rise / peak:.2g} % of the peak in "
