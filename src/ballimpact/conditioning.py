@@ -589,6 +589,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
     if contact.found:
         problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u))
+        problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
+                                          float(contact.peak_V), scale))
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
                    it.mains, mains_source, it.contact_integral)
 
@@ -700,13 +702,19 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     if not peak > 0:
         return []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    return (_level_problems(x, fs, fit, peak, scale) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
+    return (_level_problems(x, fs, fit, peak, scale, e_u) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
             + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
             + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
 
 
-def _level_problems(x, fs, fit: _BaselineFit, peak, scale):
-    """The corrected signal off zero before or after the contact, or a quiet residual that is not white noise."""
+def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u):
+    """The corrected signal off zero before or after the contact, or a quiet residual that is not white noise.
+
+    After the contact the stretch of the baseline fit is checked; when the record
+    after the contact was too short for the fit (the baseline then extrapolated
+    from before the contact), the samples from POST_GUARD_S after the contact end
+    to the end of the record, when there are MIN_PRE_SAMPLES of them.
+    """
     out = []
     w = max(int(round(FLAT_WINDOW_S * fs)), MIN_QUIET_SAMPLES)
     pre_idx = np.flatnonzero(fit.pre)
@@ -718,6 +726,10 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale):
         stretches.append(("just after", post_idx[:w]))
         if post_idx.size > 2 * w:
             stretches.append(("later after", post_idx[-w:]))
+    else:
+        tail = np.arange(int(math.ceil(end_u + POST_GUARD_S * fs)), x.size)
+        if tail.size >= MIN_PRE_SAMPLES:
+            stretches.append(("after", tail[:w]))
     for where, sel in stretches:
         level = float(np.mean(x[sel]))
         se = fit.noise / math.sqrt(sel.size)
@@ -824,6 +836,48 @@ def _mains_problems(x, fs, fit: _BaselineFit, peak, scale, ambiguous, start_u, e
                                f"mains frequency not resolved: {mains:g} and {other:g} Hz hum fit the quiet baseline "
                                f"equally well and differ by {diff * scale * 1e3:.3g} mV under the contact "
                                "(give daq.mains_hz)"))
+    return out
+
+
+def _short_record_hum(x, fs, fit: _BaselineFit, mains_hz: tuple, peak: float, scale: float):
+    """Mains hum in quiet samples that span less than one period of it: not removed, and it matters.
+
+    The baseline fit leaves hum out when the quiet samples do not span a full
+    period of the fundamental (it cannot be told from the offset and drift
+    there). What it leaves is tested here: the corrected quiet samples are
+    fitted with a line and the fundamental of each mains frequency in
+    question; a hum of more than FLAT_FRACTION of the peak and FLAT_SIGMA
+    standard errors is a problem, since under the contact it bends the
+    baseline by an unknown part of itself.
+    """
+    if fit.coef["hum_frequencies_hz"] or not mains_hz or not peak > 0:
+        return []
+    qi = np.flatnonzero(fit.quiet)
+    if qi.size < 2 * MIN_QUIET_SAMPLES:
+        return []
+    t = qi / fs
+    span = float(t[-1] - t[0])
+    t = t - 0.5 * (t[0] + t[-1])
+    out = []
+    for f in mains_hz:
+        if span * f >= 1.0:
+            continue
+        w = 2.0 * math.pi * f * t
+        a = np.column_stack([np.ones(t.size), t, np.cos(w), np.sin(w)])
+        coef, *_ = np.linalg.lstsq(a, x[qi], rcond=None)
+        resid = x[qi] - a @ coef
+        s2 = float(resid @ resid) / max(t.size - 4, 1)
+        cov = s2 * np.linalg.pinv(a.T @ a)
+        amp = float(math.hypot(coef[2], coef[3]))
+        se = math.sqrt(max((coef[2] ** 2 * cov[2, 2] + coef[3] ** 2 * cov[3, 3] + 2 * coef[2] * coef[3] * cov[2, 3])
+                           / max(amp * amp, 1e-300), 0.0))
+        if amp > FLAT_FRACTION * peak and amp > FLAT_SIGMA * se:
+            out.append(Problem(ProblemKind.MAINS_UNRESOLVED,
+                               f"mains hum not resolved: the quiet samples span {1e3 * span:.3g} ms, less than a period "
+                               f"of {f:g} Hz, and hold a hum of about {amp * scale * 1e3:.3g} mV "
+                               f"({100 * amp / peak:.2g} % of the peak) that bends the baseline under the contact "
+                               "(record longer pre- or post-trigger)"))
+            break
     return out
 
 

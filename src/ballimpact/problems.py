@@ -130,7 +130,7 @@ _MESSAGE_STARTS = {
     ProblemKind.CONTACT_END_UNDETERMINED: r"contact (start|end) not determined",
     ProblemKind.TOO_FEW_SAMPLES: r"only \S+ samples in the contact",
     ProblemKind.PLATE_RINGING: r"plate ringing",
-    ProblemKind.MAINS_UNRESOLVED: r"mains frequency not resolved",
+    ProblemKind.MAINS_UNRESOLVED: r"mains (frequency|hum) not resolved",
     ProblemKind.CONTACT_JUMP_UNRESOLVED: r"contact (start|end|start and end) between two samples",
     ProblemKind.NEGATIVE_FORCE: r"force below zero after the contact",
     ProblemKind.PEAK_ON_RINGING: r"peak force on plate ringing",
