@@ -470,6 +470,26 @@ def test_peak_between_samples_is_a_problem_when_the_samples_do_not_pin_it():
     assert not any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in condition_voltage(v, fs).problems)
 
 
+def test_largest_sample_at_the_jump_from_zero_is_a_problem():
+    # zoo trace 0:952: an 8.7 kHz plate at 22.9 kHz overshoots the force's jump by 9 %, and the first sample
+    # of the contact is the largest; a ball's force rises as it compresses, so that sample is no measured top
+    fs = 22.9e3
+    t = np.arange(int(40e-3 * fs)) / fs
+    start = (int(20e-3 * fs) + 0.6) / fs
+    u = (t - start) / 3.0e-3
+    inside = (u > 0) & (u < 1)
+    f = np.where(inside, 0.6 * (1.0 - u) + 0.4 * np.sin(np.pi * u), 0.0)
+    over = np.where(inside, 0.5 * np.exp(-(t - start) / 0.05e-3) * np.cos(2 * np.pi * 8.7e3 * (t - start)), 0.0)
+    noise = np.random.default_rng(3).normal(0.0, 1e-3, t.size)
+    c = condition_voltage(2.0 * (f + over) + noise, fs, mains_hz=None, tau_s=math.inf)
+    assert any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES and "the first of the contact" in p.message
+               for p in c.problems), c.problems
+    # the same jump without the overshoot: its top comes later (the half-sine), and is measured
+    c = condition_voltage(2.0 * (0.4 * f / 0.6 + 0.6 * np.where(inside, np.sin(np.pi * u), 0.0)) + noise, fs,
+                          mains_hz=None, tau_s=math.inf)
+    assert not any(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in c.problems), c.problems
+
+
 def test_contact_end_fading_into_the_noise_is_a_problem():
     # zoo trace 0:1550 (ideal plate, punctured ball at 34 m/s, 172 kHz): the last 0.3 ms of the
     # force are a tail of 1 % of the peak, 5 noise deviations, that curves into zero; fitted from

@@ -126,6 +126,8 @@ ZOO_REGRESSION = [
     ("spike-top-between-samples-25kHz", 0, 618, "the spike's top between two samples at 25 kHz: peak -5.3 %", False),
     ("short-record-hum-no-post-baseline", 1, 1962, "11.5 ms record, 17 mV of 60 Hz hum not fittable, no quiet "
      "samples after the contact for the fit: TC +20 %", False),
+    ("plate-overshoot-is-the-first-sample", 0, 952, "8.7 kHz plate at 22.9 kHz: the first sample of the contact, "
+     "the plate's overshoot of the jump, is the largest: peak +9.1 %", False),
     ("lone-spike-before-the-jump", 1, 523, "a lone spike two samples before the force's jump taken as the start: "
      "TC +1.2 %", True),
 ]

@@ -114,6 +114,7 @@ TURN_FAST_RUN = 4  # ... or this many before the peak within one sample of each 
 PEAK_ON_RINGING_FRACTION = 0.015  # averaged over one period of it, the peak drops by more: not the ball's [-]
 PEAK_SAMPLING_FRACTION = 0.10  # the force may rise above the largest sample by more: the peak is not known to 5 % [-]
 PEAK_RAMP_FLOOR = 0.5  # ... judged on the rises from samples above this fraction of the peak (a ramp, no jump) [-]
+PEAK_JUMP_FRACTION = 0.1  # the largest sample straight after one below this fraction of it: at the jump [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -974,7 +975,12 @@ def _peak_between_samples(xc, fs, noise):
     sample misses the top by half that rise on average and by all of it at
     worst. When that rise is
     more than PEAK_SAMPLING_FRACTION (10 %) of the peak, the peak is not known
-    to 5 % (the zoo's tolerance for the spike): sample faster.
+    to 5 % (the zoo's tolerance for the spike): sample faster. Nor is it
+    known when the largest sample is the first of the contact (the one before
+    it below PEAK_JUMP_FRACTION of it): a ball's force rises as it compresses,
+    so that sample is the top of the force's jump from zero, a plate's
+    overshoot of the jump, or a spike whose top fell within the first sample
+    interval.
 
     Not seen: a spike that falls between the samples so wholly that the
     largest sample is on the smooth part of the contact (lower maxima are not
@@ -987,6 +993,11 @@ def _peak_between_samples(xc, fs, noise):
     if i == 0:
         return []
     peak = float(xc[i])
+    if peak > 0 and xc[i - 1] < PEAK_JUMP_FRACTION * peak:
+        return [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES,
+                        f"peak force between samples: the largest sample is the first of the contact (the one "
+                        f"before it at {100 * xc[i - 1] / peak:.2g} % of it): the top of the force's jump from zero "
+                        "or the plate's overshoot of it, not a measured maximum (sample faster)")]
     # a ramp's rises only: from a sample already at PEAK_RAMP_FLOOR of the peak (not the jump from zero)
     rises = [float(xc[j] - xc[j - 1]) for j in (i, i - 1) if j >= 1 and xc[j - 1] >= PEAK_RAMP_FLOOR * peak]
     rise = max(rises, default=0.0) - 2.0 * math.sqrt(2.0) * noise
