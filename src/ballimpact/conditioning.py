@@ -41,9 +41,11 @@ hum differs under the contact, the impact is flagged as a problem.
 
 Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
-before or after the contact not flat at zero, mains frequency not resolved, a
-quiet residual that is more than white noise, plate ringing during the contact
-(a spectral line) or after it, a peak that is one of the plate's swings, force
+before or after the contact not flat at zero, mains frequency not resolved (or
+hum in a record shorter than one mains period), a quiet residual that is more
+than white noise, plate ringing during the contact (a spectral line) or after
+it, a peak that is one of the plate's swings, a peak between samples (the
+largest sample on a steep ramp, or the first of the contact), force
 below zero after the contact (the plate swinging back), a contact end that
 moves when fitted again from higher samples (a tail fading into the noise), a
 force jump from zero that locates an end only to half a sample when that is
