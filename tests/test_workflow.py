@@ -110,7 +110,7 @@ def test_dry_run_repo_raw_dir():
         return
     assert set(counts) <= {
         "validate_session", "process_chunk", "collect_impacts", "fit_ball", "fit_session", "archive", "figures",
-        "report", "catalogue", "all",
+        "report", "session_outputs", "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -124,10 +124,8 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
         "validate_session": 1,
         "process_chunk": min(n_impacts, max(2, math.ceil(n_impacts / 200))),
         "collect_impacts": 1,
-        "fit_session": 1,  # a small session fits all its ball types in one job (fit_batch_impacts)
-        "archive": 1,
-        "figures": 1,
-        "report": 1,
+        # a small session (fit_batch_impacts): fits, archive, figures and report in one job
+        "session_outputs": 1,
         "catalogue": 1,
         "all": 1,
     }
