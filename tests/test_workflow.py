@@ -122,7 +122,8 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
     counts = job_counts(proc.stdout)
     assert counts == {
         "validate_session": 1,
-        "process_chunk": min(n_impacts, max(2, math.ceil(n_impacts / 200))),
+        "process_chunk": min(n_impacts, max(yaml.safe_load((REPO / "config.yaml").read_text())["min_chunks"],
+                                            math.ceil(n_impacts / 200))),
         "collect_impacts": 1,
         # a small session (fit_batch_impacts): fits, archive, figures and report in one job
         "session_outputs": 1,
