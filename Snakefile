@@ -24,6 +24,7 @@ wildcard_constraints:
 include: "workflow/rules/process.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/session.smk"
 include: "workflow/rules/summary.smk"
 include: "workflow/rules/catalogue.smk"
 

@@ -92,10 +92,10 @@ def test_editing_one_raw_file_reruns_exactly_its_session(state, what):
     # the jobs of that session, and the catalogue across sessions (no session wildcard)
     assert {s for sessions in jobs.values() for s in sessions} == {"beta", ""}
     assert {rule for rule, sessions in jobs.items() if "" in sessions} == {"catalogue"}
-    # the whole chain of that session, down to its report (a small session fits all its
-    # ball types in one fit_session job, a large one in fit_ball jobs)
-    assert {"validate_session", "process_chunk", "collect_impacts", "archive", "report"} <= set(jobs)
-    assert {"fit_session", "fit_ball"} & set(jobs)
+    # the whole chain of that session, down to its report (a small session's fits, archive,
+    # figures and report are one session_outputs job, a large one's are per-stage jobs)
+    assert {"validate_session", "process_chunk", "collect_impacts"} <= set(jobs)
+    assert {"session_outputs"} <= set(jobs) or {"archive", "report"} <= set(jobs)
 
 
 def test_changed_mains_reruns_processing_of_every_session(state):
@@ -107,5 +107,6 @@ def test_changed_mains_reruns_processing_of_every_session(state):
 @pytest.mark.parametrize("key", ["bootstrap=12", "seed=3"])
 def test_changed_fit_setting_reruns_fits_not_processing(state, key):
     jobs = planned(state, key)
-    assert jobs.get("fit_session", set()) | jobs.get("fit_ball", set()) == set(SESSIONS)
+    fits = ("fit_session", "fit_ball", "session_outputs")  # session_outputs: the fits of a small session
+    assert set().union(*(jobs.get(rule, set()) for rule in fits)) == set(SESSIONS)
     assert "process_chunk" not in jobs and "collect_impacts" not in jobs and "validate_session" not in jobs

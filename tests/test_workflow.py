@@ -110,7 +110,7 @@ def test_dry_run_repo_raw_dir():
         return
     assert set(counts) <= {
         "validate_session", "process_chunk", "collect_impacts", "fit_ball", "fit_session", "archive", "figures",
-        "report", "catalogue", "all",
+        "report", "session_outputs", "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -122,12 +122,11 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
     counts = job_counts(proc.stdout)
     assert counts == {
         "validate_session": 1,
-        "process_chunk": min(n_impacts, max(2, math.ceil(n_impacts / 200))),
+        "process_chunk": min(n_impacts, max(yaml.safe_load((REPO / "config.yaml").read_text())["min_chunks"],
+                                            math.ceil(n_impacts / 200))),
         "collect_impacts": 1,
-        "fit_session": 1,  # a small session fits all its ball types in one job (fit_batch_impacts)
-        "archive": 1,
-        "figures": 1,
-        "report": 1,
+        # a small session (fit_batch_impacts): fits, archive, figures and report in one job
+        "session_outputs": 1,
         "catalogue": 1,
         "all": 1,
     }
@@ -671,3 +670,31 @@ def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # staging folder removed
     with pytest.raises(ValueError, match="balls must name at least one ball type"):
         pipeline.fit_balls(tmp_path / "impacts.nc", [], session, tmp_path / "none.nc", n_bootstrap=0, seed=0)
+
+
+@pytest.mark.slow
+def test_session_outputs_writes_what_the_per_stage_rules_write(synth_raw, tmp_path):
+    """Rule session_outputs (a small session's fits, archive, figures and report in one job)
+    writes the per-stage rules' files: its parameters.csv is the one rule archive writes
+    from its fits, every figure of the registry and a QC page per excluded impact."""
+    from ballimpact.figure_registry import FIGURE_STEMS
+
+    session = synth_raw / "s1"
+    pipeline.process_chunk(session, 0, 1, tmp_path / "chunk_0.nc")
+    pipeline.collect_impacts(session, [tmp_path / "chunk_0.nc"], tmp_path / "impacts.csv", tmp_path / "impacts.nc")
+    balls = sorted({r["ball"] for r in raw_rows(session)})
+    out = tmp_path / "out"
+    pipeline.session_outputs(session, tmp_path / "impacts.nc", balls, out / "work" / "fits.nc", out / "s1.nc",
+                             out / "parameters.csv", out / "figures", out / "report.pdf", n_bootstrap=5, seed=3)
+    pipeline.write_archive(session, tmp_path / "impacts.nc", [out / "work" / "fits.nc"], tmp_path / "s1.nc",
+                           tmp_path / "parameters.csv")
+    assert (out / "parameters.csv").read_text() == (tmp_path / "parameters.csv").read_text()
+    assert sorted(p.stem for p in (out / "figures").glob("*.png")) == sorted(FIGURE_STEMS)
+    with open(tmp_path / "impacts.csv", newline="", encoding="utf-8") as f:
+        n_excluded = sum(1 for row in csv.DictReader(f) if row["status"] == "excluded")
+    assert n_excluded > 0  # the synthetic session has faults: QC pages to write
+    assert len(list((out / "figures" / "qc").glob("*.png"))) == n_excluded
+    assert (out / "report.pdf").read_bytes()[:5] == b"%PDF-"
+    with pytest.raises(ValueError, match="n_bootstrap must be an integer >= 0"):
+        pipeline.session_outputs(session, tmp_path / "impacts.nc", balls, out / "f.nc", out / "x.nc", out / "p.csv",
+                                 out / "figures", out / "r.pdf", n_bootstrap=-1, seed=0)

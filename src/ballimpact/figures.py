@@ -96,7 +96,7 @@ def render(draw, ds) -> Figure:
 
 
 def _new_figure(width_in: float, height_in: float) -> Figure:
-    fig = Figure(figsize=(width_in, height_in), layout="constrained")
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
 
@@ -118,10 +118,19 @@ def is_synthetic(ds) -> bool:
 
 def _fit_titles(fig) -> None:
     """Wrap every axes title that is wider than its axes onto more lines (no title runs into
-    the next panel); the constrained layout makes room for the extra lines when the figure
-    is drawn (saved)."""
-    fig.draw_without_rendering()  # lay out (axes at their final positions) without rasterising
+    the next panel), then freeze the layout.
+
+    The constrained layout runs once (axes at their final positions, nothing drawn); only
+    when a title was wrapped does it run again to make room for the extra lines. Then the
+    figure's layout engine is replaced by a fixed one, so that saving the figure draws it
+    once without laying it out again (a layout measures every tick label: it cost as much
+    as the drawing itself).
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        engine.execute(fig)  # lay out without drawing
     renderer = fig.canvas.get_renderer()
+    changed = False
     for ax in fig.axes:
         if not ax.get_visible():
             continue
@@ -137,6 +146,11 @@ def _fit_titles(fig) -> None:
             chars = max(10, int(longest * width / measured * 0.95))
             title.set_text("\n".join(
                 wrapped for line in text.splitlines() for wrapped in textwrap.wrap(line, chars) or [""]))
+            changed = True
+    if engine is not None:
+        if changed:
+            engine.execute(fig)  # room for the wrapped titles
+        fig.set_layout_engine("none")  # keep these positions: saving draws once, no second layout
 
 
 def _finish(fig, ds) -> None:

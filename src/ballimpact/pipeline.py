@@ -34,6 +34,7 @@ __all__ = [
     "write_archive",
     "make_figures",
     "make_report",
+    "session_outputs",
 ]
 
 SNAPSHOT_FORMAT_VERSION = 1  # version of the work/session.json layout
@@ -691,3 +692,45 @@ def make_report(archive_nc, figures_dir, out_pdf) -> None:
     Path(out_pdf).parent.mkdir(parents=True, exist_ok=True)
     report.write_report(ds, out_pdf, figures_dir=figures_dir)
     logger.info("report %s: %d pages", out_pdf, report.report_page_count(ds))
+
+
+def session_outputs(session_dir, impacts_nc, balls, out_fits_nc, out_nc, out_parameters_csv, figures_dir, out_pdf,
+                    *, n_bootstrap: int, seed: int) -> None:
+    """
+    Fits, archive, figures and report of a small session in one process.
+
+    Rule ``session_outputs`` (sessions of at most config ``fit_batch_impacts`` impacts):
+    :func:`fit_balls`, :func:`write_archive`, :func:`make_figures` and
+    :func:`make_report` one after the other, the same calls as rules ``fit_session``,
+    ``archive``, ``figures`` and ``report``, so the same files and numbers; it saves
+    the start-up (Python and its imports) of three processes per session.
+
+    Parameters
+    ----------
+    session_dir : str or Path
+        The raw session folder.
+    impacts_nc : str or Path
+        ``work/impacts.nc`` of the session.
+    balls : sequence of str
+        Ball type keys with impacts in the session, in session.yaml order.
+    out_fits_nc : str or Path
+        ``work/fits.nc`` to write (the file of rule ``fit_session``).
+    out_nc : str or Path
+        The archive ``<session_id>.nc`` to write.
+    out_parameters_csv : str or Path
+        ``parameters.csv`` to write.
+    figures_dir : str or Path
+        The figures folder (``<stem>.png`` and ``qc/``).
+    out_pdf : str or Path
+        ``report.pdf`` to write.
+    n_bootstrap : int
+        Bootstrap resamples for the 95 % intervals, >= 0.
+    seed : int
+        Seed of the bootstrap random number generator, >= 0.
+    """
+    _check_int("n_bootstrap", n_bootstrap, 0)
+    _check_int("seed", seed, 0)
+    fit_balls(impacts_nc, balls, session_dir, out_fits_nc, n_bootstrap=n_bootstrap, seed=seed)
+    write_archive(session_dir, impacts_nc, [out_fits_nc], out_nc, out_parameters_csv)
+    make_figures(out_nc, figures_dir)
+    make_report(out_nc, figures_dir, out_pdf)

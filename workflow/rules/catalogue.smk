@@ -43,6 +43,8 @@ rule catalogue:
         "../envs/ballimpact.yaml"
     log:
         f"{CATALOGUE_DIR}/logs/catalogue.log",
+    benchmark:
+        f"{CATALOGUE_DIR}/benchmarks/catalogue.tsv"
     threads: 1
     script:
         "../scripts/catalogue.py"

@@ -2,6 +2,7 @@
 
 import math
 import os
+import re
 from pathlib import Path
 
 from snakemake.exceptions import WorkflowError
@@ -159,6 +160,17 @@ if not SESSIONS:
 
 
 
+# Small sessions (at most config fit_batch_impacts impacts) get their fits, archive,
+# figures and report from one job (rule session_outputs, workflow/rules/session.smk);
+# the others from the per-stage rules fit_ball, archive, figures and report.
+SMALL_SESSIONS = [
+    s for s in SESSIONS
+    if "fault" not in SESSION_INFO[s] and SESSION_INFO[s]["n_impacts"] <= int(config.get("fit_batch_impacts", 0))
+]
+# the session wildcard of session_outputs matches exactly these names ("(?!)" matches none)
+SMALL_SESSION_PATTERN = "|".join(re.escape(s) for s in SMALL_SESSIONS) or "(?!)"
+
+
 # ------------------------------------------------------------------------ paths
 
 
@@ -194,6 +206,42 @@ def session_targets(session):
         *(f"{base}/figures/{fig.file_name}" for fig in REPORT_FIGURES),
         f"{base}/figures/{QC_DIR_NAME}",
     ]
+
+
+def figure_outputs():
+    """The figures rule's outputs, also those of session_outputs. One PNG per figure of the registry
+    (ballimpact.figure_registry), named by its stem, and the QC folder, each with its entry
+    in the Snakemake report (captions in workflow/report/, relative to workflow/rules/)."""
+    outputs = {
+        fig.stem: report(
+            result_path(f"figures/{fig.file_name}"),
+            caption=f"../report/{fig.stem}.rst",
+            category=fig.category,
+            subcategory="{session}",
+            labels={"session": "{session}", "figure": fig.report_label, "shows": fig.shows},
+        )
+        for fig in REPORT_FIGURES
+    }
+    outputs["qc"] = report(
+        directory(result_path(f"figures/{QC_DIR_NAME}")),
+        patterns=["{name}.png"],
+        caption="../report/qc.rst",
+        category="Quality control",
+        subcategory="{session}",
+        labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace of an excluded impact"},
+    )
+    return outputs
+
+
+def report_pdf_output():
+    """report.pdf with its entry in the Snakemake report (rules report and session_outputs)."""
+    return report(
+        result_path("report.pdf"),
+        caption="../report/report_pdf.rst",
+        category="Session report",
+        subcategory="{session}",
+        labels={"session": "{session}", "figure": "report.pdf", "shows": "the whole session report"},
+    )
 
 
 # ------------------------------------------------------------------ input functions

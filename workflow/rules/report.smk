@@ -6,25 +6,9 @@ rule figures:
     input:
         archive=result_path("{session}.nc"),
     output:
-        # one output per figure of the registry (ballimpact.figure_registry), named by its stem
-        **{
-            fig.stem: report(
-                result_path(f"figures/{fig.file_name}"),
-                caption=f"../report/{fig.stem}.rst",
-                category=fig.category,
-                subcategory="{session}",
-                labels={"session": "{session}", "figure": fig.report_label, "shows": fig.shows},
-            )
-            for fig in REPORT_FIGURES
-        },
-        qc=report(
-            directory(result_path(f"figures/{QC_DIR_NAME}")),
-            patterns=["{name}.png"],
-            caption="../report/qc.rst",
-            category="Quality control",
-            subcategory="{session}",
-            labels={"session": "{session}", "figure": "QC {name}", "shows": "raw trace of an excluded impact"},
-        ),
+        # one output per figure of the registry (ballimpact.figure_registry), named by its
+        # stem, and the QC folder (figure_outputs, common.smk)
+        **figure_outputs(),
     conda:
         "../envs/ballimpact.yaml"
     log:
@@ -43,13 +27,7 @@ rule report:
         figures=[result_path(f"figures/{fig.file_name}") for fig in REPORT_FIGURES],
         qc=result_path(f"figures/{QC_DIR_NAME}"),
     output:
-        pdf=report(
-            result_path("report.pdf"),
-            caption="../report/report_pdf.rst",
-            category="Session report",
-            subcategory="{session}",
-            labels={"session": "{session}", "figure": "report.pdf", "shows": "the whole session report"},
-        ),
+        pdf=report_pdf_output(),
     conda:
         "../envs/ballimpact.yaml"
     log:
