@@ -17,8 +17,12 @@ What the code does (details in :func:`fit_ball_model`):
   a joint least-squares fit on the relative TC and COR residuals of the impacts,
   each kind weighted by its own unbiased scatter.
 * Intervals (AK, a, AC, kB(10 mm), kB(20 mm), kB(0) when fitted): profile likelihood
-  with an F(1, nu) critical value, nu from Satterthwaite's formula for the two
-  separately estimated scatters. ``bench/coverage.py`` measures their coverage.
+  with a critical value calibrated by a parametric bootstrap
+  (:func:`_calibrated_critical_values`: sessions simulated from the fit with its TC and
+  COR scatter, fitted in the linearised model with the scatters re-estimated, the 0.95
+  quantile of their statistic), in place of the F(1, nu) quantile with Satterthwaite's
+  nu, which only approximates the effect of two scatters estimated from few residuals.
+  ``bench/coverage.py`` measures their coverage.
 * A case-resampling bootstrap over impacts gives the AK-a correlation and the
   confidence bands of the model curves; :func:`model_curves` adds the impacts'
   own scatter for prediction bands.
@@ -718,10 +722,12 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof
     :func:`_quantities`, with the critical value calibrated for the estimated scatter.
 
     The residuals are weighted by the unbiased TC and COR scatter (``sigma_*``), so the
-    profile deviance S(q) - S_min of a quantity q is compared with the F(1, nu)
+    profile deviance S(q) - S_min of a quantity q is compared with ``critical[key]``
+    (from :func:`_calibrated_critical_values`), or when that is missing with the F(1, nu)
     quantile, nu the Satterthwaite degrees of freedom of q's variance (the TC and COR
     scatter are estimated separately, from nu_TC and nu_COR residual degrees of
-    freedom; :func:`_satterthwaite_dof`). The other parameters are refitted at every
+    freedom; :func:`_satterthwaite_dof`). The profile grid's spacing still comes from
+    the Wald standard error. The other parameters are refitted at every
     grid point (started from the Wald-linearised conditional optimum), so the interval
     follows the curved AK-a ridge.
 
@@ -1247,9 +1253,11 @@ def fit_ball_model(
     3. Stage one (:func:`fit_contact_time`), stage two (:func:`fit_restitution`), then
        a joint least-squares fit of AK, a, AC (and kB(0) when fitted) on both kinds of
        residual, re-weighted to each kind's unbiased scatter RSS / (n - p_kind).
-    4. Intervals: profile likelihood with the F(1, nu) critical value, nu the
-       Satterthwaite degrees of freedom (:func:`_profile_intervals`), for AK, a, AC,
-       kB(10 mm), kB(20 mm) (kB = kB(0) + AK x^a, Eq. (4)) and kB(0) when fitted.
+    4. Intervals: profile likelihood (:func:`_profile_intervals`) for AK, a, AC,
+       kB(10 mm), kB(20 mm) (kB = kB(0) + AK x^a, Eq. (4)) and kB(0) when fitted; the
+       critical value of each is calibrated by a parametric bootstrap of the fit
+       (:func:`_calibrated_critical_values`), the F(1, nu) quantile (nu the
+       Satterthwaite degrees of freedom) only when that is switched off.
     5. A case-resampling bootstrap over impacts (``n_bootstrap`` resamples, kB(0)
        re-extrapolated in each when extrapolated, refitted when fitted) gives the AK-a
        correlation and the confidence bands of the model curves (:func:`model_curves`).
@@ -1426,8 +1434,12 @@ def _bootstrap_summary(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source
 
 def _interval_method(kb0_source):
     """How the intervals were found, for ``BallFit.interval_method``."""
-    method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
-              "the unbiased TC and COR scatter")
+    method = ("profile likelihood, critical value calibrated by a parametric bootstrap of the fit "
+              f"({CALIBRATION_SESSIONS} simulated sessions, linearised, TC and COR scatter re-estimated), "
+              "residuals weighted by the unbiased TC and COR scatter")
+    if CALIBRATION_SESSIONS < 100:
+        method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
+                  "the unbiased TC and COR scatter")
     if kb0_source == "extrapolated":
         method += ("; kB(0) extrapolated by the paper's straight line, intervals the hull with kB(0) fixed "
                    "there and with kB(0) fitted (extrapolation-model uncertainty)")
