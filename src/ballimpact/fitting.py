@@ -855,6 +855,14 @@ def _quantity_gradient(spec, theta):
     return grad
 
 
+def _inverse(a):
+    """Inverse of a stack of symmetric positive definite matrices; pseudo-inverse if one is singular."""
+    try:
+        return np.linalg.inv(a)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(a)
+
+
 def _linear_sessions(jac_raw, r0, sigma_tc, sigma_cor, n, rounds=2):
     """The fit of :func:`_calibrated_critical_values` in the model linearised at the estimate.
 
@@ -868,12 +876,13 @@ def _linear_sessions(jac_raw, r0, sigma_tc, sigma_cor, n, rounds=2):
     d = np.zeros((b, jac_raw.shape[1]))
     for _ in range(rounds + 1):
         w = np.repeat(1.0 / s**2, n, axis=1)
-        cov = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w, jac_raw))
+        jw = jac_raw[None] * w[:, :, None]  # (B, 2n, P)
+        cov = _inverse(np.swapaxes(jw, 1, 2) @ jac_raw)
         if _ == rounds:
             break
-        d = -np.einsum("bpq,iq,bi,bi->bp", cov, jac_raw, w, r0)
+        d = -(cov @ (np.swapaxes(jw, 1, 2) @ r0[:, :, None]))[:, :, 0]
         r = r0 + d @ jac_raw.T
-        h = np.einsum("ip,bpq,iq,bi->bi", jac_raw, cov, jac_raw, w)
+        h = np.sum((jac_raw[None] @ cov) * jw, axis=2)  # leverages of the weighted fit
         dof = np.stack([np.maximum(n - h[:, :n].sum(axis=1), 1.0), np.maximum(n - h[:, n:].sum(axis=1), 1.0)], 1)
         rss = np.stack([np.sum(r[:, :n] ** 2, axis=1), np.sum(r[:, n:] ** 2, axis=1)], 1)
         s = np.maximum(np.sqrt(rss / dof), 1e-5)
