@@ -889,6 +889,41 @@ def _linear_sessions(jac_raw, r0, sigma_tc, sigma_cor, n, rounds=2):
     return d, cov
 
 
+def _refit_sessions(vin, mass, kb0, theta, tc_b, cor_b, sigma_tc, sigma_cor, jac_raw):
+    """Sessions (tc_b [s], cor_b [-], each (B, n)) fitted like the data, started at theta:
+    batched Levenberg-Marquardt with weights 1 / sigma_* [-], the TC and COR scatter
+    re-estimated from each session's residuals (RSS / (n - p_kind)) and the fit repeated.
+    Returns the parameters (B, P), a converged flag (B,) and the linearised covariance
+    (B_converged, P, P) with each session's scatter (jac_raw: unweighted relative
+    residuals' Jacobian (2n, P) at theta)."""
+    n, n_sim, n_par = vin.size, tc_b.shape[0], theta.size
+    s_tc = np.full((n_sim, 1), float(sigma_tc))
+    s_cor = np.full((n_sim, 1), float(sigma_cor))
+    lo_b, hi_b = _full_bounds(n_par)
+
+    def resid(pts, rows):
+        return _residuals(pts, vin, tc_b[rows], cor_b[rows], mass, kb0, s_tc[rows], s_cor[rows])
+
+    th_b = np.repeat(theta[None], n_sim, axis=0)
+    conv = np.ones(n_sim, dtype=bool)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for _ in range(2):
+            th_b, ok = _batched_lm(resid, th_b, lo_b, hi_b, max_iter=30)
+            conv &= ok
+            tcm, corm = _simulate(th_b, vin, mass, kb0)
+            w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
+            cov = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w, jac_raw))
+            h = np.einsum("ip,bpq,iq,bi->bi", jac_raw, cov, jac_raw, w)
+            dof_tc = np.maximum(n - h[:, :n].sum(axis=1), 1.0)
+            dof_cor = np.maximum(n - h[:, n:].sum(axis=1), 1.0)
+            s_tc = np.maximum(np.sqrt(np.sum(((tcm - tc_b) / tc_b) ** 2, axis=1) / dof_tc), 1e-5)[:, None]
+            s_cor = np.maximum(np.sqrt(np.sum(((corm - cor_b) / cor_b) ** 2, axis=1) / dof_cor), 1e-5)[:, None]
+    w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
+    cov_nl = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w[conv], jac_raw))
+    return th_b, conv, cov_nl
+
+
 def _calibrated_critical_values(vin, tc, cor, mass, kb0, theta, sigma_tc, sigma_cor, confidence,
                                 n_sim=None, n_linear=None, seed=0):
     """Critical values of the profile deviance, calibrated by a parametric bootstrap.
@@ -942,32 +977,9 @@ def _calibrated_critical_values(vin, tc, cor, mass, kb0, theta, sigma_tc, sigma_
     if n_sim < 20:
         return out
     tc_b, cor_b, r0 = sessions(n_sim)
-    s_tc = np.full((n_sim, 1), float(sigma_tc))
-    s_cor = np.full((n_sim, 1), float(sigma_cor))
-    lo_b, hi_b = _full_bounds(n_par)
-
-    def resid(pts, rows):
-        return _residuals(pts, vin, tc_b[rows], cor_b[rows], mass, kb0, s_tc[rows], s_cor[rows])
-
-    th_b = np.repeat(theta[None], n_sim, axis=0)
-    conv = np.ones(n_sim, dtype=bool)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        for _ in range(2):
-            th_b, ok = _batched_lm(resid, th_b, lo_b, hi_b, max_iter=30)
-            conv &= ok
-            tcm, corm = _simulate(th_b, vin, mass, kb0)
-            w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
-            cov = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w, jac_raw))
-            h = np.einsum("ip,bpq,iq,bi->bi", jac_raw, cov, jac_raw, w)
-            dof_tc = np.maximum(n - h[:, :n].sum(axis=1), 1.0)
-            dof_cor = np.maximum(n - h[:, n:].sum(axis=1), 1.0)
-            s_tc = np.maximum(np.sqrt(np.sum(((tcm - tc_b) / tc_b) ** 2, axis=1) / dof_tc), 1e-5)[:, None]
-            s_cor = np.maximum(np.sqrt(np.sum(((corm - cor_b) / cor_b) ** 2, axis=1) / dof_cor), 1e-5)[:, None]
+    th_b, conv, cov_nl = _refit_sessions(vin, mass, kb0, theta, tc_b, cor_b, sigma_tc, sigma_cor, jac_raw)
     if conv.sum() < n_sim / 2:
         return out
-    w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
-    cov_nl = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w[conv], jac_raw))
     d_pair, cov_pair = _linear_sessions(jac_raw, r0[conv], sigma_tc, sigma_cor, n)
     for spec in _quantities(n_par, kb0):
         q_nl = spec.fwd(th_b[conv]) - float(spec.fwd(theta))
