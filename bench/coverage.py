@@ -80,6 +80,9 @@ def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
     truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
     rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
     rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
+    if f.free_kb0_intervals:  # kB(0) extrapolated: the fit with kB(0) free alone, one half of the hull
+        rec["hit_free"] = {nm: bool(f.free_kb0_intervals[nm][0] <= truth[nm] <= f.free_kb0_intervals[nm][1])
+                           for nm in names}
     return rec
 
 
@@ -110,6 +113,8 @@ def summarise(records):
         cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
         pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
         width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
+        free = [r for r in rs if "hit_free" in r]
+        pooled_free = {nm: float(np.mean([r["hit_free"][nm] for r in free])) for nm in names} if free else None
         clean = []
         for s in seeds:
             t2 = [r for r in rs if r["seed"] == s and r["ball"] in BALLS]
@@ -121,6 +126,7 @@ def summarise(records):
             "seeds": len(seeds), "fits": len(rs),
             "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
             "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "pooled_coverage_kb0_free_alone": pooled_free,
             "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
             "good_impacts_removed_per_fit": float(np.mean([r["false_removed"] for r in rs])) if rs else float("nan"),
             "planted_outlier_named": float(np.mean(named)) if named else None,
@@ -217,6 +223,8 @@ def _print(summary):
             print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
         print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
         print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        if s.get("pooled_coverage_kb0_free_alone"):
+            print("  kB(0) free alone " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage_kb0_free_alone"].items()))
         print(f"  sessions (4 Table 2 balls) without a good impact removed: {s['sessions_without_false_removal']:.3f}")
         if s["planted_outlier_named"] is not None:
             print(f"  planted outlier named: {s['planted_outlier_named']:.3f} "

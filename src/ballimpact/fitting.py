@@ -194,6 +194,11 @@ class BallFit:
     kb0_linear_N_m, kb0_quadratic_N_m : float
         Linear (the paper's) and quadratic extrapolations of the Kelvin-Voigt
         stiffness to zero speed [N/m] (NaN when kB(0) is from the config).
+    free_kb0_intervals : dict
+        When kB(0) is extrapolated: the profile intervals of the fit with kB(0) free
+        alone, {"ak", "a", "ac", "kb_10mm", "kb_20mm", "kb0": (lo, hi)} (SI, as above),
+        one half of the reported hull (``bench/coverage.py`` measures their coverage
+        too); else empty.
     """
 
     mass_kg: float
@@ -233,6 +238,7 @@ class BallFit:
     outlier_steps: list = field(default_factory=list)
     kb0_linear_N_m: float = float("nan")
     kb0_quadratic_N_m: float = float("nan")
+    free_kb0_intervals: dict = field(default_factory=dict)
 
 
 def _as_1d(name, value, n=None):
@@ -1353,6 +1359,8 @@ def fit_ball_model(
         bootstrap_dropped=int(dropped), used=used, outlier_notes=list(outlier_notes), outlier_steps=list(steps),
         kb0_linear_N_m=line[0][0] if line else float("nan"),
         kb0_quadratic_N_m=line[1][0] if line else float("nan"),
+        free_kb0_intervals=({k: ((float(lo), float(hi)) if k == "a" else (float(np.exp(lo)), float(np.exp(hi))))
+                             for k, (lo, hi, _) in free["intervals"].items()} if kb0_source == "extrapolated" else {}),
     )
 
 
