@@ -157,6 +157,10 @@ def noise_free(vmin=14.0, vmax=30.0, n_impacts=10):
             "kb_20mm_error_pct": 100 * (f.kb_20mm_N_m / kb20 - 1),
             "kb_20mm_inside": bool(f.kb_20mm_lo <= kb20 <= f.kb_20mm_hi),
         })
+        if f.free_kb0_intervals:  # the fit with kB(0) free alone (one half of the hull)
+            lo, hi = f.free_kb0_intervals["kb0"]
+            rows[-1].update(kb0_free_lo_kN_m=lo / 1e3, kb0_free_hi_kN_m=hi / 1e3,
+                            kb0_free_inside=bool(lo <= p.kb0_N_m <= hi))
     return rows
 
 
@@ -271,7 +275,9 @@ def main():
                       f"interval [{r['kb0_lo_kN_m']:.2f}, {r['kb0_hi_kN_m']:.2f}] holds {r['true_kb0_kN_m']:.0f}: "
                       f"{r['kb0_inside']}; line {r['linear_error_pct']:+.1f} %, quadratic "
                       f"{r['quadratic_error_pct']:+.1f} %; kB(20 mm) {r['kb_20mm_error_pct']:+.2f} % "
-                      f"(inside: {r['kb_20mm_inside']})")
+                      f"(inside: {r['kb_20mm_inside']})"
+                      + (f"; kB(0) free alone [{r['kb0_free_lo_kN_m']:.2f}, {r['kb0_free_hi_kN_m']:.2f}] holds it: "
+                         f"{r['kb0_free_inside']}" if "kb0_free_inside" in r else ""))
         return
     if args.summarise:
         records = [json.loads(line) for path in args.summarise for line in open(path) if line.strip()]
