@@ -16,6 +16,7 @@ removal at all).
     python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
     python bench/coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
     python bench/coverage.py --calibration-check [--refits 1000]  # the critical values themselves
+    python bench/coverage.py --truth-world --seeds 12 [--sessions 400]  # their coverage, many sessions
 
 With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
 run can be stopped and summarised at any time.
@@ -220,6 +221,46 @@ def calibration_check(refits=1000, seed=0):
     return rows
 
 
+def truth_world(designs=12, sessions=400):
+    """Coverage of the calibrated intervals in their Wald form, precisely: for each ball type
+    and each of the bench's designs (the inbound speeds of seeds 0 .. designs-1), the
+    critical values of ``fit_ball_model`` at the true parameters with the true scatter
+    (TC 0.4 %, COR 0.003 / mean COR), then ``sessions`` sessions with the bench's noise
+    (COR 0.003 absolute) and with COR noise of that size relative instead, each fitted
+    like the data with the full model (``_refit_sessions``); how often the statistic at the
+    truth stays below the critical value. Pooled per ball type and quantity: {ball:
+    {kind: {quantity: coverage}}}, +-0.005 at 12 x 400 sessions."""
+    from ballimpact import fitting as F
+
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    hits = {key: {"absolute": {}, "relative": {}} for key in sets}
+    for seed in range(designs):
+        rng = np.random.default_rng(1000 + seed)
+        for key, p in sets.items():
+            vin = session(p, rng)[0]
+            mass = np.full(vin.size, p.mass_kg)
+            s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+            theta = F._to_theta(p.ak, p.a, p.ac)
+            s_cor = 0.003 / float(np.mean(s.cor))
+            z = np.random.default_rng(seed).standard_normal((2, sessions, vin.size))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                crit = F._calibrated_critical_values(vin, s.contact_time_s, s.cor, mass, p.kb0_N_m, theta, 0.004,
+                                                     s_cor, 0.95)
+                jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, s.contact_time_s, s.cor, mass, p.kb0_N_m,
+                                                               1.0, 1.0), theta)
+                for kind, cor_b in (("absolute", s.cor + 0.003 * z[1]), ("relative", s.cor * (1 + s_cor * z[1]))):
+                    th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, theta,
+                                                          s.contact_time_s * (1 + 0.004 * z[0]), cor_b, 0.004, s_cor,
+                                                          jac_raw)
+                    for spec in F._quantities(3, p.kb0_N_m):
+                        g = F._quantity_gradient(spec, theta)
+                        stat = (spec.fwd(th_b[conv]) - spec.fwd(theta)) ** 2 / np.einsum("p,bpq,q->b", g, cov_b, g)
+                        hits[key][kind].setdefault(spec.key, []).extend((stat <= crit[spec.key]).tolist())
+    return {key: {kind: {q: float(np.mean(v)) for q, v in d.items()} for kind, d in k.items()}
+            for key, k in hits.items()}
+
+
 def _print(summary):
     for mode, s in summary.items():
         print(f"{mode}: {s['seeds']} seeds, {s['fits']} fits, {s['failures']} failures")
@@ -250,8 +291,23 @@ def main():
     ap.add_argument("--calibration-check", action="store_true",
                     help="only the critical values: F(1, nu), calibrated, and corrected by full refits")
     ap.add_argument("--refits", type=int, default=1000, help="full-model refits of --calibration-check")
+    ap.add_argument("--truth-world", action="store_true",
+                    help="only the Wald-form coverage of the calibrated intervals over --seeds designs")
+    ap.add_argument("--sessions", type=int, default=400, help="sessions per design of --truth-world")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
+    if args.truth_world:
+        res = truth_world(args.seeds, args.sessions)
+        if args.json:
+            print(json.dumps(res, indent=2))
+            return
+        for key, kinds in res.items():
+            for kind, cov in kinds.items():
+                print(f"{key:13s} COR noise {kind:8s} " + "  ".join(f"{q} {v:.3f}" for q, v in cov.items()))
+        for kind in ("absolute", "relative"):
+            pooled = {q: np.mean([res[k][kind][q] for k in res]) for q in next(iter(res.values()))[kind]}
+            print(f"pooled        COR noise {kind:8s} " + "  ".join(f"{q} {v:.3f}" for q, v in pooled.items()))
+        return
     if args.calibration_check:
         rows = calibration_check(args.refits)
         if args.json:
