@@ -15,6 +15,8 @@ removal at all).
         [--jsonl bench/out/records.jsonl] [--json]
     python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
     python bench/coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
+    python bench/coverage.py --calibration-check [--refits 1000]  # the critical values themselves
+    python bench/coverage.py --truth-world --seeds 12 [--sessions 400]  # their coverage, many sessions
 
 With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
 run can be stopped and summarised at any time.
@@ -79,6 +81,9 @@ def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
     truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
     rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
     rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
+    if f.free_kb0_intervals:  # kB(0) extrapolated: the fit with kB(0) free alone, one half of the hull
+        rec["hit_free"] = {nm: bool(f.free_kb0_intervals[nm][0] <= truth[nm] <= f.free_kb0_intervals[nm][1])
+                           for nm in names}
     return rec
 
 
@@ -109,6 +114,8 @@ def summarise(records):
         cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
         pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
         width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
+        free = [r for r in rs if "hit_free" in r]
+        pooled_free = {nm: float(np.mean([r["hit_free"][nm] for r in free])) for nm in names} if free else None
         clean = []
         for s in seeds:
             t2 = [r for r in rs if r["seed"] == s and r["ball"] in BALLS]
@@ -120,6 +127,7 @@ def summarise(records):
             "seeds": len(seeds), "fits": len(rs),
             "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
             "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "pooled_coverage_kb0_free_alone": pooled_free,
             "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
             "good_impacts_removed_per_fit": float(np.mean([r["false_removed"] for r in rs])) if rs else float("nan"),
             "planted_outlier_named": float(np.mean(named)) if named else None,
@@ -150,7 +158,107 @@ def noise_free(vmin=14.0, vmax=30.0, n_impacts=10):
             "kb_20mm_error_pct": 100 * (f.kb_20mm_N_m / kb20 - 1),
             "kb_20mm_inside": bool(f.kb_20mm_lo <= kb20 <= f.kb_20mm_hi),
         })
+        if f.free_kb0_intervals:  # the fit with kB(0) free alone (one half of the hull)
+            lo, hi = f.free_kb0_intervals["kb0"]
+            rows[-1].update(kb0_free_lo_kN_m=lo / 1e3, kb0_free_hi_kN_m=hi / 1e3,
+                            kb0_free_inside=bool(lo <= p.kb0_N_m <= hi))
     return rows
+
+
+def calibration_check(refits=1000, seed=0):
+    """The profile intervals' critical values on one session per ball type (10 impacts at
+    14-30 m/s, seed ``seed``, sessions fitted at the true parameters with the true scatter
+    TC 0.4 %, COR 0.5 % relative): the F(1, nu) quantile (nu Satterthwaite's), the
+    calibrated value of ``fit_ball_model`` (sessions fitted in the linearised model) and
+    the same corrected by ``refits`` sessions refitted with the full model (its ratio to
+    the linearised one shows how much the model's curvature matters). Then ``refits``
+    sessions at the true parameters with the bench's noise (TC 0.4 %, COR 0.003 absolute)
+    and with COR noise 0.5 % relative instead, each fitted like the data (full model): how
+    often the statistic at the truth stays below each critical value (the coverage of the
+    intervals in their Wald form, without the profile grid; +-0.007 at 1000 sessions)."""
+    from scipy import stats
+
+    from ballimpact import fitting as F
+
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    rows = []
+    for key, p in sets.items():
+        rng = np.random.default_rng(1000 + seed)
+        vin = np.sort(rng.uniform(14.0, 30.0, 10))
+        mass = np.full(vin.size, p.mass_kg)
+        s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+        theta = F._to_theta(p.ak, p.a, p.ac)
+        args = (vin, s.contact_time_s, s.cor, mass, p.kb0_N_m, theta, 0.004, 0.005, 0.95)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            lin = F._calibrated_critical_values(*args, n_sim=0)
+            full = F._calibrated_critical_values(*args, n_sim=refits)
+            fun = lambda pts: F._residuals(pts, vin, s.contact_time_s, s.cor, mass, p.kb0_N_m, 0.004, 0.005)  # noqa: E731
+            jac = F._jacobian(fun, theta)
+            cov = np.linalg.pinv(jac.T @ jac)
+            h = np.einsum("ij,jk,ik->i", jac, cov, jac)
+            dof_tc, dof_cor = vin.size - h[: vin.size].sum(), vin.size - h[vin.size:].sum()
+            z = np.random.default_rng(2000 + seed).standard_normal((2, refits, vin.size))
+            tc_b = s.contact_time_s * (1 + 0.004 * z[0])
+            cor_noise = {"absolute": s.cor + 0.003 * z[1], "relative": s.cor * (1 + 0.005 * z[1])}
+            jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, s.contact_time_s, s.cor, mass, p.kb0_N_m,
+                                                           1.0, 1.0), theta)
+            truth_world = {}
+            for kind, cor_b in cor_noise.items():
+                th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, theta, tc_b, cor_b, 0.004, 0.005, jac_raw)
+                truth_world[kind] = (th_b[conv], cov_b)
+        for spec in F._quantities(3, p.kb0_N_m):
+            grad = F._quantity_gradient(spec, theta)
+            nu = F._satterthwaite_dof(grad, jac, vin.size, dof_tc, dof_cor)
+            row = {"ball": key, "quantity": spec.key, "f_quantile": float(stats.f.ppf(0.95, 1, nu)),
+                   "satterthwaite_nu": nu, "calibrated": lin[spec.key], "with_refits": full[spec.key],
+                   "refit_ratio": full[spec.key] / lin[spec.key]}
+            for kind, (th_b, cov_b) in truth_world.items():
+                stat = (spec.fwd(th_b) - spec.fwd(theta)) ** 2 / np.einsum("p,bpq,q->b", grad, cov_b, grad)
+                row[f"coverage_f_{kind}"] = float(np.mean(stat <= row["f_quantile"]))
+                row[f"coverage_calibrated_{kind}"] = float(np.mean(stat <= row["calibrated"]))
+            rows.append(row)
+    return rows
+
+
+def truth_world(designs=12, sessions=400):
+    """Coverage of the calibrated intervals in their Wald form, precisely: for each ball type
+    and each of the bench's designs (the inbound speeds of seeds 0 .. designs-1), the
+    critical values of ``fit_ball_model`` at the true parameters with the true scatter
+    (TC 0.4 %, COR 0.003 / mean COR), then ``sessions`` sessions with the bench's noise
+    (COR 0.003 absolute) and with COR noise of that size relative instead, each fitted
+    like the data with the full model (``_refit_sessions``); how often the statistic at the
+    truth stays below the critical value. Pooled per ball type and quantity: {ball:
+    {kind: {quantity: coverage}}}, +-0.005 at 12 x 400 sessions."""
+    from ballimpact import fitting as F
+
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    hits = {key: {"absolute": {}, "relative": {}} for key in sets}
+    for seed in range(designs):
+        rng = np.random.default_rng(1000 + seed)
+        for key, p in sets.items():
+            vin = session(p, rng)[0]
+            mass = np.full(vin.size, p.mass_kg)
+            s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+            theta = F._to_theta(p.ak, p.a, p.ac)
+            s_cor = 0.003 / float(np.mean(s.cor))
+            z = np.random.default_rng(seed).standard_normal((2, sessions, vin.size))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                crit = F._calibrated_critical_values(vin, s.contact_time_s, s.cor, mass, p.kb0_N_m, theta, 0.004,
+                                                     s_cor, 0.95)
+                jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, s.contact_time_s, s.cor, mass, p.kb0_N_m,
+                                                               1.0, 1.0), theta)
+                for kind, cor_b in (("absolute", s.cor + 0.003 * z[1]), ("relative", s.cor * (1 + s_cor * z[1]))):
+                    th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, theta,
+                                                          s.contact_time_s * (1 + 0.004 * z[0]), cor_b, 0.004, s_cor,
+                                                          jac_raw)
+                    for spec in F._quantities(3, p.kb0_N_m):
+                        g = F._quantity_gradient(spec, theta)
+                        stat = (spec.fwd(th_b[conv]) - spec.fwd(theta)) ** 2 / np.einsum("p,bpq,q->b", g, cov_b, g)
+                        hits[key][kind].setdefault(spec.key, []).extend((stat <= crit[spec.key]).tolist())
+    return {key: {kind: {q: float(np.mean(v)) for q, v in d.items()} for kind, d in k.items()}
+            for key, k in hits.items()}
 
 
 def _print(summary):
@@ -160,6 +268,8 @@ def _print(summary):
             print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
         print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
         print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        if s.get("pooled_coverage_kb0_free_alone"):
+            print("  kB(0) free alone " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage_kb0_free_alone"].items()))
         print(f"  sessions (4 Table 2 balls) without a good impact removed: {s['sessions_without_false_removal']:.3f}")
         if s["planted_outlier_named"] is not None:
             print(f"  planted outlier named: {s['planted_outlier_named']:.3f} "
@@ -178,8 +288,39 @@ def main():
     ap.add_argument("--summarise", nargs="+", metavar="JSONL", help="only summarise these record files")
     ap.add_argument("--noise-free", action="store_true",
                     help="only kB(0) of noise-free impacts, evenly spaced from --vmin to 30 m/s")
+    ap.add_argument("--calibration-check", action="store_true",
+                    help="only the critical values: F(1, nu), calibrated, and corrected by full refits")
+    ap.add_argument("--refits", type=int, default=1000, help="full-model refits of --calibration-check")
+    ap.add_argument("--truth-world", action="store_true",
+                    help="only the Wald-form coverage of the calibrated intervals over --seeds designs")
+    ap.add_argument("--sessions", type=int, default=400, help="sessions per design of --truth-world")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
+    if args.truth_world:
+        res = truth_world(args.seeds, args.sessions)
+        if args.json:
+            print(json.dumps(res, indent=2))
+            return
+        for key, kinds in res.items():
+            for kind, cov in kinds.items():
+                print(f"{key:13s} COR noise {kind:8s} " + "  ".join(f"{q} {v:.3f}" for q, v in cov.items()))
+        for kind in ("absolute", "relative"):
+            pooled = {q: np.mean([res[k][kind][q] for k in res]) for q in next(iter(res.values()))[kind]}
+            print(f"pooled        COR noise {kind:8s} " + "  ".join(f"{q} {v:.3f}" for q, v in pooled.items()))
+        return
+    if args.calibration_check:
+        rows = calibration_check(args.refits)
+        if args.json:
+            print(json.dumps(rows, indent=2))
+        for r in rows if not args.json else []:
+            print(f"{r['ball']:13s} {r['quantity']:8s} F(1, {r['satterthwaite_nu']:4.1f}) {r['f_quantile']:.2f}  "
+                  f"calibrated {r['calibrated']:.2f}  with {args.refits} full refits {r['with_refits']:.2f} "
+                  f"(ratio {r['refit_ratio']:.3f}); coverage at the truth, COR noise absolute: F "
+                  f"{r['coverage_f_absolute']:.3f}, calibrated {r['coverage_calibrated_absolute']:.3f}; relative: "
+                  f"F {r['coverage_f_relative']:.3f}, calibrated {r['coverage_calibrated_relative']:.3f}")
+        print("pooled: " + ", ".join(f"{k} {np.mean([r[k] for r in rows]):.3f}" for k in rows[0]
+                                     if k.startswith("coverage")))
+        return
     if args.noise_free:
         rows = noise_free(vmin=args.vmin)
         if args.json:
@@ -190,7 +331,9 @@ def main():
                       f"interval [{r['kb0_lo_kN_m']:.2f}, {r['kb0_hi_kN_m']:.2f}] holds {r['true_kb0_kN_m']:.0f}: "
                       f"{r['kb0_inside']}; line {r['linear_error_pct']:+.1f} %, quadratic "
                       f"{r['quadratic_error_pct']:+.1f} %; kB(20 mm) {r['kb_20mm_error_pct']:+.2f} % "
-                      f"(inside: {r['kb_20mm_inside']})")
+                      f"(inside: {r['kb_20mm_inside']})"
+                      + (f"; kB(0) free alone [{r['kb0_free_lo_kN_m']:.2f}, {r['kb0_free_hi_kN_m']:.2f}] holds it: "
+                         f"{r['kb0_free_inside']}" if "kb0_free_inside" in r else ""))
         return
     if args.summarise:
         records = [json.loads(line) for path in args.summarise for line in open(path) if line.strip()]

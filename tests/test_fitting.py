@@ -295,6 +295,24 @@ def test_batched_lm_started_at_the_optimum_counts_as_converged():
     assert_allclose(p, np.repeat(coef[None], 2, axis=0), atol=1e-4)
 
 
+@pytest.mark.parametrize("n, n_par", [(10, 3), (8, 2)])
+def test_calibration_sessions_reproduce_the_t_test_when_only_one_kind_of_residual_moves(n, n_par):
+    """Independent truth: when the parameters move only the TC residuals, the calibration's
+    statistic is a linear least-squares t statistic squared, with n - p residual degrees of
+    freedom: its 0.95 quantile is that of F(1, n - p) (textbook), whatever the COR scatter."""
+    from scipy import stats
+
+    from ballimpact.fitting import _linear_sessions
+
+    rng = np.random.default_rng(7)
+    jac = np.vstack([rng.standard_normal((n, n_par)), np.zeros((n, n_par))])
+    r0 = rng.standard_normal((20000, 2 * n)) * np.r_[np.full(n, 0.004), np.full(n, 0.02)]
+    d, cov = _linear_sessions(jac, r0, 0.004, 0.02, n)
+    for g in np.eye(n_par):
+        stat = (d @ g) ** 2 / np.einsum("p,bpq,q->b", g, cov, g)
+        assert_allclose(np.quantile(stat, 0.95), stats.f.ppf(0.95, 1, n - n_par), rtol=0.06)
+
+
 def test_bootstrap_resample_equal_to_the_data_started_at_the_optimum_is_converged():
     """The real model: a resample that is the data itself (all weights 1), started at the
     joint optimum, is converged before any step (no iteration cap involved)."""

@@ -17,8 +17,12 @@ What the code does (details in :func:`fit_ball_model`):
   a joint least-squares fit on the relative TC and COR residuals of the impacts,
   each kind weighted by its own unbiased scatter.
 * Intervals (AK, a, AC, kB(10 mm), kB(20 mm), kB(0) when fitted): profile likelihood
-  with an F(1, nu) critical value, nu from Satterthwaite's formula for the two
-  separately estimated scatters. ``bench/coverage.py`` measures their coverage.
+  with a critical value calibrated by a parametric bootstrap
+  (:func:`_calibrated_critical_values`: sessions simulated from the fit with its TC and
+  COR scatter, fitted in the linearised model with the scatters re-estimated, the 0.95
+  quantile of their statistic), in place of the F(1, nu) quantile with Satterthwaite's
+  nu, which only approximates the effect of two scatters estimated from few residuals.
+  ``bench/coverage.py`` measures their coverage.
 * A case-resampling bootstrap over impacts gives the AK-a correlation and the
   confidence bands of the model curves; :func:`model_curves` adds the impacts'
   own scatter for prediction bands.
@@ -58,6 +62,8 @@ __all__ = [
     "OUTLIER_LEVEL",
     "OUTLIER_MAX_SHARE",
     "CONVERGENCE_OFFSET",
+    "CALIBRATION_SESSIONS",
+    "CALIBRATION_REFITS",
     "detect_fit_outliers",
     "fit_kb0",
     "fit_contact_time",
@@ -86,6 +92,14 @@ OUTLIER_MAX_SHARE = 0.2
 #: the parameters are then within about 1 % of a standard error of the optimum. (1e-3 is
 #: below what the model's finite-difference Jacobian resolves at some optima.)
 CONVERGENCE_OFFSET = 1.0e-2
+#: Simulated sessions, fitted in the model linearised at the estimate, that calibrate the
+#: critical value of the profile intervals (:func:`_calibrated_critical_values`) [-];
+#: 0 gives the F(1, nu) quantile alone.
+CALIBRATION_SESSIONS = 4000
+#: Of those, sessions also refitted with the full model (batched Levenberg-Marquardt) to
+#: correct the linearised quantile for the model's curvature [-]; 0: none (the default:
+#: the correction is within its own sampling noise on Table 2 balls at 14-30 m/s).
+CALIBRATION_REFITS = 0
 _FD_STEP = 1.0e-4  # forward-difference step in the internal parameters (log kR, a, log AC)
 
 
@@ -180,6 +194,11 @@ class BallFit:
     kb0_linear_N_m, kb0_quadratic_N_m : float
         Linear (the paper's) and quadratic extrapolations of the Kelvin-Voigt
         stiffness to zero speed [N/m] (NaN when kB(0) is from the config).
+    free_kb0_intervals : dict
+        When kB(0) is extrapolated: the profile intervals of the fit with kB(0) free
+        alone, {"ak", "a", "ac", "kb_10mm", "kb_20mm", "kb0": (lo, hi)} (SI, as above),
+        one half of the reported hull (``bench/coverage.py`` measures their coverage
+        too); else empty.
     """
 
     mass_kg: float
@@ -219,6 +238,7 @@ class BallFit:
     outlier_steps: list = field(default_factory=list)
     kb0_linear_N_m: float = float("nan")
     kb0_quadratic_N_m: float = float("nan")
+    free_kb0_intervals: dict = field(default_factory=dict)
 
 
 def _as_1d(name, value, n=None):
@@ -703,15 +723,17 @@ def _quantities(n_par, kb0_fixed):
 
 
 def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof_cor, theta, confidence,
-                       n_grid=17):
+                       n_grid=17, critical=None):
     """Profile-likelihood intervals (Bates & Watts 1988, ch. 6) of every quantity of
     :func:`_quantities`, with the critical value calibrated for the estimated scatter.
 
     The residuals are weighted by the unbiased TC and COR scatter (``sigma_*``), so the
-    profile deviance S(q) - S_min of a quantity q is compared with the F(1, nu)
+    profile deviance S(q) - S_min of a quantity q is compared with ``critical[key]``
+    (from :func:`_calibrated_critical_values`), or when that is missing with the F(1, nu)
     quantile, nu the Satterthwaite degrees of freedom of q's variance (the TC and COR
     scatter are estimated separately, from nu_TC and nu_COR residual degrees of
-    freedom; :func:`_satterthwaite_dof`). The other parameters are refitted at every
+    freedom; :func:`_satterthwaite_dof`). The profile grid's spacing still comes from
+    the Wald standard error. The other parameters are refitted at every
     grid point (started from the Wald-linearised conditional optimum), so the interval
     follows the curved AK-a ridge.
 
@@ -734,6 +756,8 @@ def _profile_intervals(vin, tc, cor, mass, kb0, sigma_tc, sigma_cor, dof_tc, dof
     for spec in qs:
         qh, c, start, grid = _profile_grid(spec, theta, cov, jac, n, dof_tc, dof_cor, confidence, offsets,
                                            lo_b, hi_b)
+        if critical is not None and np.isfinite(critical.get(spec.key, np.nan)):
+            c = critical[spec.key]
         q_hat.append(qh)
         crit.append(c)
         starts.append(start)
@@ -824,6 +848,152 @@ def _profile_ends(deviance, grid, crit, q_hat):
             prev = i
         ends.append((end, closed))
     return float(min(ends[0][0], q_hat)), float(max(ends[1][0], q_hat)), ends[0][1] and ends[1][1]
+
+
+def _quantity_gradient(spec, theta):
+    """Forward-difference gradient of a quantity of :func:`_quantities` at theta: (P,)."""
+    qh = float(spec.fwd(theta))
+    grad = np.zeros(theta.size)
+    for j in range(theta.size):
+        th = theta.copy()
+        th[j] += 1e-6
+        grad[j] = (float(spec.fwd(th)) - qh) / 1e-6
+    return grad
+
+
+def _inverse(a):
+    """Inverse of a stack of symmetric positive definite matrices; pseudo-inverse if one is singular."""
+    try:
+        return np.linalg.inv(a)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(a)
+
+
+def _linear_sessions(jac_raw, r0, sigma_tc, sigma_cor, n, rounds=2):
+    """The fit of :func:`_calibrated_critical_values` in the model linearised at the estimate.
+
+    jac_raw (2n, P): Jacobian of the unweighted relative residuals (TC then COR); r0 (B, 2n):
+    each session's relative residuals at the estimate. Weighted least squares with the
+    scatter re-estimated from the residuals (RSS / (n - p_kind)) ``rounds`` times, like the
+    nonlinear fit. Returns the parameter offsets (B, P) and their covariance (B, P, P) with
+    each session's final scatter."""
+    b = r0.shape[0]
+    s = np.tile([float(sigma_tc), float(sigma_cor)], (b, 1))
+    d = np.zeros((b, jac_raw.shape[1]))
+    for _ in range(rounds + 1):
+        w = np.repeat(1.0 / s**2, n, axis=1)
+        jw = jac_raw[None] * w[:, :, None]  # (B, 2n, P)
+        cov = _inverse(np.swapaxes(jw, 1, 2) @ jac_raw)
+        if _ == rounds:
+            break
+        d = -(cov @ (np.swapaxes(jw, 1, 2) @ r0[:, :, None]))[:, :, 0]
+        r = r0 + d @ jac_raw.T
+        h = np.sum((jac_raw[None] @ cov) * jw, axis=2)  # leverages of the weighted fit
+        dof = np.stack([np.maximum(n - h[:, :n].sum(axis=1), 1.0), np.maximum(n - h[:, n:].sum(axis=1), 1.0)], 1)
+        rss = np.stack([np.sum(r[:, :n] ** 2, axis=1), np.sum(r[:, n:] ** 2, axis=1)], 1)
+        s = np.maximum(np.sqrt(rss / dof), 1e-5)
+    return d, cov
+
+
+def _refit_sessions(vin, mass, kb0, theta, tc_b, cor_b, sigma_tc, sigma_cor, jac_raw):
+    """Sessions (tc_b [s], cor_b [-], each (B, n)) fitted like the data, started at theta:
+    batched Levenberg-Marquardt with weights 1 / sigma_* [-], the TC and COR scatter
+    re-estimated from each session's residuals (RSS / (n - p_kind)) and the fit repeated.
+    Returns the parameters (B, P), a converged flag (B,) and the linearised covariance
+    (B_converged, P, P) with each session's scatter (jac_raw: unweighted relative
+    residuals' Jacobian (2n, P) at theta)."""
+    n, n_sim, n_par = vin.size, tc_b.shape[0], theta.size
+    s_tc = np.full((n_sim, 1), float(sigma_tc))
+    s_cor = np.full((n_sim, 1), float(sigma_cor))
+    lo_b, hi_b = _full_bounds(n_par)
+
+    def resid(pts, rows):
+        return _residuals(pts, vin, tc_b[rows], cor_b[rows], mass, kb0, s_tc[rows], s_cor[rows])
+
+    th_b = np.repeat(theta[None], n_sim, axis=0)
+    conv = np.ones(n_sim, dtype=bool)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for _ in range(2):
+            th_b, ok = _batched_lm(resid, th_b, lo_b, hi_b, max_iter=30)
+            conv &= ok
+            tcm, corm = _simulate(th_b, vin, mass, kb0)
+            w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
+            cov = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w, jac_raw))
+            h = np.einsum("ip,bpq,iq,bi->bi", jac_raw, cov, jac_raw, w)
+            dof_tc = np.maximum(n - h[:, :n].sum(axis=1), 1.0)
+            dof_cor = np.maximum(n - h[:, n:].sum(axis=1), 1.0)
+            s_tc = np.maximum(np.sqrt(np.sum(((tcm - tc_b) / tc_b) ** 2, axis=1) / dof_tc), 1e-5)[:, None]
+            s_cor = np.maximum(np.sqrt(np.sum(((corm - cor_b) / cor_b) ** 2, axis=1) / dof_cor), 1e-5)[:, None]
+    w = np.concatenate([np.repeat(1.0 / s_tc**2, n, axis=1), np.repeat(1.0 / s_cor**2, n, axis=1)], axis=1)
+    cov_nl = np.linalg.pinv(np.einsum("ip,bi,iq->bpq", jac_raw, w[conv], jac_raw))
+    return th_b, conv, cov_nl
+
+
+def _calibrated_critical_values(vin, tc, cor, mass, kb0, theta, sigma_tc, sigma_cor, confidence,
+                                n_sim=None, n_linear=None, seed=0):
+    """Critical values of the profile deviance, calibrated by a parametric bootstrap.
+
+    Sessions are simulated from the fitted model at the impacts' own speeds, with the
+    fitted relative scatter of TC and COR (``sigma_*`` [-], normal errors), and each is
+    fitted like the data: weighted least squares from the estimate, the TC and COR
+    scatter re-estimated from its residuals (RSS / (n - p_kind)) and the fit repeated
+    with them. For every quantity q of :func:`_quantities` a session's statistic is
+    (q_b - q_hat)^2 / var_b, var_b the linearised variance of q with that session's
+    scatter (the profile deviance of a linear model), and the critical value is its
+    ``confidence`` quantile. It takes the place of the F(1, nu) quantile: F(1, nu) with
+    Satterthwaite's nu approximates the effect of two scatters estimated separately from
+    few residuals; the simulation has it exactly (in the linearised model), together
+    with what F(1, nu) leaves out: the estimated scatters set the weights, so they move
+    the estimate too.
+
+    ``n_linear`` sessions (default :data:`CALIBRATION_SESSIONS`) are fitted in the
+    model linearised at the estimate (:func:`_linear_sessions`, plain linear algebra:
+    milliseconds). Optionally ``n_sim`` of them (default :data:`CALIBRATION_REFITS`)
+    are also refitted with the full model (one batched :func:`_batched_lm`) and the
+    linearised quantile is multiplied by the ratio of the full refits' quantile to the
+    linearised quantile of the same sessions (a control variate: both share the
+    sampling noise of the same draws).
+
+    Returns {key: critical value [-]}; empty (the F(1, nu) quantile is then used) when
+    ``n_linear`` < 100; without the refits' correction when fewer than half converged.
+    """
+    n_sim = CALIBRATION_REFITS if n_sim is None else n_sim
+    n_linear = CALIBRATION_SESSIONS if n_linear is None else n_linear
+    n, n_par = vin.size, theta.size
+    if n_linear < 100:
+        return {}
+    rng = np.random.default_rng(seed)
+    tc_m, cor_m = _simulate(theta, vin, mass, kb0)
+    fun0 = lambda pts: _residuals(pts, vin, tc_m, cor_m, mass, kb0, 1.0, 1.0)  # noqa: E731
+    jac_raw = _jacobian(fun0, theta)  # unweighted relative residuals at the estimate: (2n, P)
+
+    def sessions(b):
+        z = rng.standard_normal((2, b, n))
+        tc_b, cor_b = tc_m * (1.0 + sigma_tc * z[0]), cor_m * (1.0 + sigma_cor * z[1])
+        return tc_b, cor_b, np.concatenate([(tc_m - tc_b) / tc_b, (cor_m - cor_b) / cor_b], axis=1)
+
+    d_lin, cov_lin = _linear_sessions(jac_raw, sessions(n_linear)[2], sigma_tc, sigma_cor, n)
+    grads = {spec.key: _quantity_gradient(spec, theta) for spec in _quantities(n_par, kb0)}
+
+    def stat(d, cov, grad):
+        return (d @ grad) ** 2 / np.maximum(np.einsum("p,bpq,q->b", grad, cov, grad), 1e-300)
+
+    out = {key: float(np.quantile(stat(d_lin, cov_lin, g), confidence)) for key, g in grads.items()}
+    if n_sim < 20:
+        return out
+    tc_b, cor_b, r0 = sessions(n_sim)
+    th_b, conv, cov_nl = _refit_sessions(vin, mass, kb0, theta, tc_b, cor_b, sigma_tc, sigma_cor, jac_raw)
+    if conv.sum() < n_sim / 2:
+        return out
+    d_pair, cov_pair = _linear_sessions(jac_raw, r0[conv], sigma_tc, sigma_cor, n)
+    for spec in _quantities(n_par, kb0):
+        q_nl = spec.fwd(th_b[conv]) - float(spec.fwd(theta))
+        stat_nl = q_nl**2 / np.maximum(np.einsum("p,bpq,q->b", grads[spec.key], cov_nl, grads[spec.key]), 1e-300)
+        ratio = np.quantile(stat_nl, confidence) / max(np.quantile(stat(d_pair, cov_pair, grads[spec.key]),
+                                                                   confidence), 1e-300)
+        out[spec.key] *= float(ratio)
+    return out
 
 
 def _kb0_lines(vin, kv, confidence):
@@ -1110,9 +1280,11 @@ def fit_ball_model(
     3. Stage one (:func:`fit_contact_time`), stage two (:func:`fit_restitution`), then
        a joint least-squares fit of AK, a, AC (and kB(0) when fitted) on both kinds of
        residual, re-weighted to each kind's unbiased scatter RSS / (n - p_kind).
-    4. Intervals: profile likelihood with the F(1, nu) critical value, nu the
-       Satterthwaite degrees of freedom (:func:`_profile_intervals`), for AK, a, AC,
-       kB(10 mm), kB(20 mm) (kB = kB(0) + AK x^a, Eq. (4)) and kB(0) when fitted.
+    4. Intervals: profile likelihood (:func:`_profile_intervals`) for AK, a, AC,
+       kB(10 mm), kB(20 mm) (kB = kB(0) + AK x^a, Eq. (4)) and kB(0) when fitted; the
+       critical value of each is calibrated by a parametric bootstrap of the fit
+       (:func:`_calibrated_critical_values`), the F(1, nu) quantile (nu the
+       Satterthwaite degrees of freedom) only when that is switched off.
     5. A case-resampling bootstrap over impacts (``n_bootstrap`` resamples, kB(0)
        re-extrapolated in each when extrapolated, refitted when fitted) gives the AK-a
        correlation and the confidence bands of the model curves (:func:`model_curves`).
@@ -1187,6 +1359,8 @@ def fit_ball_model(
         bootstrap_dropped=int(dropped), used=used, outlier_notes=list(outlier_notes), outlier_steps=list(steps),
         kb0_linear_N_m=line[0][0] if line else float("nan"),
         kb0_quadratic_N_m=line[1][0] if line else float("nan"),
+        free_kb0_intervals=({k: ((float(lo), float(hi)) if k == "a" else (float(np.exp(lo)), float(np.exp(hi))))
+                             for k, (lo, hi, _) in free["intervals"].items()} if kb0_source == "extrapolated" else {}),
     )
 
 
@@ -1289,8 +1463,12 @@ def _bootstrap_summary(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source
 
 def _interval_method(kb0_source):
     """How the intervals were found, for ``BallFit.interval_method``."""
-    method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
-              "the unbiased TC and COR scatter")
+    method = ("profile likelihood, critical value calibrated by a parametric bootstrap of the fit "
+              f"({CALIBRATION_SESSIONS} simulated sessions, linearised, TC and COR scatter re-estimated), "
+              "residuals weighted by the unbiased TC and COR scatter")
+    if CALIBRATION_SESSIONS < 100:
+        method = ("profile likelihood, F(1, Satterthwaite dof) critical value, residuals weighted by "
+                  "the unbiased TC and COR scatter")
     if kb0_source == "extrapolated":
         method += ("; kB(0) extrapolated by the paper's straight line, intervals the hull with kB(0) fixed "
                    "there and with kB(0) fitted (extrapolation-model uncertainty)")
@@ -1330,7 +1508,8 @@ def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None):
         s_tc, s_cor = new_tc, new_cor
         if done:
             break
-    iv = _profile_intervals(vin, tc, e, mass, kb0, s_tc, s_cor, dof_tc, dof_cor, theta, confidence)
+    crit = _calibrated_critical_values(vin, tc, e, mass, kb0, theta, s_tc, s_cor, confidence)
+    iv = _profile_intervals(vin, tc, e, mass, kb0, s_tc, s_cor, dof_tc, dof_cor, theta, confidence, critical=crit)
     return {"theta": theta, "sigma_tc": s_tc, "sigma_cor": s_cor, "dof_tc": dof_tc, "dof_cor": dof_cor,
             "intervals": iv, "result": res}
 
