@@ -431,3 +431,43 @@ def test_mains_not_resolved_in_a_short_record_is_a_problem():
     assert ProblemKind.MAINS_UNRESOLVED in kinds
     given = condition_voltage(tr.voltage_V, fs, polarity=rig.polarity, n_harmonics=5, mains_hz=60.0)
     assert ProblemKind.MAINS_UNRESOLVED not in [p.kind for p in given.problems]
+
+
+# ---------------------------------------------------------- found by the sampled mutation run
+
+
+@pytest.mark.parametrize("tau", [0.003, 0.004])
+def test_time_constant_below_the_plausible_bound_is_not_applied(tau):
+    # a charge amplifier of 3-4 ms (below TAU_BOUNDS_S[0] = 5 ms, which no plate amplifier has):
+    # the time constant is estimated (it is in the message, to the truth's 3 digits within 5 %)
+    # but not applied, and the impact is a problem, with the warning said once
+    from ballimpact.conditioning import TAU_BOUNDS_S
+
+    v, fs, _ = make_trace(tau_s=tau, seed=9, post_s=0.06, **CHAIN)
+    with pytest.warns(ConditioningWarning, match="below the plausible") as record:
+        c = condition_voltage(v, fs)
+    assert math.isinf(c.tau_s) and c.tau_source == "none"
+    msg = [str(w.message) for w in record if "below the plausible" in str(w.message)]
+    assert len(msg) == 1
+    m = re.fullmatch(r"charge-amplifier decay not corrected: estimated time constant (\S+) s is below the "
+                     r"plausible (\S+) s \(a baseline shift that is not the amplifier's decay\?\)", msg[0])
+    assert m, msg[0]
+    assert_allclose(float(m.group(1)), tau, rtol=0.05)
+    assert float(m.group(2)) == TAU_BOUNDS_S[0]
+    assert (ProblemKind.DECAY_NOT_CORRECTED, msg[0]) in [(p.kind, p.message) for p in c.problems]
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_dc_coupled_trace_undershoot_in_the_noise_applied_only_when_positive(seed):
+    # no decay in the chain: the undershoot is noise (within 3 standard errors). A positive
+    # one is applied as found (tau = impulse / undershoot, seed 0: about 200 s, a negligible
+    # correction; unbiased on average), a negative one is not (seed 2: tau infinite, "none")
+    v, fs, truth = make_trace(seed=seed, **CHAIN)
+    c = _quiet(voltage_V=v, sample_rate_hz=fs)
+    assert abs(c.undershoot_V) < 3 * c.undershoot_se_V
+    if c.undershoot_V > 0:
+        assert c.tau_source == "estimated"
+        assert_allclose(c.tau_s, truth.impulse_V_s / c.undershoot_V, rtol=0.01)
+    else:
+        assert math.isinf(c.tau_s) and c.tau_source == "none"
+    assert (c.undershoot_V > 0) == (seed == 0)  # both branches are taken
