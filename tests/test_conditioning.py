@@ -471,3 +471,66 @@ def test_dc_coupled_trace_undershoot_in_the_noise_applied_only_when_positive(see
     else:
         assert math.isinf(c.tau_s) and c.tau_source == "none"
     assert (c.undershoot_V > 0) == (seed == 0)  # both branches are taken
+
+
+def test_force_below_zero_message_gives_depth_and_time_of_the_swing():
+    # a swing of 2 % of the peak below zero, a half sine centred 1.0 ms after the contact end,
+    # at 200 kHz (so that the 0.05 ms smoothing spans 10 samples): the message gives its depth,
+    # its size in noise deviations (depth / (noise / sqrt(10))) and when it is deepest
+    fs = 200_000.0
+    v, fs, truth = make_trace(sample_rate_hz=fs, seed=5, **CHAIN)
+    u = (truth.time_s - truth.end_s - 0.7e-3) / 0.6e-3
+    v = v + np.where((u > 0) & (u < 1), -0.02 * truth.peak_V * np.sin(np.pi * u), 0.0)
+    c = condition_voltage(v, fs)
+    msgs = [p.message for p in c.problems if p.kind is ProblemKind.NEGATIVE_FORCE]
+    assert len(msgs) == 1
+    m = re.fullmatch(r"force below zero after the contact: (\S+) % of the peak \((\S+) noise deviations\) (\S+) ms "
+                     r"after its end; the plate rings \(or the baseline is wrong\) and TC and the peak cannot be "
+                     r"trusted", msgs[0])
+    assert m, msgs[0]
+    pct, n_dev, ms = (float(g) for g in m.groups())
+    assert_allclose(pct, 2.0, rtol=0.05)
+    assert_allclose(n_dev, 0.02 * truth.peak_V / (0.002 / math.sqrt(10)), rtol=0.1)
+    assert_allclose(ms, 1.0, atol=0.03)  # printed to 2 digits; the end is located to about a sample
+
+
+def test_peak_on_ringing_message_gives_the_ringing_frequency():
+    # the 8 kHz ringing of test_peak_on_plate_ringing_is_a_problem: its frequency is read from
+    # the spacing of the swings around the peak, to about one sample of a 8-sample period
+    v, fs, _ = make_trace(seed=6, ringing_fraction=0.03, ringing_hz=8e3, ringing_decay_s=10e-3, **CHAIN)
+    msgs = [p.message for p in condition_voltage(v, fs).problems if p.kind is ProblemKind.PEAK_ON_RINGING]
+    assert len(msgs) == 1
+    m = re.match(r"peak force on plate ringing: the force oscillates at about (\S+) kHz during the contact", msgs[0])
+    assert m, msgs[0]
+    assert_allclose(float(m.group(1)), 8.0, rtol=0.25)
+
+
+def test_baseline_off_zero_message_names_the_stretch():
+    # the wrong time constant of test_wrong_given_time_constant_is_a_problem: the corrected
+    # signal is off zero just after the contact and later; the message gives the level [mV]
+    # and that level as a percentage of the peak
+    v, fs, truth = make_trace(tau_s=0.02, seed=9, post_s=0.06, **CHAIN)
+    c = condition_voltage(v, fs, tau_s=0.2)
+    found = {}
+    for p in c.problems:
+        m = re.fullmatch(r"corrected signal (before|just after|later after) the contact is (\S+) mV off zero "
+                         r"\((\S+) % of the peak\): baseline or amplifier decay not removed", p.message)
+        if p.kind is ProblemKind.BASELINE_OFF_ZERO:
+            assert m, p.message
+            found[m.group(1)] = (float(m.group(2)), float(m.group(3)))
+    assert "just after" in found
+    for mV, pct in found.values():
+        assert_allclose(pct, 100 * abs(mV) / (truth.peak_V * 1e3), rtol=0.08)
+
+
+def test_quiet_baseline_with_an_unmodelled_oscillation_is_a_problem():
+    # 100 mV at 333 Hz (no mains harmonic) on the quiet baseline: offset, drift, hum and decay
+    # cannot explain it; the same trace without it has no such problem
+    v, fs, truth = make_trace(seed=5, **CHAIN)
+    assert not any(p.kind is ProblemKind.BASELINE_RESIDUAL for p in condition_voltage(v, fs).problems)
+    with pytest.warns(ConditioningWarning, match="undershoot not measurable"):
+        c = condition_voltage(v + 0.1 * np.sin(2 * np.pi * 333.0 * truth.time_s + 0.4), fs)
+    msgs = [p.message for p in c.problems if p.kind is ProblemKind.BASELINE_RESIDUAL]
+    assert len(msgs) == 1
+    assert re.fullmatch(r"quiet baseline not explained by offset, drift, hum and decay: \S+ mV rms above the white "
+                        r"noise \(\S+ % of the peak; hum or drift not resolved\?\)", msgs[0]), msgs[0]
