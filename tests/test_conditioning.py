@@ -534,3 +534,26 @@ def test_quiet_baseline_with_an_unmodelled_oscillation_is_a_problem():
     assert len(msgs) == 1
     assert re.fullmatch(r"quiet baseline not explained by offset, drift, hum and decay: \S+ mV rms above the white "
                         r"noise \(\S+ % of the peak; hum or drift not resolved\?\)", msgs[0]), msgs[0]
+
+
+@pytest.mark.parametrize(("jump_at", "ends"), [("end", "end"), ("both", "start and end")])
+def test_jump_at_the_end_or_both_ends_is_named_with_its_uncertainty(jump_at, ends):
+    # a force that jumps from zero (0.4 of its scale) at its end, or at both ends, at 20 kHz:
+    # each jump leaves TC uncertain by half a sample (25 us), more than JUMP_MAX_FRACTION (0.7 %)
+    # of the 3 ms contact
+    from ballimpact.conditioning import JUMP_MAX_FRACTION
+
+    fs, duration_s = 20e3, 3.0e-3
+    t = np.arange(int(round(40e-3 * fs))) / fs
+    u = (t - (int(20e-3 * fs) + 0.7) / fs) / duration_s
+    step = 0.4 * u if jump_at == "end" else 0.4 * np.ones_like(u)
+    v = 2.0 * np.where((u > 0) & (u < 1), step + np.sin(np.pi * u), 0.0) + np.random.default_rng(1).normal(0, 1e-3, t.size)
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    msgs = [p.message for p in c.problems if p.kind is ProblemKind.CONTACT_JUMP_UNRESOLVED]
+    assert len(msgs) == 1
+    m = re.fullmatch(rf"contact {ends} between two samples: the force jumps from zero there, so TC is known to "
+                     rf"\+-(\S+) us only, more than {100 * JUMP_MAX_FRACTION:.2g} % of (\S+) ms \(sample faster\)",
+                     msgs[0])
+    assert m, msgs[0]
+    assert float(m.group(1)) == pytest.approx(len(ends.split(" and ")) * 0.5e6 / fs)
+    assert_allclose(float(m.group(2)), duration_s * 1e3, rtol=0.02)
