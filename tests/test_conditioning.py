@@ -557,3 +557,23 @@ def test_jump_at_the_end_or_both_ends_is_named_with_its_uncertainty(jump_at, end
     assert m, msgs[0]
     assert float(m.group(1)) == pytest.approx(len(ends.split(" and ")) * 0.5e6 / fs)
     assert_allclose(float(m.group(2)), duration_s * 1e3, rtol=0.02)
+
+
+def test_contact_end_fading_into_the_noise_message_gives_the_move_in_us_and_percent_of_tc():
+    # zoo trace 0:1550 of test_contact_end_fading_into_the_noise_is_a_problem: the message gives
+    # how far the end moves when fitted again [us] and that move as a percentage of TC
+    import zoo
+
+    tr = zoo.trace_for(0, 1550)
+    c = condition_voltage(tr.voltage_V, tr.rig.sample_rate_hz, polarity=tr.rig.polarity, n_harmonics=5,
+                          tau_s=tr.rig.tau_s)
+    msgs = [p.message for p in c.problems
+            if p.kind is ProblemKind.CONTACT_END_UNDETERMINED and "to 1 %" in p.message]
+    assert len(msgs) == 1
+    m = re.fullmatch(r"contact end not determined to 1 %: fitted again from the samples above twice the noise "
+                     r"threshold it moves by (\S+) us \((\S+) % of TC\); the force fades into the noise there",
+                     msgs[0])
+    assert m, msgs[0]
+    moved_us, pct = float(m.group(1)), float(m.group(2))
+    assert abs(moved_us) > 0.01 * c.contact.contact_time_s * 1e6  # more than 1 % of TC, as the message says
+    assert_allclose(pct, 100 * moved_us * 1e-6 / c.contact.contact_time_s, rtol=0.05)
