@@ -577,3 +577,22 @@ def test_contact_end_fading_into_the_noise_message_gives_the_move_in_us_and_perc
     moved_us, pct = float(m.group(1)), float(m.group(2))
     assert abs(moved_us) > 0.01 * c.contact.contact_time_s * 1e6  # more than 1 % of TC, as the message says
     assert_allclose(pct, 100 * moved_us * 1e-6 / c.contact.contact_time_s, rtol=0.05)
+
+
+def test_contact_noise_reported_in_volts():
+    # the contact's noise is reported in volts like the signal's: the trace's 2 mV
+    v, fs, _ = make_trace(seed=3, **CHAIN)
+    c = condition_voltage(v, fs)
+    assert_allclose(c.contact.noise_rms_V, 0.002, rtol=0.1)
+
+
+def test_event_before_the_contact_is_left_out_of_the_baseline():
+    # a knock on the plate 15 ms before the contact (a 1 ms half sine of 10 % of the peak) is an
+    # event, not baseline: the impulse and the contact time stay those of the trace without it
+    v, fs, truth = make_trace(seed=3, **CHAIN)
+    u = (truth.time_s - truth.start_s + 15e-3) / 1e-3
+    knock = np.where((u > 0) & (u < 1), 0.1 * truth.peak_V * np.sin(np.pi * u), 0.0)
+    plain, knocked = condition_voltage(v, fs), condition_voltage(v + knock, fs)
+    assert_allclose(_impulse(knocked, truth), _impulse(plain, truth), rtol=2e-4)
+    assert_allclose(knocked.contact.contact_time_s, plain.contact.contact_time_s, rtol=2e-3)
+    assert_allclose(_impulse(knocked, truth), truth.impulse_V_s, rtol=3e-3)
