@@ -208,7 +208,12 @@ def _mtimes(folder):
 
 @pytest.mark.slow
 def test_workflow_catalogue_flags_the_changed_ball_and_adds_a_session(tmp_path):
-    """The demo and two synthetic sessions, punctured changed (AC x 1.5) in the last; then a fourth session."""
+    """The demo and two synthetic sessions, punctured changed (AC x 1.5) in the last; then a fourth session.
+
+    Snakemake is asked for the catalogue only (results/catalogue/catalogue.csv and what it
+    needs: each session's archive and parameters.csv), not for the figures and reports,
+    which this test does not read; the full runs are tested in test_workflow.py and test_run.py.
+    """
     raw, results, work = tmp_path / "raw", tmp_path / "results", tmp_path / "work"
     raw.mkdir()
     work.mkdir()
@@ -219,6 +224,7 @@ def test_workflow_catalogue_flags_the_changed_ball_and_adds_a_session(tmp_path):
     _synth(raw, "s2027-01-15", "2027-01-15", 102, balls=changed)
     args = ["--snakefile", REPO / "Snakefile", "--directory", work, "--cores", "2",
             "--config", f"raw_dir={raw}", f"results_dir={results}", "bootstrap=10"]
+    args = [results / "catalogue" / "catalogue.csv", *args]  # the target, before --config's list
     proc = run_snakemake(*args, cwd=work)
     assert proc.returncode == 0, proc.stdout[-5000:]
     cat = results / "catalogue"

@@ -397,3 +397,37 @@ def test_second_contact_cut_off_by_the_trace_end_is_counted():
     x2 = np.where((t > 5e-3) & (t < 9e-3), np.sin(np.pi * (t - 5e-3) / 4e-3), 0.0)
     x2 += np.where((t > 15e-3) & (t < 15.2e-3), 0.16, 0.0)
     assert detect_contact(x2 + np.random.default_rng(0).normal(0, 1e-3, t.size), fs).n_impacts == 1
+
+
+# ------------------------------------------------------ found by the sampled mutation run
+
+
+def _clean_pulse(fs=100e3, pre_s=20e-3, noise_V=2e-3, seed=0):
+    """A 4 ms half sine of 5 V after pre_s of baseline, white noise noise_V [V]; (voltage, start index)."""
+    n_pre, n_c = int(pre_s * fs), int(4e-3 * fs)
+    v = np.zeros(n_pre + n_c + int(20e-3 * fs))
+    v[n_pre:n_pre + n_c] = 5.0 * np.sin(np.pi * (np.arange(n_c) + 0.5) / n_c)
+    return v + np.random.default_rng(seed).normal(0.0, noise_V, v.size), n_pre
+
+
+def test_given_noise_used_and_threshold_reported_in_volts():
+    # noise_rms_V given: the thresholds use it (in volts, like the trace), THRESHOLD_SIGMA of it
+    # above THRESHOLD_FRACTION of the 5 V peak; not given: estimated from the pre-trigger (2 mV)
+    from ballimpact.contact import THRESHOLD_FRACTION, THRESHOLD_SIGMA, detect_contact
+
+    v, _ = _clean_pulse()
+    c = detect_contact(v, 100e3, noise_rms_V=0.05)
+    assert c.noise_rms_V == pytest.approx(0.05)
+    assert c.threshold_V == pytest.approx(max(THRESHOLD_SIGMA * 0.05, THRESHOLD_FRACTION * c.peak_V))
+    c = detect_contact(v, 100e3)
+    assert_allclose(c.noise_rms_V, 2e-3, rtol=0.1)
+    assert c.threshold_V == pytest.approx(max(THRESHOLD_SIGMA * c.noise_rms_V, THRESHOLD_FRACTION * c.peak_V))
+    assert "short_pretrigger" not in c.flags
+
+
+def test_short_pretrigger_flagged():
+    # 0.1 ms of baseline before the contact: too few samples to measure the noise before it
+    from ballimpact.contact import detect_contact
+
+    v, _ = _clean_pulse(pre_s=0.1e-3)
+    assert "short_pretrigger" in detect_contact(v, 100e3).flags

@@ -163,6 +163,9 @@ if _pattern:
 """
 
 
+SMALL = ("bootstrap=10",)  # the interrupted run's config: few bootstrap resamples (intervals are not read here)
+
+
 def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_path):
     raw = tmp_path / "raw"
     write_session(raw / "cut", SynthConfig(session_id="cut", impacts_per_ball=3, faults_per_kind=1, seed=5))
@@ -175,7 +178,7 @@ def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_pat
     marker = tmp_path / "killed_at"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(hook), os.environ.get("PYTHONPATH")])),
                KILL_AT_REPLACE="impacts.csv", KILL_MARKER=str(marker))
-    cmd = [str(SNAKEMAKE), *map(str, _args(tmp_path, raw, results))]
+    cmd = [str(SNAKEMAKE), *map(str, _args(tmp_path, raw, results, *SMALL))]
     proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
     try:
@@ -202,8 +205,8 @@ def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_pat
     assert not (results / "cut" / "report.pdf").exists()
     # a hard kill leaves Snakemake's lock: unlock (as the README says), then the rerun
     # (profiles/default: rerun-incomplete) completes
-    run_snakemake(*_args(tmp_path, raw, results), "--unlock", cwd=tmp_path, check=True)
-    again = run_snakemake(*_args(tmp_path, raw, results), cwd=tmp_path)
+    run_snakemake(*_args(tmp_path, raw, results, *SMALL), "--unlock", cwd=tmp_path, check=True)
+    again = run_snakemake(*_args(tmp_path, raw, results, *SMALL), cwd=tmp_path)
     assert again.returncode == 0, again.stdout[-5000:]
     table = pd.read_csv(results / "cut" / "impacts.csv", keep_default_na=False)
     assert len(table) == len(pd.read_csv(raw / "cut" / "impacts.csv"))
@@ -214,7 +217,7 @@ def test_interrupted_run_leaves_nothing_half_written_and_rerun_completes(tmp_pat
     yaml_path = raw / "new" / "session.yaml"
     yaml_path.write_text(yaml_path.read_text(encoding="utf-8").replace("session_id: cut", "session_id: new"),
                          encoding="utf-8")
-    plan = run_snakemake(*_args(tmp_path, raw, results), "-n", cwd=tmp_path, check=True).stdout
+    plan = run_snakemake(*_args(tmp_path, raw, results, *SMALL), "-n", cwd=tmp_path, check=True).stdout
     assert "wildcards: session=new" in plan and "session=cut" not in plan, plan[-3000:]
 
 

@@ -272,49 +272,87 @@ def test_bad_session_yaml_fails_naming_the_file(synth_raw, tmp_path, edit, expec
     assert "cannot be processed" in proc.stdout
 
 
-@pytest.mark.slow
-def test_bad_session_stops_only_itself(synth_raw, tmp_path):
-    raw = tmp_path / "raw"
+def _lab_typo(text: str) -> str:
+    """session.yaml with the lab's typo kb0_kn_m (for kb0_kN_m) under the first ball type."""
+    return re.sub(r"(?m)^(\s+)kb0_kN_m: (.*)$", r"\1kb0_kn_m: \2", text, count=1)
+
+
+HOSTILE_CELLS = ["traces/a\x00b.csv", "traces/\x07bell.csv", "traces/" + "x" * 10_000 + ".csv"]
+
+
+@pytest.fixture(scope="module")
+def mixed_run(synth_raw, tmp_path_factory):
+    """One Snakemake run (bootstrap=10, keep-going) on three copies of s1, shared by the tests
+    of what a bad session or a bad impact stops and of the run summary (one run instead of
+    three; each test checks its own session):
+
+    * 'lab': session.yaml with the typo kb0_kn_m under the first ball type (a warning);
+    * 'hostile': a NUL byte, a control character and a 10 000-character path in the trace
+      cells of its first three impacts;
+    * 'bad': plate.polarity 2 (a session-level error).
+
+    A dict: raw, results, proc (the CompletedProcess), hostile_ids, first_ball (of 'lab').
+    """
+    tmp = tmp_path_factory.mktemp("mixed")
+    raw = tmp / "raw"
     raw.mkdir()
-    copy_session(synth_raw / "s1", raw, "good")
+    lab = copy_session(synth_raw / "s1", raw, "lab")
+    original = (lab / "session.yaml").read_text(encoding="utf-8")
+    (lab / "session.yaml").write_text(_lab_typo(original), encoding="utf-8")
+    first_ball = next(iter(yaml.safe_load(original)["balls"]))
+
     bad = copy_session(synth_raw / "s1", raw, "bad")
     text = (bad / "session.yaml").read_text(encoding="utf-8")
     (bad / "session.yaml").write_text(text.replace("  polarity: 1", "  polarity: 2", 1), encoding="utf-8")
-    results = tmp_path / "results"
-    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"),
-                         check=False)  # keep-going (profiles/default): the good session completes
-    assert (results / "good" / "report.pdf").is_file(), proc.stdout[-3000:]
+
+    hostile = copy_session(synth_raw / "s1", raw, "hostile")
+    csv_path = hostile / "impacts.csv"
+    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
+    header = lines[0].rstrip("\r\n").split(",")
+    col = header.index("trace")
+    hostile_ids = []
+    for k, cell in enumerate(HOSTILE_CELLS, start=1):
+        fields = lines[k].rstrip("\r\n").split(",")
+        fields[col] = cell
+        hostile_ids.append(fields[header.index("impact_id")])
+        lines[k] = ",".join(fields) + "\n"
+    csv_path.write_text("".join(lines), encoding="utf-8")
+
+    results = tmp / "results"
+    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+    return {"raw": raw, "results": results, "proc": proc, "hostile_ids": hostile_ids, "first_ball": first_ball}
+
+
+def _summary_block(summary: str, session: str) -> str:
+    """The lines of one session in the run summary (from '  <session>:' to the next session)."""
+    start = summary.index(f"\n  {session}:")
+    following = re.search(r"\n  \S", summary[start + 1:])
+    return summary[start: start + 1 + following.start()] if following else summary[start:]
+
+
+@pytest.mark.slow
+def test_bad_session_stops_only_itself(mixed_run):
+    """keep-going (profiles/default): the good sessions complete beside the bad one."""
+    results, proc = mixed_run["results"], mixed_run["proc"]
+    for good in ("lab", "hostile"):
+        assert (results / good / "report.pdf").is_file(), proc.stdout[-3000:]
     assert not (results / "bad" / "work" / "session.json").exists()
     log = (results / "bad" / "logs" / "validate_session.log").read_text(encoding="utf-8")
     assert "session.yaml" in log and "polarity" in log
 
 
 @pytest.mark.slow
-def test_hostile_trace_cells_stop_only_their_impacts(synth_raw, tmp_path):
+def test_hostile_trace_cells_stop_only_their_impacts(mixed_run):
     """A NUL byte, a control character and a 10 000-character path in the trace cells of one
-    session: the workflow plans and runs both sessions; those impacts are excluded with a reason."""
-    raw = tmp_path / "raw"
-    raw.mkdir()
-    copy_session(synth_raw / "s1", raw, "good")
-    bad = copy_session(synth_raw / "s1", raw, "hostile")
-    csv_path = bad / "impacts.csv"
-    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
-    header = lines[0].rstrip("\r\n").split(",")
-    col = header.index("trace")
-    cells = ["traces/a\x00b.csv", "traces/\x07bell.csv", "traces/" + "x" * 10_000 + ".csv"]
-    hostile_ids = []
-    for k, cell in enumerate(cells, start=1):
-        fields = lines[k].rstrip("\r\n").split(",")
-        fields[col] = cell
-        hostile_ids.append(fields[header.index("impact_id")])
-        lines[k] = ",".join(fields) + "\n"
-    csv_path.write_text("".join(lines), encoding="utf-8")
-    results = tmp_path / "results"
-    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=True)
-    for session in ("good", "hostile"):
-        assert (results / session / "report.pdf").is_file(), proc.stdout[-3000:]
+    session: the workflow plans and runs it; those impacts are excluded with a reason."""
+    results, proc = mixed_run["results"], mixed_run["proc"]
+    assert (results / "hostile" / "report.pdf").is_file(), proc.stdout[-3000:]
+    # the run failed only because of the session 'bad': every failed job is of 'bad'
+    blocks = re.findall(r"Error in rule \w+:\n((?:    .*\n)+)", proc.stdout)
+    failed = {s for block in blocks for s in re.findall(rf"output: {re.escape(str(results))}/([^/\s]+)/", block)}
+    assert blocks and failed == {"bad"}, proc.stdout[-3000:]
     rows = {r["impact_id"]: r for r in raw_rows(results / "hostile")}
-    for impact_id in hostile_ids:
+    for impact_id in mixed_run["hostile_ids"]:
         assert rows[impact_id]["status"] == "excluded"
         assert "trace" in rows[impact_id]["reason"]
 
@@ -531,6 +569,7 @@ def test_end_to_end_synthetic_session(tmp_path):
     ]
     proc = run_snakemake("--cores", "2", *common, cwd=workdir)
     assert proc.returncode == 0, proc.stdout
+    assert "steps (100%) done" not in proc.stdout[proc.stdout.index("ballimpact run summary"):]  # printed at the end
 
     out = results / "e2e"
     for name in ("impacts.csv", "parameters.csv", "e2e.nc", "report.pdf", "work/session.json",
@@ -590,40 +629,39 @@ def test_snakemake_lint_is_clean():
 
 
 @pytest.mark.slow
-def test_run_summary_shows_warnings_errors_and_stale_results(synth_raw, tmp_path):
-    raw = tmp_path / "raw"
-    raw.mkdir()
-    lab = copy_session(synth_raw / "s1", raw, "lab")
-    yaml_path = lab / "session.yaml"
-    original = yaml_path.read_text(encoding="utf-8")
-    # the lab's typo: kb0_kn_m instead of kb0_kN_m under the first ball type
-    first_ball = next(iter(yaml.safe_load(original)["balls"]))
-    typo = re.sub(r"(?m)^(\s+)kb0_kN_m: (.*)$", r"\1kb0_kn_m: \2", original, count=1)
-    yaml_path.write_text(typo, encoding="utf-8")
-    results = tmp_path / "results"
-    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=True)
+def test_run_summary_shows_warnings_errors_and_stale_results(mixed_run, tmp_path):
+    raw, results, proc = mixed_run["raw"], mixed_run["results"], mixed_run["proc"]
+    lab = raw / "lab"
     summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
-    assert "steps (100%) done" not in summary  # printed at the end of the run
     n_rows = len(raw_rows(lab))
     assert re.search(rf"\n  lab: {n_rows} impacts, \d+ ok, \d+ excluded\n", summary), summary
-    assert "    excluded   1 x clipping at the ADC rails" in summary, summary
-    assert f"validate warning: {lab / 'session.yaml'}: unknown key(s) 'balls.{first_ball}.kb0_kn_m'" in summary
-    assert re.search(r"    fit \w+: (ok|WARNING: .+)\n", summary)
+    block = _summary_block(summary, "lab")
+    assert "    excluded   1 x clipping at the ADC rails" in block, summary
+    assert (f"validate warning: {lab / 'session.yaml'}: unknown key(s) 'balls.{mixed_run['first_ball']}.kb0_kn_m'"
+            in block), summary
+    assert re.search(r"    fit \w+: (ok|WARNING: .+)\n", block)
 
     # three session-level mistakes at once: all reported, earlier results marked stale
+    # (on copies of lab's raw folder and results, so that the shared run stays as it was)
+    raw2, results2 = tmp_path / "raw", tmp_path / "results"
+    raw2.mkdir()
+    lab = copy_session(lab, raw2, "lab")
+    shutil.copytree(results / "lab", results2 / "lab")
+    yaml_path = lab / "session.yaml"
+    typo = yaml_path.read_text(encoding="utf-8")
     yaml_path.write_text(typo.replace("date: ", "date: yesterday #", 1).replace("  polarity: 1", "  polarity: 2"),
                          encoding="utf-8")
     rows = (lab / "impacts.csv").read_text(encoding="utf-8").splitlines()
     rows[1] = rows[1].replace(f",{raw_rows(lab)[0]['ball']},", ",nosuchball,", 1)
     (lab / "impacts.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
-    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+    proc = run_snakemake("--cores", "2", *config_args(raw2, results2, "bootstrap=10"), check=False)
     assert proc.returncode != 0
     summary = proc.stdout[proc.stdout.index("ballimpact run summary"):]
     assert "  lab: SESSION-LEVEL ERROR, not processed:" in summary, summary
     for fragment in ("key 'date'", "key 'plate.polarity'", "ball 'nosuchball' is not defined"):
         assert re.search(rf"    error: .*{re.escape(fragment)}", summary), (fragment, summary)
-    assert f"    STALE: the results in {results / 'lab'} are from an earlier run" in summary
-    stale = (results / "lab" / "STALE").read_text(encoding="utf-8")
+    assert f"    STALE: the results in {results2 / 'lab'} are from an earlier run" in summary
+    stale = (results2 / "lab" / "STALE").read_text(encoding="utf-8")
     assert "report.pdf" in stale and "nosuchball" in stale
 
 
