@@ -545,7 +545,7 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end) if spread else (math.nan, math.nan)
     # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
     # just before (after) the contact that the merging of runs joined to it is no force on the ball.
-    run_a, run_b = _unbroken_run(xs, peak_index, sigma, run_a, run_b)
+    run_a, run_b = _unbroken_run(xs, peak_index, sigma, thr, run_a, run_b)
     u_start = min(max(u_start, 0.0), float(run_a))
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
@@ -572,25 +572,26 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     )
 
 
-def _lone_samples(xs, sigma: float) -> np.ndarray:
-    """Samples above the contact threshold (THRESHOLD_SIGMA noise) whose two neighbours are quiet (FOOT_SIGMA).
+def _lone_samples(xs, sigma: float, threshold: float | None = None) -> np.ndarray:
+    """Samples above the contact threshold (default THRESHOLD_SIGMA noise) whose two neighbours are quiet (FOOT_SIGMA).
 
     A force on the ball cannot rise from zero and fall back to it within two
     sample intervals at any sample rate of raw-format v1.1: such a sample is a
     spike, not a foot or a tail.
     """
     xs = np.asarray(xs, dtype=float)
+    loud = THRESHOLD_SIGMA * sigma if threshold is None else threshold
     out = np.zeros(xs.size, dtype=bool)
     if xs.size >= 3:
         quiet = xs <= FOOT_SIGMA * sigma
-        out[1:-1] = (xs[1:-1] > THRESHOLD_SIGMA * sigma) & quiet[:-2] & quiet[2:]
+        out[1:-1] = (xs[1:-1] > loud) & quiet[:-2] & quiet[2:]
     return out
 
 
-def _unbroken_run(xs, peak_index: int, sigma: float, run_a: int, run_b: int) -> tuple[int, int]:
-    """The run [run_a, run_b] (merged across short gaps) without the lone samples at its ends (spikes)."""
-    lone = _lone_samples(xs, sigma)
-    above = xs > THRESHOLD_SIGMA * sigma
+def _unbroken_run(xs, peak_index: int, sigma: float, thr: float, run_a: int, run_b: int) -> tuple[int, int]:
+    """The run [run_a, run_b] above thr (merged across short gaps) without the lone samples at its ends (spikes)."""
+    lone = _lone_samples(xs, sigma, thr)
+    above = xs > thr
     while run_a < peak_index and lone[run_a]:
         run_a += int(np.flatnonzero(above[run_a + 1:peak_index + 1])[0]) + 1  # the peak is above: found
     while run_b > peak_index and lone[run_b]:
