@@ -591,7 +591,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     problems = it.problems + it.tau_problems
     contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
     if contact.found:
-        problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u))
+        problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u,
+                                   post_guard_s))
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
@@ -699,23 +700,24 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
                       contact_integral)
 
 
-def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u):
+def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u,
+               post_guard_s=POST_GUARD_S):
     """Problems of the corrected signal, in a fixed order: levels, contact ends, ringing, mains."""
     peak = float(contact.peak_V)
     if not peak > 0:
         return []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    return (_level_problems(x, fs, fit, peak, scale, e_u) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
+    return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
             + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
             + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
 
 
-def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u):
+def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=POST_GUARD_S):
     """The corrected signal off zero before or after the contact, or a quiet residual that is not white noise.
 
     After the contact the stretch of the baseline fit is checked; when the record
     after the contact was too short for the fit (the baseline then extrapolated
-    from before the contact), the samples from POST_GUARD_S after the contact end
+    from before the contact), the samples from post_guard_s after the contact end
     to the end of the record, when there are MIN_PRE_SAMPLES of them.
     """
     out = []
@@ -730,7 +732,7 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u):
         if post_idx.size > 2 * w:
             stretches.append(("later after", post_idx[-w:]))
     else:
-        tail = np.arange(int(math.ceil(end_u + POST_GUARD_S * fs)), x.size)
+        tail = np.arange(int(math.ceil(end_u + post_guard_s * fs)), x.size)
         if tail.size >= MIN_PRE_SAMPLES:
             stretches.append(("after", tail[:w]))
     for where, sel in stretches:
@@ -975,9 +977,9 @@ def _peak_between_samples(xc, fs, noise):
     compression in the model) is no ramp and goes on nowhere. Where in the
     interval the force drops is not known (any instant alike), so the largest
     sample misses the top by half that rise on average and by all of it at
-    worst. When that rise is
-    more than PEAK_SAMPLING_FRACTION (10 %) of the peak, the peak is not known
-    to 5 % (the zoo's tolerance for the spike): sample faster. Nor is it
+    worst. When that rise is more than PEAK_SAMPLING_FRACTION (10 %) of the
+    peak, the peak is not known to 5 % (the zoo's tolerance for the spike):
+    sample faster. Nor is it
     known when the largest sample is the first of the contact (the one before
     it below PEAK_JUMP_FRACTION of it): a ball's force rises as it compresses,
     so that sample is the top of the force's jump from zero, a plate's
