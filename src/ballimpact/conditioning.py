@@ -51,6 +51,16 @@ moves when fitted again from higher samples (a tail fading into the noise), a
 force jump from zero that locates an end only to half a sample when that is
 more than 0.7 % of TC, too few samples across the contact, a contact window
 that does not settle.
+
+Plate resonance: when the only problems are the plate's (ringing in or after
+the contact, a peak on the ringing, force below zero after it, and the end and
+peak problems such ringing causes), the resonance is identified from the
+ringing and undone (``ballimpact.plate``) and every contact, end and ringing
+check is done again on the undone force. It is used only when two
+identifications from independent instruments both pass every check, the
+undone force's noise is below PLATE_NOISE_FRACTION of its peak, and the two
+agree on TC to PLATE_AGREE_TC and on the peak to PLATE_AGREE_PEAK; otherwise
+the impact keeps its problems.
 """
 
 from __future__ import annotations
@@ -65,6 +75,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
+from .plate import PlateResonance, identify_plate_resonance, undo_plate_resonance
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -121,6 +132,20 @@ NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact m
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
 NEGATIVE_SIGMA = 6.0  # ... and this many standard errors of the average [-]
+PLATE_ID_AFTER_S = 2.0e-3  # the plate's ringing is identified from the contact and this long after it [s]
+PLATE_ID_LAGS = (5, 8)  # two identifications, instruments this many samples back [samples]
+PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ... [-]
+PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
+PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most this fraction of TC [-]
+PLATE_START_LATE = 1.0  # the undone contact may start this much later than the sensed one at most [samples]
+PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
+PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
+#: Problems that plate ringing causes: checked again on the undone force.
+PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
+                         ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
+                         ProblemKind.CONTACT_JUMP_UNRESOLVED})
+#: ... of which at least one must show the ringing itself.
+PLATE_EVIDENCE = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE})
 
 
 class ConditioningWarning(UserWarning):
@@ -172,6 +197,8 @@ class ConditionedSignal:
         empty when the conditioning passed every integrity check.
     spike_indices : tuple of int
         Samples replaced as single-sample spikes [-].
+    plate : ballimpact.plate.PlateResonance or None
+        The plate resonance undone in ``voltage_V`` (None when none was).
     """
 
     voltage_V: np.ndarray
@@ -190,6 +217,7 @@ class ConditionedSignal:
     warnings: tuple[str, ...] = ()
     problems: tuple[Problem, ...] = ()
     spike_indices: tuple[int, ...] = ()
+    plate: PlateResonance | None = None
 
 
 @dataclass
@@ -497,7 +525,8 @@ def _event_mask(x, fs, noise, contact: ContactResult, pre_guard, post_guard):
 
 def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
-                      pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S) -> ConditionedSignal:
+                      pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S,
+                      undo_plate: bool = True) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
 
     The force-plate voltage must be proportional to the force for kCAL to be
@@ -529,6 +558,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     pre_guard_s, post_guard_s : float
         Samples closer than this to the contact are left out of the baseline
         fit [s].
+    undo_plate : bool
+        Undo a plate resonance identified from its ringing when that ringing
+        is the only problem (see the module docstring); False reports the
+        ringing as a problem.
 
     Returns
     -------
@@ -595,8 +628,93 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                                    post_guard_s))
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
+        undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
+        if undone is not None:
+            y, contact, plate = undone
+            messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
+                            f"{plate.damping_ratio:.2g}) identified from its ringing and undone")
+            return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, [], t0_s, scale, spikes,
+                           it.mains, mains_source, it.contact_integral, plate)
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
                    it.mains, mains_source, it.contact_integral)
+
+
+def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
+    """Standard uncertainty of TC from its two ends [samples]: noise over the force's slope at each end.
+
+    An end where the force jumps is located to half a sample; elsewhere a line
+    through the force's last samples meets zero within noise / slope samples
+    (the slope read over PLATE_SLOPE_S inside the end).
+    """
+    m = max(int(round(PLATE_SLOPE_S * fs)), 2)
+    out = []
+    for where, i0, i1 in (("start", int(math.ceil(s_u)), int(math.ceil(s_u)) + m),
+                          ("end", int(math.floor(e_u)), int(math.floor(e_u)) - m)):
+        if f"{where}_jump" in contact.flags:
+            out.append(0.5)
+            continue
+        if not (0 <= i0 < y.size and 0 <= i1 < y.size):
+            return math.inf
+        slope = abs(float(y[i1] - y[i0])) / m
+        out.append(max(noise / slope, 0.5) if slope > 0 else math.inf)
+    return math.hypot(*out)
+
+
+def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
+    """The force with the plate's resonance undone, its contact and the resonance; None when not trusted.
+
+    Tried only when every problem is one plate ringing causes and one shows the
+    ringing itself. The resonance is identified twice, from the contact (less
+    two samples after its start, the force's jump) and PLATE_ID_AFTER_S after
+    it, with instruments PLATE_ID_LAGS samples back; each undone force must
+    pass the contact, end and ringing checks again, its noise (undoing the
+    resonance amplifies the noise above it) must stay below
+    PLATE_NOISE_FRACTION of the peak, twice its TC's uncertainty (noise over
+    slope at each end) below PLATE_TC_FRACTION of TC, it must not pull on the
+    plate (below -NEGATIVE_SIGMA noise deviations) in the contact, nor start
+    more than PLATE_START_LATE samples after the sensed force (the plate
+    delays the sensed force; an undone force that starts later has lost a
+    low foot in its amplified noise), and the two must agree. A pull is what
+    is left where the force departs from the first-order hold the inverse
+    assumes (a jump between samples leaves an alternating tail decaying by the
+    zeros of the sampled plate).
+    """
+    kinds = {p.kind for p in problems}
+    if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
+        return None
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    a = max(int(math.ceil(s_u)) + 2, 0)
+    b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
+    found = []
+    for lag in PLATE_ID_LAGS:
+        plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
+        if plate is None:
+            return None
+        y = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
+        c = detect_contact(y, fs, t0_s=t0_s, spread=True)
+        if not c.found or not c.peak_V > 0:
+            return None
+        noise = float(c.noise_rms_V)
+        if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
+            return None  # the largest sample of so noisy a force is a biased peak
+        checked = replace(fit, noise=noise)
+        cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
+        if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
+                                                                                  ce_u, cs_u, ce_u):
+            return None
+        if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) > PLATE_TC_FRACTION * (ce_u - cs_u):
+            return None
+        inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
+        if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
+            return None  # a pull in the contact: the force is not what this plate's inverse assumes
+        if cs_u > s_u + PLATE_START_LATE:
+            return None  # the undone force starts later than the sensed one: a foot lost in its noise
+        found.append((y, c, plate))
+    (y, c, plate), (_, c2, _) = found
+    if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
+            or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
+        return None
+    return y, c, plate
 
 
 def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):
@@ -1120,7 +1238,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
 
 
 def _result(x, fit: _BaselineFit, tau, source, contact, n_iter, messages, problems, t0_s, scale, spikes, mains,
-            mains_source, contact_integral=math.nan):
+            mains_source, contact_integral=math.nan, plate=None):
     """Assemble the ConditionedSignal, back in volts."""
     coef = dict(fit.coef)
     coef["offset_V"] = coef["offset_V"] * scale
@@ -1153,4 +1271,5 @@ def _result(x, fit: _BaselineFit, tau, source, contact, n_iter, messages, proble
             warnings=tuple(messages),
             problems=tuple(dict.fromkeys(problems)),
             spike_indices=tuple(int(i) for i in spikes),
+            plate=plate,
         )

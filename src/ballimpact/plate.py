@@ -1,0 +1,245 @@
+"""The force plate's own resonance: identified from its ringing in a trace, and undone.
+
+Goodwill & Haake (2004, section 4) see oscillations in their measured force
+that the one-degree-of-freedom ball model does not have. Part of such an
+oscillation can be the plate's: a piezoelectric platform is a mass on stiff
+sensors, so the force it reports is the applied force passed through a
+second-order mechanical response,
+
+    F_sensed'' + 2 zeta wn F_sensed' + wn^2 F_sensed = wn^2 F     (unit static gain),
+
+with its resonance fn = wn / 2 pi from below 1 kHz to 30 kHz and damping ratio
+zeta of a few per cent (raw-format v1.1). The paper does not treat it; this
+module is our addition (see the README, "Plate resonance").
+
+Sampled at fs, the plate's free response obeys exactly a two-term recursion
+(its poles z = exp(s / fs)), and its response to a force that is linear between
+samples is exactly the first-order-hold discretisation B(z) / A(z) of the
+continuous plate. So:
+
+1. **Identification** (:func:`identify_plate_resonance`): the ball's force is
+   smooth, the ringing is not. The second difference of the trace removes most
+   of the force and keeps the ringing, which then follows the recursion
+   ``d[n] = a1 d[n-1] + a2 d[n-2]``. The noise of a second difference is
+   correlated over two samples, so a plain least-squares fit is biased; the
+   coefficients are estimated with instrumental variables (the second
+   difference ``lag`` samples earlier, uncorrelated with that noise). The poles
+   give fn and zeta.
+2. **Undoing** (:func:`undo_plate_resonance`): ``A(z)`` applied to the trace
+   leaves ``B(z) F``; B has one zero inside and one outside the unit circle
+   (about -0.27 and -3.7 for a resonance well below fs), so it is inverted by a
+   causal pass for the inner zero and a backward pass for the outer one: a
+   stable two-sided filter with unit static gain. The impulse (so kCAL) is
+   unchanged; noise above the resonance is amplified, as it must be.
+
+A resonance above fs / 2 (no anti-aliasing filter) folds onto its alias: its
+poles are still those of the samples, but its continuous fn is not known from
+them. Nothing here can tell; the caller must check the undone force (see
+``conditioning``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance"]
+
+IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
+MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
+MAX_FREQUENCY_FRACTION = 0.45  # a resonance identified above this fraction of fs is not trusted [-]
+MIN_FREQUENCY_FRACTION = 0.005  # ... nor one below this fraction of fs [-]
+MAX_DAMPING_RATIO = 0.5  # a "resonance" more damped than this is no ringing [-]
+MIN_DAMPING_RATIO = 0.005  # ... and one damped less (rings for > 30 periods per e-fold) is no plate on its mounts [-]
+RING_NOISE_FACTOR = 3.0  # the ringing's second difference stands out of the noise's by this in rms [-]
+REFINEMENTS = 2  # fits repeated with the smoothing chosen from the last estimate [-]
+
+
+@dataclass(frozen=True)
+class PlateResonance:
+    """A plate's second-order resonance as identified from a trace.
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Undamped natural frequency fn = wn / 2 pi [Hz].
+    damping_ratio : float
+        Damping ratio zeta [-].
+    a1, a2 : float
+        The recursion of the sampled free response,
+        ``x[n] = a1 x[n-1] + a2 x[n-2]`` [-].
+    """
+
+    frequency_hz: float
+    damping_ratio: float
+    a1: float
+    a2: float
+
+
+def _resonance_from_recursion(a1: float, a2: float, fs: float) -> PlateResonance | None:
+    """The continuous resonance of the poles of ``z^2 - a1 z - a2`` (None when they are not a decaying pair)."""
+    if not (math.isfinite(a1) and math.isfinite(a2)) or a1 * a1 + 4.0 * a2 >= 0.0 or not -1.0 < a2 < 0.0:
+        return None
+    r = math.sqrt(-a2)
+    theta = math.acos(max(-1.0, min(1.0, a1 / (2.0 * r))))
+    s = complex(math.log(r), theta) * fs  # the pole in the s plane [1/s]
+    wn = abs(s)
+    return PlateResonance(wn / (2.0 * math.pi), -s.real / wn, float(a1), float(a2))
+
+
+def _iv_recursion(d: np.ndarray, lag: int):
+    """(a1, a2) of ``d[n] = a1 d[n-1] + a2 d[n-2]`` by instrumental variables ``lag`` samples back; None if singular."""
+    if d.size < MIN_RING_SAMPLES + lag + 1:
+        return None
+    y = d[lag + 1:]
+    regressors = np.column_stack([d[lag:-1], d[lag - 1:-2]])
+    instruments = np.column_stack([d[1:-lag], d[:-lag - 1]])
+    zx = instruments.T @ regressors
+    if not np.all(np.isfinite(zx)) or abs(np.linalg.det(zx)) <= 1e-300 * max(float(np.max(np.abs(zx))), 1e-300) ** 2:
+        return None
+    a1, a2 = np.linalg.solve(zx, instruments.T @ y)
+    return float(a1), float(a2)
+
+
+def _noise_only(d: np.ndarray, k: int, noise_rms: float) -> bool:
+    """The smoothed second difference d within RING_NOISE_FACTOR of what white noise alone gives, in rms."""
+    taps = np.diff(np.ones(k) / k, 2, prepend=[0.0, 0.0], append=[0.0, 0.0])  # the filter x -> d
+    expected = noise_rms * math.sqrt(float(np.sum(taps ** 2)))
+    return float(np.sqrt(np.mean(d ** 2))) <= RING_NOISE_FACTOR * expected
+
+
+def identify_plate_resonance(force, sample_rate_hz: float, *, lag: int = IV_LAG,
+                             noise_rms: float | None = None) -> PlateResonance | None:
+    """The plate resonance that rings in a stretch of a trace, or None when none can be identified.
+
+    The recursion of the free response holds for any linear filtering of the
+    trace, so it is fitted to the second difference of the trace smoothed by a
+    moving average of k samples: k = 1 first, then k chosen from that
+    estimate (a quarter of the resonance's period: the ringing passes at 90 %,
+    the noise above it is cut) and the fit repeated, REFINEMENTS times. The
+    smoothed noise is correlated over k + 1 samples, so the instruments go
+    ``lag + k - 1`` samples back.
+
+    Parameters
+    ----------
+    force : array_like
+        A stretch of the baseline-corrected trace that holds the ringing: from
+        just after the force's jump at the contact start to a little after the
+        contact (proportional to force; any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    lag : int
+        Delay of the instrumental variables for k = 1 [samples], at least 3.
+    noise_rms : float, optional
+        Standard deviation of the trace's white noise, in the unit of
+        ``force``. When given, the smoothed second difference must stand out of
+        what that noise alone gives by RING_NOISE_FACTOR in rms, or nothing
+        is identified (noise has a "recursion" too).
+
+    Returns
+    -------
+    PlateResonance or None
+        None when the stretch is too short, the recursion has no decaying
+        oscillation, or its frequency is outside MIN_FREQUENCY_FRACTION-
+        MAX_FREQUENCY_FRACTION of fs or its damping ratio outside
+        MIN_DAMPING_RATIO-MAX_DAMPING_RATIO. An oscillation damped less than
+        MIN_DAMPING_RATIO outlasts the contact many times over: a ball's force
+        cannot have set it ringing that way (it would take an impulse), so it
+        is not taken for the plate's.
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate, lag below 3, a negative noise_rms or
+        non-finite samples.
+    """
+    fs = float(sample_rate_hz)
+    if not (math.isfinite(fs) and fs > 0):
+        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    if noise_rms is not None and not (noise_rms >= 0):
+        raise ValueError(f"noise_rms must be non-negative, got {noise_rms!r}")
+    if int(lag) < 3:
+        raise ValueError(f"lag must be at least 3 samples (the second difference's noise spans 2), got {lag!r}")
+    x = np.asarray(force, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("force holds non-finite samples")
+    lag = int(lag)
+    res = None
+    k = 1
+    for _ in range(1 + REFINEMENTS):
+        smooth = np.convolve(x, np.ones(k) / k, mode="valid") if k > 1 else x
+        d = np.diff(smooth, 2)
+        if noise_rms is not None and _noise_only(d, k, noise_rms):
+            return None
+        coef = _iv_recursion(d, lag + k - 1)
+        found = None if coef is None else _resonance_from_recursion(*coef, fs)
+        if found is None:
+            break
+        res = found
+        k_next = max(int(fs / (4.0 * res.frequency_hz)), 1)
+        if k_next == k:
+            break
+        k = k_next
+    if res is None or not (MIN_FREQUENCY_FRACTION * fs <= res.frequency_hz <= MAX_FREQUENCY_FRACTION * fs) \
+            or not MIN_DAMPING_RATIO <= res.damping_ratio <= MAX_DAMPING_RATIO:
+        return None
+    return res
+
+
+def plate_discretisation(frequency_hz: float, damping_ratio: float, sample_rate_hz: float):
+    """First-order-hold discretisation of the plate: numerator b (3 taps) and denominator a [-].
+
+    Exact for a force linear between samples: ``A(z) F_sensed = B(z) F`` with
+    unit static gain, B(1) = A(1).
+    """
+    from scipy import signal
+
+    if not (frequency_hz > 0 and damping_ratio >= 0 and sample_rate_hz > 0):
+        raise ValueError(f"need frequency_hz > 0, damping_ratio >= 0 and sample_rate_hz > 0, got "
+                         f"{frequency_hz!r}, {damping_ratio!r}, {sample_rate_hz!r}")
+    wn = 2.0 * math.pi * float(frequency_hz)
+    b, a, _ = signal.cont2discrete(([wn * wn], [1.0, 2.0 * damping_ratio * wn, wn * wn]), 1.0 / sample_rate_hz,
+                                   method="foh")
+    b = np.ravel(b)[-3:]
+    return b, np.ravel(a)
+
+
+def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
+    """The applied force from the plate's sensed force, its second-order resonance undone.
+
+    Parameters
+    ----------
+    sensed : array_like
+        Baseline-corrected trace, proportional to the sensed force [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    frequency_hz, damping_ratio : float
+        The plate's resonance [Hz] and damping ratio [-] (e.g. from
+        :func:`identify_plate_resonance`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The applied force in the unit of ``sensed`` [V], same length; unit
+        static gain, so its integral (the impulse) is that of ``sensed`` up to
+        the ends of the record.
+    """
+    from scipy import signal
+
+    x = np.asarray(sensed, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("sensed holds non-finite samples")
+    b, a = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
+    w = signal.lfilter(a, [1.0], x) / b[0]
+    zeros = np.roots(b)
+    if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)):
+        raise ValueError(f"the plate's sampled response has complex zeros {zeros}: not a second-order plate "
+                         "sampled below its resonance's decay")
+    for zero in zeros:
+        z = float(np.real(zero))
+        if abs(z) < 1.0:  # causal pass: u[n] = w[n] + z u[n-1]
+            w = signal.lfilter([1.0], [1.0, -z], w)
+        else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1
+            w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[::-1])[::-1]
+    return w
