@@ -19,6 +19,7 @@ NOTE TO THE ALGORITHM ENGINEER (issue 9)
 
 from __future__ import annotations
 
+import math
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, assume, given, settings
@@ -231,3 +232,14 @@ def test_faulty_never_ok(seed, mode, fraction, gap_s):
     result, judgement = zoo.run_trace(trace)
     assert judgement.category != "faulty_ok", (judgement.errors, zoo.describe(trace.rig))
     assert result.status == "excluded"
+
+
+def test_undone_plate_is_reported_on_the_impact(tmp_path):
+    # zoo 0:41: a 6.26 kHz plate (damping 0.157) at 50 kHz; the resonance undone is on the ImpactResult
+    trace = zoo.trace_for(0, 41)
+    result, _ = zoo.run_trace(trace, tmp_path)
+    assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)
+    assert result.plate_damping_ratio == pytest.approx(trace.rig.plate_zeta, rel=0.1)
+    # an ideal plate has none
+    result, _ = zoo.run_trace(zoo.trace_for(0, 1), tmp_path)
+    assert math.isnan(result.plate_resonance_hz)

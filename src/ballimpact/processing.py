@@ -96,6 +96,8 @@ class ImpactResult:
     noise_rms_V: float = math.nan
     hum_amplitude_V: float = math.nan
     tau_s: float = math.nan
+    plate_resonance_hz: float = math.nan  # the plate resonance undone (ballimpact.plate); NaN when none was
+    plate_damping_ratio: float = math.nan
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
     force_N: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -270,6 +272,9 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
     res.tau_s = cond.tau_s
+    if cond.plate is not None:
+        res.plate_resonance_hz = cond.plate.frequency_hz
+        res.plate_damping_ratio = cond.plate.damping_ratio
     contact = cond.contact
     wrong_sign = _opposite_pulse_reason(raw, meta.polarity)
     if wrong_sign is not None:
