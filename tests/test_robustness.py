@@ -20,6 +20,7 @@ NOTE TO THE ALGORITHM ENGINEER (issue 9)
 from __future__ import annotations
 
 import math
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, assume, given, settings
