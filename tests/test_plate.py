@@ -165,3 +165,20 @@ def test_conditioning_refuses_to_undo_when_the_undone_force_is_too_noisy():
     c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
     assert c.plate is None
     assert {p.kind for p in c.problems} & {ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING}
+
+
+def test_conditioning_does_not_undo_a_contact_that_runs_to_the_record_end():
+    # the inverse's backward pass starts from rest at the last sample: a contact (or its ringing)
+    # reaching the end of the record is never undone (zoo 1:1184 came out ok with TC +48 %)
+    fs = 66964.3
+    t = np.arange(int(0.0262 * fs)) / fs
+    t0 = 0.020 + 0.37 / fs
+    kt = np.array([t0, t0 + 1e-9, t0 + 1.5e-3, t0 + 4.2e-3])
+    kf = np.array([0.0, 800.0, 1000.0, 0.0])
+    volts = sensed_force(kt, kf, t, 14000.0, 0.05) / 400.0 + np.random.default_rng(5).normal(0.0, 0.0005, t.size)
+    c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
+    assert c.plate is None
+    # with 10 ms more record the same contact is undone
+    t = np.arange(int(0.036 * fs)) / fs
+    volts = sensed_force(kt, kf, t, 14000.0, 0.05) / 400.0 + np.random.default_rng(5).normal(0.0, 0.0005, t.size)
+    assert condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf).plate is not None

@@ -664,7 +664,8 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     """The force with the plate's resonance undone, its contact and the resonance; None when not trusted.
 
     Tried only when every problem is one plate ringing causes and one shows the
-    ringing itself. The resonance is identified twice, from the contact (less
+    ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
+    record does (the inverse's backward pass starts from rest there). The resonance is identified twice, from the contact (less
     two samples after its start, the force's jump) and PLATE_ID_AFTER_S after
     it, with instruments PLATE_ID_LAGS samples back; each undone force must
     pass the contact, end and ringing checks again, its noise (undoing the
@@ -682,7 +683,11 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
         return None
+    if contact.n_impacts > 1 or {"contact_at_trace_start", "contact_at_trace_end"} & set(contact.flags):
+        return None  # excluded whatever the plate
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    if e_u + PLATE_ID_AFTER_S * fs > x.size - 1:
+        return None  # the inverse's backward pass starts from rest at the record's end: the ringing must be over
     a = max(int(math.ceil(s_u)) + 2, 0)
     b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
     found = []
@@ -692,7 +697,8 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
             return None
         y = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
         c = detect_contact(y, fs, t0_s=t0_s, spread=True)
-        if not c.found or not c.peak_V > 0:
+        if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
+                or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
             return None
         noise = float(c.noise_rms_V)
         if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
