@@ -57,10 +57,10 @@ the contact, a peak on the ringing, force below zero after it, and the end and
 peak problems such ringing causes), the resonance is identified from the
 ringing and undone (``ballimpact.plate``) and every contact, end and ringing
 check is done again on the undone force. It is used only when two
-identifications from independent instruments both pass every check, the
-undone force's noise is below PLATE_NOISE_FRACTION of its peak, and the two
-agree on TC to PLATE_AGREE_TC and on the peak to PLATE_AGREE_PEAK; otherwise
-the impact keeps its problems.
+identifications from independent instruments both pass every check and agree
+on TC and peak, and the undone force is quiet enough for its peak and ends
+(see ``_plate_undone`` for every condition); otherwise the impact keeps its
+problems.
 """
 
 from __future__ import annotations
@@ -665,9 +665,10 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
 
     Tried only when every problem is one plate ringing causes and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
-    record does (the inverse's backward pass starts from rest there). The resonance is identified twice, from the contact (less
-    two samples after its start, the force's jump) and PLATE_ID_AFTER_S after
-    it, with instruments PLATE_ID_LAGS samples back; each undone force must
+    record does (the inverse's backward pass starts from rest there). The
+    resonance is identified twice, from the contact (less two samples after its
+    start, the force's jump) and PLATE_ID_AFTER_S after it, with instruments
+    PLATE_ID_LAGS samples back; each undone force must
     pass the contact, end and ringing checks again, its noise (undoing the
     resonance amplifies the noise above it) must stay below
     PLATE_NOISE_FRACTION of the peak, twice its TC's uncertainty (noise over
