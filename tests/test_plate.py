@@ -153,15 +153,20 @@ def test_conditioning_leaves_an_ideal_plate_alone():
     assert c.plate is None
 
 
-def test_conditioning_refuses_to_undo_when_the_undone_force_is_too_noisy():
-    # undoing a 4 kHz resonance sampled at 67 kHz amplifies the noise near the Nyquist frequency
-    # about 70-fold: 2 mV of noise would hide the peak, so the impact keeps its ringing problems
-    fs = 66964.3
-    t = np.arange(int(0.060 * fs)) / fs
+def _ringing_volts(fn_hz, zeta, noise_V, record_s=0.060, fs=66964.3):
+    """A jump to 800 N, a rise to 1000 N at 1.5 ms and a fall to zero at 4.2 ms through a ringing plate [V]."""
+    t = np.arange(int(record_s * fs)) / fs
     t0 = 0.020 + 0.37 / fs
     kt = np.array([t0, t0 + 1e-9, t0 + 1.5e-3, t0 + 4.2e-3])
     kf = np.array([0.0, 800.0, 1000.0, 0.0])
-    volts = sensed_force(kt, kf, t, 4000.0, 0.03) / 400.0 + np.random.default_rng(5).normal(0.0, 0.002, t.size)
+    noise = np.random.default_rng(5).normal(0.0, noise_V, t.size)
+    return sensed_force(kt, kf, t, fn_hz, zeta) / 400.0 + noise, fs
+
+
+def test_conditioning_refuses_to_undo_when_the_undone_force_is_too_noisy():
+    # undoing a 4 kHz resonance sampled at 67 kHz amplifies the noise near the Nyquist frequency
+    # about 70-fold: 2 mV of noise would hide the peak, so the impact keeps its ringing problems
+    volts, fs = _ringing_volts(4000.0, 0.03, 0.002)
     c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
     assert c.plate is None
     assert {p.kind for p in c.problems} & {ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING}
@@ -170,15 +175,8 @@ def test_conditioning_refuses_to_undo_when_the_undone_force_is_too_noisy():
 def test_conditioning_does_not_undo_a_contact_that_runs_to_the_record_end():
     # the inverse's backward pass starts from rest at the last sample: a contact (or its ringing)
     # reaching the end of the record is never undone (zoo 1:1184 came out ok with TC +48 %)
-    fs = 66964.3
-    t = np.arange(int(0.0262 * fs)) / fs
-    t0 = 0.020 + 0.37 / fs
-    kt = np.array([t0, t0 + 1e-9, t0 + 1.5e-3, t0 + 4.2e-3])
-    kf = np.array([0.0, 800.0, 1000.0, 0.0])
-    volts = sensed_force(kt, kf, t, 14000.0, 0.05) / 400.0 + np.random.default_rng(5).normal(0.0, 0.0005, t.size)
-    c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
-    assert c.plate is None
+    volts, fs = _ringing_volts(14000.0, 0.05, 0.0005, record_s=0.0262)
+    assert condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf).plate is None
     # with 10 ms more record the same contact is undone
-    t = np.arange(int(0.036 * fs)) / fs
-    volts = sensed_force(kt, kf, t, 14000.0, 0.05) / 400.0 + np.random.default_rng(5).normal(0.0, 0.0005, t.size)
+    volts, fs = _ringing_volts(14000.0, 0.05, 0.0005, record_s=0.036)
     assert condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf).plate is not None
