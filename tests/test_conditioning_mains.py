@@ -4,3 +4,120 @@ The rest of conditioning's tests are in tests/test_conditioning.py.
 """
 
 from __future__ import annotations
+
+import math
+import re
+import warnings
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from tracekit import make_trace
+
+from ballimpact.conditioning import MAINS_AMBIGUOUS_FRACTION, _BaselineFit, _mains_problems, condition_voltage
+from ballimpact.problems import ProblemKind
+
+FS = 10_000.0  # [Hz]
+N = 200
+
+
+def _fit(baseline, hum_amplitudes=(0.004, 0.001), quiet=slice(10, 150)):
+    q = np.zeros(N, dtype=bool)
+    q[quiet] = True
+    return _BaselineFit(baseline=np.asarray(baseline, dtype=float), coef={}, kappa=0.0, kappa_se=0.0, has_post=False,
+                        noise=1e-4, hum_amplitudes=hum_amplitudes, bic=0.0, quiet=q, pre=q, post=np.zeros(N, bool))
+
+
+def _problems(fit, peak, ambiguous, start_u=0.0, end_u=49.5, scale=2.0):
+    return _mains_problems(np.zeros(N), FS, fit, peak, scale, ambiguous, start_u, end_u)
+
+
+# --- _mains_problems on hand-built baselines (scaled units; scale = 2 V per unit) ------------
+
+
+@pytest.mark.parametrize("peak", [1.0, 0.5])
+@pytest.mark.parametrize(("factor", "flagged"), [(2.0, True), (0.5, False)])
+def test_two_fits_alike_on_the_quiet_samples_that_differ_under_the_contact(peak, factor, flagged):
+    """50 and 60 Hz baselines that differ under the contact by more than MAINS_AMBIGUOUS_FRACTION of the peak."""
+    d = factor * MAINS_AMBIGUOUS_FRACTION * peak
+    base = np.full(N, 0.3)  # offset and hum of the chosen fit
+    other = base.copy()
+    other[0] = base[0] + d  # the largest difference at the first sample of the contact (start_u = 0)
+    other[20] = base[20] - 0.5 * d
+    other[50] = base[50] + 0.9 * d  # the sample after the end (end_u = 49.5) is still under the contact
+    other[52:] = base[52:] + 10 * d  # after the contact: not counted
+    out = _problems(_fit(base), peak, (50.0, 60.0, other))
+    if not flagged:
+        assert out == []
+        return
+    assert [p.kind for p in out] == [ProblemKind.MAINS_UNRESOLVED]
+    assert out[0].message == (f"mains frequency not resolved: 50 and 60 Hz hum fit the quiet baseline equally well "
+                              f"and differ by {d * 2.0 * 1e3:.3g} mV under the contact (give daq.mains_hz)")
+
+
+def test_difference_under_a_contact_that_starts_later():
+    """Samples before the contact are not under it: only those from floor(start_u) to ceil(end_u) count."""
+    base = np.zeros(N)
+    other = np.zeros(N)
+    other[:30] = 0.05  # before the contact
+    other[30] = 0.002  # floor(30.4): the sample the contact starts after
+    other[41] = 0.003  # ceil(40.2)
+    other[42:] = 0.05  # after it
+    out = _problems(_fit(base), 1.0, (60.0, 50.0, other), start_u=30.4, end_u=40.2)
+    assert [p.message for p in out] == ["mains frequency not resolved: 60 and 50 Hz hum fit the quiet baseline "
+                                        "equally well and differ by 6 mV under the contact (give daq.mains_hz)"]
+
+
+@pytest.mark.parametrize("peak", [1.0, 0.5])
+@pytest.mark.parametrize(("factor", "flagged"), [(2.0, True), (0.5, False)])
+def test_hum_of_a_quiet_stretch_too_short_for_the_other_frequency(peak, factor, flagged):
+    """The other frequency could not be fitted (no hum amplitudes): the hum itself against the peak."""
+    hum = factor * MAINS_AMBIGUOUS_FRACTION * peak
+    fit = _fit(np.zeros(N), hum_amplitudes=(0.75 * hum, 0.25 * hum), quiet=slice(10, 150))
+    out = _problems(fit, peak, (60.0, 50.0, None))
+    if not flagged:
+        assert out == []
+        return
+    # quiet samples 10..149: they span 139 sample intervals, 13.9 ms
+    assert [(p.kind, p.message) for p in out] == [(
+        ProblemKind.MAINS_UNRESOLVED,
+        f"mains frequency not resolved: the quiet baseline spans 13.9 ms, too short to tell 60 from 50 Hz hum of "
+        f"{hum * 2.0 * 1e3:.3g} mV (give daq.mains_hz)")]
+
+
+def test_no_ambiguity_no_problem():
+    assert _problems(_fit(np.zeros(N)), 1.0, None) == []
+
+
+# --- whole traces with known hum -------------------------------------------------------------
+
+# 5 ms before the contact and 9.5 ms after it: an 18.5 ms record holds a full period of 60 Hz
+# (16.7 ms) but not of 50 Hz (20 ms)
+SHORT = dict(pre_s=5e-3, post_s=9.5e-3, noise_V=0.002, seed=3)
+
+
+def _unresolved(c):
+    return [p.message for p in c.problems
+            if p.kind is ProblemKind.MAINS_UNRESOLVED and p.message.startswith("mains frequency not resolved")]
+
+
+def test_short_record_with_60_hz_hum_and_no_mains_given_is_a_problem():
+    """20 mV of 60 Hz hum (harmonics 0.3 and 0.5 of it: 36 mV in all) in 18.5 ms, daq.mains_hz not given."""
+    v, fs, _ = make_trace(hum_V=0.02, mains_hz=60.0, **SHORT)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        msgs = _unresolved(condition_voltage(v, fs, tau_s=math.inf))
+    assert len(msgs) == 1, msgs
+    m = re.fullmatch(r"mains frequency not resolved: the quiet baseline spans (\S+) ms, too short to tell 60 from 50 "
+                     r"Hz hum of (\S+) mV \(give daq.mains_hz\)", msgs[0])
+    assert m, msgs[0]
+    assert_allclose(float(m[1]), 1e3 * (v.size - 1) / fs, rtol=0.01)  # the whole record is quiet but the contact
+    assert_allclose(float(m[2]), 36.0, rtol=0.05)
+
+
+@pytest.mark.parametrize("mains", [50.0, 60.0])
+def test_short_record_with_the_mains_frequency_given_is_no_problem(mains):
+    v, fs, _ = make_trace(hum_V=0.02, mains_hz=mains, **SHORT)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _unresolved(condition_voltage(v, fs, mains_hz=mains, tau_s=math.inf)) == []
