@@ -121,3 +121,21 @@ def test_short_record_with_the_mains_frequency_given_is_no_problem(mains):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert _unresolved(condition_voltage(v, fs, mains_hz=mains, tau_s=math.inf)) == []
+
+
+@pytest.mark.parametrize("given", [False, True])
+def test_weak_50_hz_hum_under_noise_is_ambiguous_unless_given(given):
+    """10 mV of 50 Hz hum under 50 mV of noise, 34 ms record: 50 and 60 Hz fit the quiet samples alike
+    (BIC within 10) and differ under the contact by more than 0.1 % of the 5 V peak, unless daq.mains_hz says."""
+    v, fs, _ = make_trace(pre_s=15e-3, post_s=15e-3, hum_V=0.01, mains_hz=50.0, noise_V=0.05, seed=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        msgs = _unresolved(condition_voltage(v, fs, mains_hz=50.0 if given else "auto", tau_s=math.inf))
+    if given:
+        assert msgs == []
+        return
+    assert len(msgs) == 1, msgs
+    m = re.fullmatch(r"mains frequency not resolved: 50 and 60 Hz hum fit the quiet baseline equally well and differ "
+                     r"by (\S+) mV under the contact \(give daq.mains_hz\)", msgs[0])
+    assert m, msgs[0]
+    assert 5.0 < float(m[1]) < 100.0  # above 0.1 % of the 5 V peak; of the order of the noise, not of the peak
