@@ -1,4 +1,5 @@
-"""Tests of conditioning's 50/60 Hz hum checks (`_mains_problems`): the problem each branch exists for.
+"""Tests of conditioning's integrity checks that the sampled mutation run asked for: the 50/60 Hz hum checks
+(`_mains_problems`, the problem each branch exists for), the level before the contact, spikes in short records.
 
 The rest of conditioning's tests are in tests/test_conditioning.py.
 """
@@ -14,7 +15,8 @@ import pytest
 from numpy.testing import assert_allclose
 from tracekit import make_trace
 
-from ballimpact.conditioning import MAINS_AMBIGUOUS_FRACTION, _BaselineFit, _mains_problems, condition_voltage
+from ballimpact.conditioning import (MAINS_AMBIGUOUS_FRACTION, _BaselineFit, _mains_problems, condition_voltage,
+                                     remove_spikes)
 from ballimpact.problems import ProblemKind
 
 FS = 10_000.0  # [Hz]
@@ -139,3 +141,48 @@ def test_weak_50_hz_hum_under_noise_is_ambiguous_unless_given(given):
                      r"by (\S+) mV under the contact \(give daq.mains_hz\)", msgs[0])
     assert m, msgs[0]
     assert 5.0 < float(m[1]) < 100.0  # above 0.1 % of the 5 V peak; of the order of the noise, not of the peak
+
+
+# --- other integrity checks -------------------------------------------------------------------
+
+
+def test_baseline_step_before_the_contact_leaves_the_level_before_it_off_zero():
+    """A DC step of -20 mV 3 ms before the contact (DC-coupled chain, no hum): the offset the baseline fit
+    takes is an average, so the corrected signal just before the contact is off zero, by between 0 and -20 mV
+    (-10.8 mV measured; the bound -5 mV keeps it clear of the noise)."""
+    v, fs, _ = make_trace(seed=9, noise_V=0.002, start_phase=0.3)
+    v = v.copy()
+    v[int(round((0.030 - 3e-3) * fs)):] -= 0.02  # make_trace's contact starts after pre_s = 30 ms
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    off = [p.message for p in c.problems if p.kind is ProblemKind.BASELINE_OFF_ZERO]
+    assert len(off) == 1, off
+    m = re.fullmatch(r"corrected signal before the contact is (\S+) mV off zero \((\S+) % of the peak\): baseline or "
+                     r"amplifier decay not removed", off[0])
+    assert m, off[0]
+    assert -20.0 < float(m[1]) < -5.0
+    assert_allclose(float(m[2]), 100 * abs(float(m[1])) / 5000.0, rtol=0.05)  # the peak is 5 V
+
+
+def test_too_few_samples_message_gives_the_count():
+    """At 4 kHz a 4 ms contact (and its 0.1 ms cloth foot) spans about 16.4 samples, fewer than 20."""
+    v, fs, truth = make_trace(sample_rate_hz=4000.0, seed=12, pre_s=0.05, post_s=0.05, cloth_s=0.1e-3,
+                              cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = condition_voltage(v, fs)
+    msgs = [p.message for p in c.problems if p.kind is ProblemKind.TOO_FEW_SAMPLES]
+    assert len(msgs) == 1, msgs
+    m = re.fullmatch(r"only (\S+) samples in the contact \(fewer than 20\): sample rate too low for the contact time",
+                     msgs[0])
+    assert m, msgs[0]
+    assert_allclose(float(m[1]), truth.contact_time_s * fs, atol=1.0)
+
+
+@pytest.mark.parametrize("n", [7, 9])
+def test_spike_in_a_short_record_is_removed(n):
+    """A 7-sample record is long enough for the spike test (three neighbours each side of the middle sample)."""
+    v = np.zeros(n)
+    v[n // 2] = 1.0
+    out, idx = remove_spikes(v, noise_rms_V=1e-3)
+    assert idx.tolist() == [n // 2]
+    assert_allclose(out, np.zeros(n), atol=0.0)

@@ -136,15 +136,32 @@ def _offset_by_qr(jac, r):
     return np.sqrt((along @ along / p) / (np.sum((r - q @ along) ** 2) / (m - p)))
 
 
-@pytest.mark.parametrize("m", [4, 7])
+@pytest.mark.parametrize("m", [3, 4, 7])
 def test_relative_offset_against_the_textbook_formula(m):
-    """Interior point: the relative offset with m residuals and 2 free parameters (m - 2 dof)."""
+    """Interior point: the relative offset with m residuals and 2 free parameters (m - 2 dof, 1 for m = 3)."""
     from ballimpact.fitting import _relative_offset
 
     rng = np.random.default_rng(3)
     jac, r = rng.normal(size=(m, 2)), rng.normal(size=m)
     got = _relative_offset(jac[None], r[None], np.zeros((1, 2)), np.full((1, 2), -1.0), np.full((1, 2), 1.0))
     assert_allclose(got, [_offset_by_qr(jac, r)], rtol=1e-9)
+
+
+def test_relative_offset_of_a_batch_is_each_problems_own():
+    """Three problems of different size of residuals in one batch: each gets the offset it has alone."""
+    from ballimpact.fitting import _relative_offset
+
+    rng = np.random.default_rng(5)
+    jac, r = rng.normal(size=(3, 6, 2)), rng.normal(size=(3, 6)) * np.array([[0.1], [1.0], [30.0]])
+    got = _relative_offset(jac, r, np.zeros((3, 2)), np.full((3, 2), -1.0), np.full((3, 2), 1.0))
+    assert_allclose(got, [_offset_by_qr(j, ri) for j, ri in zip(jac, r)], rtol=1e-9)
+
+
+def test_stage_two_started_at_the_optimum_stays_there():
+    """Noise-free COR of AC = 5e4 N s/m^3 (inside the search bounds 1e1-1e5): started there, the fit returns it."""
+    _, cor = _model(P.ak, P.a, 5.0e4)
+    fit = fit_restitution(VIN, cor, MASS, P.kb0_N_m, P.ak, P.a, ac_start=5.0e4)
+    assert_allclose(fit.ac, 5.0e4, rtol=1e-12)
 
 
 def test_relative_offset_leaves_out_a_parameter_held_on_its_bound():
