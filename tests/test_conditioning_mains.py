@@ -186,3 +186,17 @@ def test_spike_in_a_short_record_is_removed(n):
     out, idx = remove_spikes(v, noise_rms_V=1e-3)
     assert idx.tolist() == [n // 2]
     assert_allclose(out, np.zeros(n), atol=0.0)
+
+
+@pytest.mark.parametrize("side", ["rise after", "fall before"])
+def test_sample_two_before_a_steep_edge_is_not_taken_for_a_spike(side):
+    """A sample standing out with a spike's neighbours (-h/2 either side) but two samples from the corner of a
+    steep edge: a spike needs second differences of about 0 two and three samples away on both sides."""
+    v = np.zeros(20)
+    v[5] = 1.0
+    v[8:] = 0.6 * np.arange(1, 13)  # the edge starts at sample 7: second difference -0.3 there, 0.3 h
+    if side == "fall before":
+        v = v[::-1].copy()
+    out, idx = remove_spikes(v, noise_rms_V=1e-3)
+    assert idx.size == 0
+    assert_allclose(out, v, atol=0.0)
