@@ -200,3 +200,14 @@ def test_sample_two_before_a_steep_edge_is_not_taken_for_a_spike(side):
     out, idx = remove_spikes(v, noise_rms_V=1e-3)
     assert idx.size == 0
     assert_allclose(out, v, atol=0.0)
+
+
+def test_negative_outliers_in_the_quiet_baseline_are_clipped_like_positive_ones():
+    """30 dips of 3 samples at -0.1 V (50 noise deviations; 5 % of the pre-trigger): outliers, which the whiteness
+    check of the quiet residual clips at ROBUST_SIGMA noise deviations on both sides, not an unexplained baseline."""
+    v, fs, _ = make_trace(seed=3, noise_V=0.002)
+    v = v.copy()
+    for p in np.random.default_rng(0).choice(np.arange(50, int(0.025 * fs), 7), 30, replace=False):
+        v[p:p + 3] -= 0.1
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    assert not [p.message for p in c.problems if p.kind is ProblemKind.BASELINE_RESIDUAL]
