@@ -211,3 +211,23 @@ def test_negative_outliers_in_the_quiet_baseline_are_clipped_like_positive_ones(
         v[p:p + 3] -= 0.1
     c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
     assert not [p.message for p in c.problems if p.kind is ProblemKind.BASELINE_RESIDUAL]
+
+
+@pytest.mark.parametrize(("level_mV", "printed"), [(12.349, "12.3"), (-7.0, "-7")])
+def test_level_off_zero_message_gives_the_level_in_mV(level_mV, printed):
+    """The last 2 ms before the contact at a known level (scale 2 V per unit, peak 1 unit = 2 V): the message
+    gives it in mV to 3 digits and as a percentage of the peak."""
+    from ballimpact.conditioning import _level_problems
+
+    fs, n = 10_000.0, 400
+    x = np.zeros(n)
+    x[:200] = level_mV / 2.0e3
+    pre = np.arange(n) < 200
+    fit = _BaselineFit(baseline=np.zeros(n), coef={}, kappa=0.0, kappa_se=0.0, has_post=False, noise=1e-5,
+                       hum_amplitudes=(), bic=0.0, quiet=pre, pre=pre, post=np.zeros(n, dtype=bool))
+    out = _level_problems(x, fs, fit, 1.0, 2.0, n - 1.0)
+    pct = 100 * abs(level_mV) / 2.0e3
+    assert [(p.kind, p.message) for p in out] == [(
+        ProblemKind.BASELINE_OFF_ZERO,
+        f"corrected signal before the contact is {printed} mV off zero ({pct:.2g} % of the peak): baseline or "
+        "amplifier decay not removed")]
