@@ -92,6 +92,11 @@ def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
 
 def generate(max_children: int = 2) -> None:
     """Write mutants/ as `mutmut run` does before it runs anything (mutmut 3.8 internals)."""
+    # bench/ is sys.path[0] when this file is run as a script, and bench/coverage.py would
+    # shadow the `coverage` package mutmut imports
+    here = Path(__file__).resolve().parent
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != here]
+    sys.modules.pop("coverage", None)
     from mutmut.__main__ import (copy_also_copy_files, copy_src_dir, create_mutants, setup_source_paths,
                                  store_lines_covered_by_tests)
 

@@ -431,3 +431,34 @@ def test_short_pretrigger_flagged():
 
     v, _ = _clean_pulse(pre_s=0.1e-3)
     assert "short_pretrigger" in detect_contact(v, 100e3).flags
+
+
+# ------------------------------------------ found by the sampled mutation run at commit 3a907e8
+
+
+@pytest.mark.parametrize("blip_V", [None, 0.05])
+def test_no_contact_reports_the_noise_of_the_trace_and_its_threshold(blip_V):
+    """Noise of 2 mV rms, alone or with a 2-sample blip (too short for a contact): no contact, the noise
+    estimated (about 2 mV) and the threshold at 8 noise deviations (above 3 % of the blip)."""
+    x = np.random.default_rng(1).normal(0, 0.002, 5000)
+    if blip_V is not None:
+        x[3000:3002] = blip_V
+    c = detect_contact(x, 66964.3)
+    assert not c.found
+    assert_allclose(c.noise_rms_V, 0.002, rtol=0.05)
+    assert_allclose(c.threshold_V, 8.0 * c.noise_rms_V, rtol=1e-12)
+
+
+@pytest.mark.parametrize("dip_V", [-0.5, -3.0])
+def test_threshold_is_a_fraction_of_the_contact_peak_whatever_the_largest_magnitude(dip_V):
+    """3 % of the 1 V peak, also when a negative sample elsewhere (an undershoot, a spike) is larger in magnitude."""
+    fs = 50_000.0
+    t = np.arange(2000) / fs
+    x = np.where((t > 0.01) & (t < 0.014), np.sin(np.pi * (t - 0.01) / 0.004), 0.0)
+    x = x + np.random.default_rng(2).normal(0, 1e-4, t.size)
+    x[1500] = dip_V
+    c = detect_contact(x, fs)
+    assert c.found
+    assert_allclose(c.peak_V, 1.0, atol=1e-3)
+    assert_allclose(c.threshold_V, 0.03 * c.peak_V, rtol=1e-12)
+    assert_allclose(c.contact_time_s, 0.004, atol=0.5 / fs)
