@@ -29,6 +29,8 @@ Keys:
                             otherwise idle 2-core machine if both cores stay busy (a lower bound)
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
+  catalogue_cpu_seconds_<k>  (--catalogue) CPU time of the catalogue's work (write_catalogue) over k copies of
+                            one 40-impact session, in a fresh process; catalogue_peak_memory_mb_<k>: its peak RSS
   load_average_1min_at_start/_end  the machine's load around the runs (other work inflates wall times);
                             sessions_wall_reliable is false when it exceeded 2.5 or the line does not rise:
                             then only the CPU figures mean something
@@ -327,7 +329,7 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
     importing the library's modules once (what each rule's process pays again).
     """
     t0 = time.process_time()
-    from ballimpact import figures, fitting, pipeline, processing, report  # noqa: F401
+    from ballimpact import archive, figures, fitting, pipeline, processing, report  # noqa: F401
     from ballimpact.session import read_session
     from ballimpact.synth import SynthConfig, write_session
 
@@ -339,6 +341,7 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
         w = tmp / "work"
         w.mkdir()
         balls = list(read_session(session).meta.balls)
+        held, images = {}, {}
         stages = [
             ("validate", pipeline.snapshot_session, (session, w / "session.json"), {}),
             ("process", pipeline.process_chunk, (session, 0, 1, w / "chunk_0.nc"), {}),
@@ -346,13 +349,87 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
             ("fit", pipeline.fit_balls, (w / "impacts.nc", balls, session, w / "fits.nc"),
              {"n_bootstrap": n_bootstrap, "seed": 0}),
             ("archive", pipeline.write_archive, (session, w / "impacts.nc", [w / "fits.nc"], w / "a.nc", w / "p.csv"), {}),
-            ("figures", pipeline.make_figures, (w / "a.nc", w / "figures"), {}),
-            ("report", pipeline.make_report, (w / "a.nc", w / "figures", w / "r.pdf"), {}),
+            # as rule session_outputs: the archive read once, the figures' pixels handed to the report
+            ("figures", lambda *a, **k: pipeline.make_figures(*a, ds=held.setdefault("ds", archive.open_dataset(a[0])),
+                                                              images=images, **k), (w / "a.nc", w / "figures"), {}),
+            ("report", lambda *a, **k: pipeline.make_report(*a, ds=held["ds"], images=images, **k),
+             (w / "a.nc", w / "figures", w / "r.pdf"), {}),
         ]
         for name, func, args, kwargs in stages:
             t0 = time.process_time()
             func(*args, **kwargs)
             out[f"stage_cpu_seconds_{name}"] = time.process_time() - t0
+    return out
+
+
+CATALOGUE_COUNTS = (10, 30, 100)  # sessions in the catalogue for --catalogue
+
+
+def _session_results(tmp: Path, n_bootstrap: int = 200) -> Path:
+    """results/<id>/ (archive and parameters.csv) of one synthetic 40-impact session, by the pipeline functions."""
+    from ballimpact import pipeline
+    from ballimpact.session import read_session
+    from ballimpact.synth import SynthConfig, write_session
+
+    session, _ = write_session(tmp / "raw" / "cat000", SynthConfig(
+        session_id="cat000", seed=1000, total_impacts=IMPACTS_PER_SESSION, faults_per_kind=1))
+    out = tmp / "results" / "cat000"
+    w = out / "work"
+    w.mkdir(parents=True)
+    pipeline.session_impacts(session, w / "session.json", out / "impacts.csv", w / "impacts.nc")
+    pipeline.fit_balls(w / "impacts.nc", list(read_session(session).meta.balls), session, w / "fits.nc",
+                       n_bootstrap=n_bootstrap, seed=0)
+    pipeline.write_archive(session, w / "impacts.nc", [w / "fits.nc"], out / "cat000.nc", out / "parameters.csv")
+    return out
+
+
+def _run_catalogue(n_sessions: int, results: Path, out: Path) -> tuple[float, float]:
+    """CPU time [s] and peak RSS [MB] of write_catalogue over the first n session folders, in this process."""
+    from ballimpact.catalogue import write_catalogue
+
+    dirs = sorted(p for p in results.iterdir() if p.is_dir())[:n_sessions]
+    out.mkdir(parents=True, exist_ok=True)
+    c0 = time.process_time()
+    write_catalogue(dirs, out_csv=out / "catalogue.csv", out_nc=out / "catalogue.nc", out_pdf=out / "catalogue.pdf",
+                    pools=[], n_bootstrap=200, seed=0)
+    return time.process_time() - c0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def bench_catalogue(counts=CATALOGUE_COUNTS) -> dict:
+    """Rule catalogue's work (write_catalogue) over k sessions, each in a fresh process.
+
+    The sessions are copies of one synthetic 40-impact session under k names (the
+    archive's session_id and date changed), so the change test finds no change:
+    the cost of reading k archives, the joint fits of the change tests, the table, the
+    netCDF file and the PDF. ``catalogue_cpu_seconds_<k>``, ``catalogue_peak_memory_mb_<k>``
+    (largest resident set of that process).
+    """
+    from ballimpact import archive
+
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-catalogue-") as tmp:
+        tmp = Path(tmp)
+        first = _session_results(tmp)
+        ds = archive.open_dataset(first / f"{first.name}.nc")
+        for k in range(1, max(counts)):
+            sid = f"cat{k:03d}"
+            folder = first.parent / sid
+            folder.mkdir()
+            copy = ds.copy()
+            copy.attrs["session_id"] = sid
+            copy.attrs["session_date"] = f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"
+            archive.write_dataset(copy, folder / f"{sid}.nc")
+            (folder / "parameters.csv").write_bytes((first / "parameters.csv").read_bytes())
+        for k in counts:
+            code = ("import sys, json; sys.path.insert(0, %r); import run; "
+                    "print(json.dumps(run._run_catalogue(%d, run.Path(%r), run.Path(%r))))"
+                    % (str(Path(__file__).parent), k, str(first.parent), str(tmp / f"catalogue{k}")))
+            proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+            if proc.returncode != 0:
+                raise RuntimeError(proc.stderr[-3000:])
+            cpu, mem = json.loads(proc.stdout.strip().splitlines()[-1])
+            out[f"catalogue_cpu_seconds_{k}"] = cpu
+            out[f"catalogue_peak_memory_mb_{k}"] = mem
     return out
 
 
@@ -367,11 +444,17 @@ def main(argv=None) -> int:
                     help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
     ap.add_argument("--sessions-only", action="store_true",
                     help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
+    ap.add_argument("--catalogue", action="store_true",
+                    help="only the catalogue job's CPU time and memory at 10, 30 and 100 sessions (catalogue_*)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
     if args.stages:
         figures.update(bench_session_stages())
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
+    if args.catalogue:
+        figures.update(bench_catalogue())
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
         return 0
     if args.sessions_only:

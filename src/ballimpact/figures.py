@@ -219,6 +219,9 @@ def _fixed_layout(fig) -> None:
     shown = [ax for ax in axes if ax.get_visible()] or axes
     y_space = max(_y_space_in(ax) for ax in shown if ax.axison) if any(ax.axison for ax in shown) else 0.1
     left, right, gap_x = y_space + 0.08, 0.18, y_space + 0.3
+    if left + right + (ncols - 1) * gap_x > 0.75 * width_in:  # tick labels wider than the figure
+        scale = 0.75 * width_in / (left + right + (ncols - 1) * gap_x)
+        left, right, gap_x = left * scale, right * scale, gap_x * scale
     grid.update(left=left / width_in, right=1 - right / width_in,
                 wspace=gap_x / max((width_in - left - right - (ncols - 1) * gap_x) / ncols, 0.1))
     _place_axes(fig, axes)
@@ -252,7 +255,13 @@ def _fixed_layout(fig) -> None:
     top += above[0]
     bottom += below[-1]
     gap_y = max([below[r] + above[r + 1] for r in range(nrows - 1)], default=0.0) + 0.06
-    axes_h = max((height_in - top - bottom - (nrows - 1) * gap_y) / nrows, 0.1)
+    spare = height_in - top - bottom - (nrows - 1) * gap_y
+    if spare < 0.25 * height_in:
+        # texts taller than the figure (a title of thousands of characters): the panels keep a
+        # quarter of the height and the margins shrink in proportion (texts may then overlap)
+        scale = 0.75 * height_in / (top + bottom + (nrows - 1) * gap_y)
+        top, bottom, gap_y = top * scale, bottom * scale, gap_y * scale
+    axes_h = max((height_in - top - bottom - (nrows - 1) * gap_y) / nrows, 0.01)
     grid.update(top=1 - top / height_in, bottom=bottom / height_in, hspace=gap_y / axes_h)
     _place_axes(fig, axes)
 
@@ -1008,7 +1017,13 @@ def qc_file_stem(impact_id: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", str(impact_id)) or "impact"
 
 
-def save_all(ds, out_dir) -> list[Path]:
+def _keep_pixels(images, key: str, fig: Figure) -> None:
+    """Store the pixels just saved (RGBA, uint8) of a figure under ``key`` when ``images`` is a dict."""
+    if images is not None:
+        images[key] = np.array(fig.canvas.buffer_rgba(), dtype=np.uint8, copy=True)
+
+
+def save_all(ds, out_dir, images: dict | None = None) -> list[Path]:
     """Write every report figure as PNG (dpi 150) into ``out_dir``, QC traces into ``out_dir/qc``.
 
     Files: ``<stem>.png`` for each figure of
@@ -1022,6 +1037,11 @@ def save_all(ds, out_dir) -> list[Path]:
         Session archive.
     out_dir : str or Path
         Output folder (created if needed).
+    images : dict, optional
+        When given, filled with the pixels of every file written (RGBA, uint8, the PNG's
+        own pixels) under its path relative to ``out_dir`` (``<stem>.png``,
+        ``qc/<impact>.png``), so that :func:`ballimpact.report.write_report` places them
+        without decoding the files again.
 
     Returns
     -------
@@ -1033,7 +1053,12 @@ def save_all(ds, out_dir) -> list[Path]:
     qc_dir.mkdir(parents=True, exist_ok=True)
     written = []
     for spec in REPORT_FIGURES:
-        written.append(save_figure(render(spec.draw, ds), out_dir / spec.file_name))
+        fig = render(spec.draw, ds)
+        written.append(save_figure(fig, out_dir / spec.file_name))
+        _keep_pixels(images, spec.file_name, fig)
     for impact_id, _, _ in excluded_impacts(ds):
-        written.append(save_figure(fig_qc_impact(ds, impact_id), qc_dir / f"{qc_file_stem(impact_id)}.png"))
+        fig = fig_qc_impact(ds, impact_id)
+        name = f"{qc_file_stem(impact_id)}.png"
+        written.append(save_figure(fig, qc_dir / name))
+        _keep_pixels(images, f"{QC_DIR_NAME}/{name}", fig)
     return written
