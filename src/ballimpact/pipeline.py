@@ -387,7 +387,10 @@ def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float |
     snapshot_session(session_dir, out_json)
     out_nc = Path(out_nc)
     out_nc.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_nc.name}.", suffix=".tmp", dir=out_nc.parent))
+    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
+    staging = out_nc.parent / f".{out_nc.name}.chunk.tmp"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
     try:
         chunk_nc = staging / "chunk_0.nc"
         process_chunk(session_dir, 0, 1, chunk_nc, mains_hz=mains_hz)
