@@ -27,12 +27,21 @@ Keys:
   sessions_100x40_cpu_seconds  CPU time (user + sys, every process) of the run, same extrapolation;
                             sessions_100x40_idle_2core_seconds = half of it, the wall time on an
                             otherwise idle 2-core machine if both cores stay busy (a lower bound)
+  sessions_<k>x40_job_cpu    that run's CPU time by rule: {rule: [jobs, CPU seconds, largest peak RSS MB]}
+                            ("snakemake": its main process), recorded by bench/cpu_hook/sitecustomize.py
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
+  catalogue_cpu_seconds_<k>  (--catalogue) CPU time of the catalogue's work (write_catalogue) over k copies of
+                            one 40-impact session, in a fresh process; catalogue_peak_memory_mb_<k>: its peak RSS
   load_average_1min_at_start/_end  the machine's load around the runs (other work inflates wall times);
                             sessions_wall_reliable is false when it exceeded 2.5 or the line does not rise:
                             then only the CPU figures mean something
   sessions_peak_memory_mb   largest resident set of any process of the largest measured run
+  sessions_100x40_peak_memory_mb_by_process  the largest of: the per-session jobs' peak (one session each,
+                            it does not grow), and the peaks of Snakemake's main process and of the catalogue
+                            job, each extrapolated to 100 sessions by its own line
+  sessions_job_cpu_seconds_per_session  CPU of the per-session jobs (all but snakemake and catalogue) of the
+                            largest run, per session; sessions_<k>x40_snakemake/catalogue_cpu_seconds: the rest
   sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
 that time plus the extra impacts' processing time (process_seconds_per_impact, shared by
@@ -178,7 +187,7 @@ def bench_fit_no_kb0(n_bootstrap: int = 200) -> dict:
     return out
 
 
-def _snakemake_wall_s(raw: Path, results: Path, what: str) -> float:
+def _snakemake_wall_s(raw: Path, results: Path, what: str, env: dict | None = None) -> float:
     """Wall time [s] of `snakemake --cores 2` on raw_dir=raw, results_dir=results; RuntimeError if it fails."""
     cmd = [
         str(Path(sys.executable).parent / "snakemake"), "--cores", "2", "--quiet", "all",
@@ -186,7 +195,7 @@ def _snakemake_wall_s(raw: Path, results: Path, what: str) -> float:
         "--directory", str(REPO),
     ]
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"workflow failed for {what}:\n{proc.stderr[-3000:]}")
@@ -268,11 +277,32 @@ def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
     for truth in raw.glob("*.truth.*"):
         truth.unlink()
     results = workdir / f"results_s{n_sessions}"
-    wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions")
+    cpu_log = workdir / f"cpu_s{n_sessions}.log"
+    env = dict(os.environ, BALLIMPACT_BENCH_CPU_LOG=str(cpu_log),
+               PYTHONPATH=os.pathsep.join(filter(None, [str(Path(__file__).parent / "cpu_hook"),
+                                                        os.environ.get("PYTHONPATH")])))
+    wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions", env=env)
     if not (results / "catalogue" / "catalogue.csv").is_file():
         raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime
+    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime, job_cpu(cpu_log)
+
+
+def job_cpu(cpu_log: Path) -> dict:
+    """Rule -> [jobs, CPU seconds, largest peak RSS MB] from the lines of bench/cpu_hook
+    ("snakemake" is Snakemake's own main process; a job's script is named tmp<random>.<rule>.py)."""
+    out: dict = {}
+    if not cpu_log.is_file():
+        return out
+    for line in cpu_log.read_text(encoding="utf-8").splitlines():
+        cpu, mem, command = line.split("\t", 2)
+        script = command.split()[0] if command.split() else "?"
+        rule = script.rsplit(".", 2)[1] if script.startswith("tmp") and script.count(".") >= 2 else script
+        entry = out.setdefault(rule, [0, 0.0, 0.0])
+        entry[0] += 1
+        entry[1] = round(entry[1] + float(cpu), 3)
+        entry[2] = max(entry[2], float(mem))
+    return out
 
 
 def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
@@ -284,8 +314,8 @@ def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
     if out.returncode != 0:
         raise RuntimeError(out.stderr[-3000:])
-    wall, mem, cpu = json.loads(out.stdout.strip().splitlines()[-1])
-    return wall, mem, cpu
+    wall, mem, cpu, jobs = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, mem, cpu, jobs
 
 
 def bench_sessions(counts) -> dict:
@@ -294,9 +324,10 @@ def bench_sessions(counts) -> dict:
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
         measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
-    for k, (wall, mem, cpu) in measured.items():
+    for k, (wall, mem, cpu, jobs) in measured.items():
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_seconds"] = wall
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu
+        out[f"sessions_{k}x{IMPACTS_PER_SESSION}_job_cpu"] = jobs
     ks = list(measured)
     t100, slope, intercept, resid = extrapolate_linear(ks, [measured[k][0] for k in ks], TARGET_SESSIONS)
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_seconds"] = t100
@@ -316,6 +347,24 @@ def bench_sessions(counts) -> dict:
     out["sessions_peak_memory_mb"] = measured[max(ks)][1]
     m100 = extrapolate_linear(ks, [measured[k][1] for k in ks], TARGET_SESSIONS)[0]
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb"] = max(m100, measured[max(ks)][1])
+    # by process (bench/cpu_hook): the per-session jobs each hold one session, so their peak
+    # does not grow with the number of sessions; only Snakemake's main process and the
+    # catalogue job see every session: their peaks are extrapolated, each by its own line
+    jobs = {k: measured[k][3] for k in ks}
+    if all(jobs.values()):
+        growing = ("snakemake", "catalogue")
+        per_session = [v[2] for k in ks for rule, v in jobs[k].items() if rule not in growing]
+        peaks = [max(per_session, default=0.0)]
+        for rule in growing:
+            if all(rule in jobs[k] for k in ks):
+                peaks.append(extrapolate_linear(ks, [jobs[k][rule][2] for k in ks], TARGET_SESSIONS)[0])
+        out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_peak_memory_mb_by_process"] = max(peaks)
+        k = max(ks)
+        session_cpu = sum(v[1] for rule, v in jobs[k].items() if rule not in growing)
+        out["sessions_job_cpu_seconds_per_session"] = session_cpu / k
+        for rule in growing:
+            if rule in jobs[k]:
+                out[f"sessions_{k}x{IMPACTS_PER_SESSION}_{rule}_cpu_seconds"] = jobs[k][rule][1]
     return out
 
 
@@ -327,7 +376,7 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
     importing the library's modules once (what each rule's process pays again).
     """
     t0 = time.process_time()
-    from ballimpact import figures, fitting, pipeline, processing, report  # noqa: F401
+    from ballimpact import archive, figures, fitting, pipeline, processing, report  # noqa: F401
     from ballimpact.session import read_session
     from ballimpact.synth import SynthConfig, write_session
 
@@ -339,6 +388,7 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
         w = tmp / "work"
         w.mkdir()
         balls = list(read_session(session).meta.balls)
+        held, images = {}, {}
         stages = [
             ("validate", pipeline.snapshot_session, (session, w / "session.json"), {}),
             ("process", pipeline.process_chunk, (session, 0, 1, w / "chunk_0.nc"), {}),
@@ -346,13 +396,87 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
             ("fit", pipeline.fit_balls, (w / "impacts.nc", balls, session, w / "fits.nc"),
              {"n_bootstrap": n_bootstrap, "seed": 0}),
             ("archive", pipeline.write_archive, (session, w / "impacts.nc", [w / "fits.nc"], w / "a.nc", w / "p.csv"), {}),
-            ("figures", pipeline.make_figures, (w / "a.nc", w / "figures"), {}),
-            ("report", pipeline.make_report, (w / "a.nc", w / "figures", w / "r.pdf"), {}),
+            # as rule session_outputs: the archive read once, the figures' pixels handed to the report
+            ("figures", lambda *a, **k: pipeline.make_figures(*a, ds=held.setdefault("ds", archive.open_dataset(a[0])),
+                                                              images=images, **k), (w / "a.nc", w / "figures"), {}),
+            ("report", lambda *a, **k: pipeline.make_report(*a, ds=held["ds"], images=images, **k),
+             (w / "a.nc", w / "figures", w / "r.pdf"), {}),
         ]
         for name, func, args, kwargs in stages:
             t0 = time.process_time()
             func(*args, **kwargs)
             out[f"stage_cpu_seconds_{name}"] = time.process_time() - t0
+    return out
+
+
+CATALOGUE_COUNTS = (4, 8, 16)  # sessions in the catalogue for --catalogue (its cost grows faster than linearly)
+
+
+def _session_results(tmp: Path, n_bootstrap: int = 200) -> Path:
+    """results/<id>/ (archive and parameters.csv) of one synthetic 40-impact session, by the pipeline functions."""
+    from ballimpact import pipeline
+    from ballimpact.session import read_session
+    from ballimpact.synth import SynthConfig, write_session
+
+    session, _ = write_session(tmp / "raw" / "cat000", SynthConfig(
+        session_id="cat000", seed=1000, total_impacts=IMPACTS_PER_SESSION, faults_per_kind=1))
+    out = tmp / "results" / "cat000"
+    w = out / "work"
+    w.mkdir(parents=True)
+    pipeline.session_impacts(session, w / "session.json", out / "impacts.csv", w / "impacts.nc")
+    pipeline.fit_balls(w / "impacts.nc", list(read_session(session).meta.balls), session, w / "fits.nc",
+                       n_bootstrap=n_bootstrap, seed=0)
+    pipeline.write_archive(session, w / "impacts.nc", [w / "fits.nc"], out / "cat000.nc", out / "parameters.csv")
+    return out
+
+
+def _run_catalogue(n_sessions: int, results: Path, out: Path) -> tuple[float, float]:
+    """CPU time [s] and peak RSS [MB] of write_catalogue over the first n session folders, in this process."""
+    from ballimpact.catalogue import write_catalogue
+
+    dirs = sorted(p for p in results.iterdir() if p.is_dir())[:n_sessions]
+    out.mkdir(parents=True, exist_ok=True)
+    c0 = time.process_time()
+    write_catalogue(dirs, out_csv=out / "catalogue.csv", out_nc=out / "catalogue.nc", out_pdf=out / "catalogue.pdf",
+                    pools=[], n_bootstrap=200, seed=0)
+    return time.process_time() - c0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def bench_catalogue(counts=CATALOGUE_COUNTS) -> dict:
+    """Rule catalogue's work (write_catalogue) over k sessions, each in a fresh process.
+
+    The sessions are copies of one synthetic 40-impact session under k names (the
+    archive's session_id and date changed), so the change test finds no change:
+    the cost of reading k archives, the joint fits of the change tests, the table, the
+    netCDF file and the PDF. ``catalogue_cpu_seconds_<k>``, ``catalogue_peak_memory_mb_<k>``
+    (largest resident set of that process).
+    """
+    from ballimpact import archive
+
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-bench-catalogue-") as tmp:
+        tmp = Path(tmp)
+        first = _session_results(tmp)
+        ds = archive.open_dataset(first / f"{first.name}.nc")
+        for k in range(1, max(counts)):
+            sid = f"cat{k:03d}"
+            folder = first.parent / sid
+            folder.mkdir()
+            copy = ds.copy()
+            copy.attrs["session_id"] = sid
+            copy.attrs["session_date"] = f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"
+            archive.write_dataset(copy, folder / f"{sid}.nc")
+            (folder / "parameters.csv").write_bytes((first / "parameters.csv").read_bytes())
+        for k in counts:
+            code = ("import sys, json; sys.path.insert(0, %r); import run; "
+                    "print(json.dumps(run._run_catalogue(%d, run.Path(%r), run.Path(%r))))"
+                    % (str(Path(__file__).parent), k, str(first.parent), str(tmp / f"catalogue{k}")))
+            proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+            if proc.returncode != 0:
+                raise RuntimeError(proc.stderr[-3000:])
+            cpu, mem = json.loads(proc.stdout.strip().splitlines()[-1])
+            out[f"catalogue_cpu_seconds_{k}"] = cpu
+            out[f"catalogue_peak_memory_mb_{k}"] = mem
     return out
 
 
@@ -367,11 +491,17 @@ def main(argv=None) -> int:
                     help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
     ap.add_argument("--sessions-only", action="store_true",
                     help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
+    ap.add_argument("--catalogue", action="store_true",
+                    help="only the catalogue job's CPU time and memory at 4, 8 and 16 sessions (catalogue_*)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
     if args.stages:
         figures.update(bench_session_stages())
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
+    if args.catalogue:
+        figures.update(bench_catalogue())
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
         return 0
     if args.sessions_only:

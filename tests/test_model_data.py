@@ -50,6 +50,26 @@ def test_a_heavier_ball_stays_longer_and_a_bad_mass_falls_back_on_the_fitted_one
     assert np.isfinite(f_heavy).all() and x_heavy.max() > 0
 
 
+@pytest.mark.parametrize("batch", [1, 3, 64])
+def test_impact_model_curves_of_many_impacts_are_the_curves_of_each(monkeypatch, batch):
+    """Simulated together (in batches of CURVE_BATCH), each impact keeps its own curve, bit for bit;
+    speeds that cannot be simulated give None, and a bad mass falls back on the fitted one."""
+    monkeypatch.setattr(model_data, "CURVE_BATCH", batch)
+    vin = np.array([14.0, np.nan, 30.0, -1.0, 22.5, 18.0])
+    mass = np.array([PARAMS[0], PARAMS[0], 1.2 * PARAMS[0], PARAMS[0], np.nan, 0.0])
+    curves = model_data.impact_model_curves(PARAMS, vin, mass)
+    assert len(curves) == vin.size
+    for v, m, curve in zip(vin, mass, curves):
+        alone = model_data.impact_model_curve(PARAMS, v, m)
+        if alone is None:
+            assert curve is None
+            continue
+        for got, want in zip(curve, alone):
+            assert_allclose(got, want, rtol=0, atol=0)
+    assert [c is None for c in curves] == [False, True, False, True, False, False]
+    assert model_data.impact_model_curves(None, vin, mass) == [None] * vin.size
+
+
 def _one_impact_archive(force):
     t = np.arange(force.size) * 1e-5
     return xr.Dataset(

@@ -92,15 +92,17 @@ def test_editing_one_raw_file_reruns_exactly_its_session(state, what):
     # the jobs of that session, and the catalogue across sessions (no session wildcard)
     assert {s for sessions in jobs.values() for s in sessions} == {"beta", ""}
     assert {rule for rule, sessions in jobs.items() if "" in sessions} == {"catalogue"}
-    # the whole chain of that session, down to its report (a small session's fits, archive,
-    # figures and report are one session_outputs job, a large one's are per-stage jobs)
-    assert {"validate_session", "process_chunk", "collect_impacts"} <= set(jobs)
+    # the whole chain of that session, down to its report (a small session is validated,
+    # processed and collected by one session_impacts job, and its fits, archive, figures and
+    # report are one session_outputs job; a large one's are per-stage jobs)
+    assert {"validate_session", "process_chunk", "collect_impacts"} <= set(jobs) or {"session_impacts"} <= set(jobs)
     assert {"session_outputs"} <= set(jobs) or {"archive", "report"} <= set(jobs)
 
 
 def test_changed_mains_reruns_processing_of_every_session(state):
     jobs = planned(state, "mains_hz=60")
-    assert jobs["process_chunk"] == set(SESSIONS)
+    # processing: rule process_chunk, or session_impacts for a small session (these are small)
+    assert jobs["session_impacts"] == set(SESSIONS)
     assert "validate_session" not in jobs  # the raw files did not change
 
 
@@ -110,3 +112,4 @@ def test_changed_fit_setting_reruns_fits_not_processing(state, key):
     fits = ("fit_session", "fit_ball", "session_outputs")  # session_outputs: the fits of a small session
     assert set().union(*(jobs.get(rule, set()) for rule in fits)) == set(SESSIONS)
     assert "process_chunk" not in jobs and "collect_impacts" not in jobs and "validate_session" not in jobs
+    assert "session_impacts" not in jobs  # a small session's processing job

@@ -110,7 +110,7 @@ def test_dry_run_repo_raw_dir():
         return
     assert set(counts) <= {
         "validate_session", "process_chunk", "collect_impacts", "fit_ball", "fit_session", "archive", "figures",
-        "report", "session_outputs", "catalogue", "all",
+        "report", "session_impacts", "session_outputs", "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -120,11 +120,13 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
     n_impacts = len(raw_rows(session))
     proc = run_snakemake("-n", "--cores", "2", *config_args(synth_raw, tmp_path / "results"), check=True)
     counts = job_counts(proc.stdout)
+    n_chunks = min(n_impacts, max(yaml.safe_load((REPO / "config.yaml").read_text())["min_chunks"],
+                                  math.ceil(n_impacts / 200)))
+    # a small session processed as one chunk: validated, processed and collected in one job
+    first = {"session_impacts": 1} if n_chunks == 1 else {
+        "validate_session": 1, "process_chunk": n_chunks, "collect_impacts": 1}
     assert counts == {
-        "validate_session": 1,
-        "process_chunk": min(n_impacts, max(yaml.safe_load((REPO / "config.yaml").read_text())["min_chunks"],
-                                            math.ceil(n_impacts / 200))),
-        "collect_impacts": 1,
+        **first,
         # a small session (fit_batch_impacts): fits, archive, figures and report in one job
         "session_outputs": 1,
         "catalogue": 1,
@@ -179,12 +181,14 @@ def test_sessions_selects_only_those(synth_raw, tmp_path):
     proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results, "sessions=[beta]"), check=True)
     assert f"{results / 'beta' / 'report.pdf'}" in proc.stdout
     assert f"{results / 'alpha'}" not in proc.stdout
-    assert job_counts(proc.stdout)["validate_session"] == 1
+    # the first job of a session: validate_session, or session_impacts for a small session
+    first_jobs = ("validate_session", "session_impacts")
+    assert sum(job_counts(proc.stdout).get(rule, 0) for rule in first_jobs) == 1
 
     proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results), check=True)
     assert f"{results / 'alpha' / 'report.pdf'}" in proc.stdout
     assert f"{results / 'beta' / 'report.pdf'}" in proc.stdout
-    assert job_counts(proc.stdout)["validate_session"] == 2
+    assert sum(job_counts(proc.stdout).get(rule, 0) for rule in first_jobs) == 2
 
 
 @pytest.mark.slow
@@ -708,6 +712,32 @@ def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # staging folder removed
     with pytest.raises(ValueError, match="balls must name at least one ball type"):
         pipeline.fit_balls(tmp_path / "impacts.nc", [], session, tmp_path / "none.nc", n_bootstrap=0, seed=0)
+
+
+@pytest.mark.slow
+def test_session_impacts_writes_what_the_per_stage_rules_write(synth_raw, tmp_path):
+    """Rule session_impacts (a small session validated, processed and collected in one job)
+    writes the files of rules validate_session, process_chunk (one chunk) and collect_impacts."""
+    import json
+
+    import xarray as xr
+
+    from ballimpact import archive
+
+    session = synth_raw / "s1"
+    one, staged = tmp_path / "one", tmp_path / "staged"
+    one.mkdir()
+    staged.mkdir()
+    pipeline.session_impacts(session, one / "session.json", one / "impacts.csv", one / "impacts.nc")
+    pipeline.snapshot_session(session, staged / "session.json")
+    pipeline.process_chunk(session, 0, 1, staged / "chunk_0.nc")
+    pipeline.collect_impacts(session, [staged / "chunk_0.nc"], staged / "impacts.csv", staged / "impacts.nc")
+    assert json.loads((one / "session.json").read_text()) == json.loads((staged / "session.json").read_text())
+    assert (one / "impacts.csv").read_text() == (staged / "impacts.csv").read_text()
+    xr.testing.assert_identical(archive.open_dataset(one / "impacts.nc"), archive.open_dataset(staged / "impacts.nc"))
+    assert sorted(p.name for p in one.iterdir()) == ["impacts.csv", "impacts.nc", "session.json"]  # no chunk left
+    with pytest.raises(ValueError, match="mains_hz must be a positive number"):
+        pipeline.session_impacts(session, one / "s.json", one / "i.csv", one / "i.nc", mains_hz=-50.0)
 
 
 @pytest.mark.slow

@@ -11,6 +11,7 @@ import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedLocator
 
 from . import archive_read as ar
 from .archive_read import excluded_impacts
@@ -96,7 +97,9 @@ def render(draw, ds) -> Figure:
 
 
 def _new_figure(width_in: float, height_in: float) -> Figure:
-    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+    # no layout engine: _fixed_layout places the axes once, from the figure's size and its
+    # texts (a constrained layout measures every tick label, twice, and cost as much as drawing)
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI)
     FigureCanvasAgg(fig)
     return fig
 
@@ -116,21 +119,70 @@ def is_synthetic(ds) -> bool:
         return False
 
 
-def _fit_titles(fig) -> None:
-    """Wrap every axes title that is wider than its axes onto more lines (no title runs into
-    the next panel), then freeze the layout.
+_PT_IN = 1.0 / 72.0  # inches per typographic point
+_CHAR_EM = 0.62  # mean advance of a digit or letter of DejaVu Sans, in em (digits 0.636, minus 0.838)
+_LINE = 1.2  # line height of a text, in font sizes
 
-    The constrained layout runs once (axes at their final positions, nothing drawn); only
-    when a title was wrapped does it run again to make room for the extra lines. Then the
-    figure's layout engine is replaced by a fixed one, so that saving the figure draws it
-    once without laying it out again (a layout measures every tick label: it cost as much
-    as the drawing itself).
-    """
-    engine = fig.get_layout_engine()
-    if engine is not None:
-        engine.execute(fig)  # lay out without drawing
-    renderer = fig.canvas.get_renderer()
-    changed = False
+
+def _font_pt(key: str) -> float:
+    """Size [pt] of an rcParams font-size entry (numbers or names such as "medium")."""
+    from matplotlib.font_manager import FontProperties
+
+    return float(FontProperties(size=matplotlib.rcParams[key]).get_size_in_points())
+
+
+def _lines(text: str) -> int:
+    return text.count("\n") + 1 if text else 0
+
+
+def _ytick_width_in(ax) -> float:
+    """Width [in] of the widest y tick label, from its characters (no text is laid out)."""
+    lo, hi = sorted(ax.get_ylim())
+    locator, formatter = ax.yaxis.get_major_locator(), ax.yaxis.get_major_formatter()
+    locs = [v for v in locator.tick_values(lo, hi) if lo - 1e-9 * (hi - lo) <= v <= hi + 1e-9 * (hi - lo)]
+    labels = formatter.format_ticks(locs) if locs else [""]
+    chars = max((len(s) for s in labels), default=0)
+    return chars * _CHAR_EM * _font_pt("ytick.labelsize") * _PT_IN
+
+
+def _y_space_in(ax) -> float:
+    """Room [in] left of an axes for its y tick labels and y label."""
+    room = (matplotlib.rcParams["ytick.major.size"] + matplotlib.rcParams["ytick.major.pad"] + 3) * _PT_IN
+    room += _ytick_width_in(ax)
+    if ax.get_ylabel():
+        room += (_LINE * _font_pt("axes.labelsize") + matplotlib.rcParams["axes.labelpad"]) * _PT_IN
+    return room
+
+
+def _below_in(ax) -> float:
+    """Room [in] below an axes for its x tick labels and x label."""
+    room = 2 * _PT_IN
+    if ax.xaxis.get_tick_params(which="major").get("labelbottom", True):
+        size = _font_pt("xtick.labelsize")
+        fixed = isinstance(ax.xaxis.get_major_locator(), FixedLocator)  # ticks (and labels) set by set_xticks
+        rotated = [t for t in ax.get_xticklabels() if abs(t.get_rotation() - 90) < 1] if fixed else []
+        if rotated:  # impact ids written upwards (kCAL figure): as high as the longest id is wide
+            size = max(t.get_fontsize() for t in rotated)
+            height = max(len(t.get_text()) for t in rotated) * _CHAR_EM * size + 2
+        else:
+            height = _LINE * size
+        room += (matplotlib.rcParams["xtick.major.size"] + matplotlib.rcParams["xtick.major.pad"] + height) * _PT_IN
+    if ax.get_xlabel():
+        room += (_LINE * _font_pt("axes.labelsize") + matplotlib.rcParams["axes.labelpad"] + 2) * _PT_IN
+    return room
+
+
+def _above_in(ax) -> float:
+    """Room [in] above an axes for its (possibly wrapped) title."""
+    lines = max(_lines(t.get_text()) for t in (ax.title, ax._left_title, ax._right_title) if t.get_visible())
+    if not lines:
+        return 4 * _PT_IN
+    return (lines * _LINE * _font_pt("axes.titlesize") + matplotlib.rcParams["axes.titlepad"] + 4) * _PT_IN
+
+
+def _wrap_titles(fig, renderer) -> None:
+    """Wrap every axes title that is wider than its axes onto more lines (no title runs into
+    the next panel); only the titles are measured."""
     for ax in fig.axes:
         if not ax.get_visible():
             continue
@@ -146,22 +198,89 @@ def _fit_titles(fig) -> None:
             chars = max(10, int(longest * width / measured * 0.95))
             title.set_text("\n".join(
                 wrapped for line in text.splitlines() for wrapped in textwrap.wrap(line, chars) or [""]))
-            changed = True
-    if engine is not None:
-        if changed:
-            engine.execute(fig)  # room for the wrapped titles
-        fig.set_layout_engine("none")  # keep these positions: saving draws once, no second layout
+
+
+def _fixed_layout(fig) -> None:
+    """Place the axes of a figure once, in inches, from what surrounds them.
+
+    The grid of panels (one ``subplots`` call) gets margins for the figure title (its
+    lines), each row's axes titles (wrapped to the panel width by :func:`_wrap_titles`),
+    the y tick labels (their characters counted, not laid out), the axis labels and a
+    legend of the figure below the panels (``fig.legend``, which this then puts at the
+    bottom edge). No layout engine runs: a constrained layout measures every tick label
+    twice, and cost as much as the drawing itself.
+    """
+    width_in, height_in = fig.get_size_inches()
+    axes = [ax for ax in fig.axes if ax.get_subplotspec() is not None]
+    if not axes:
+        return
+    grid = axes[0].get_subplotspec().get_gridspec()
+    nrows, ncols = grid.get_geometry()
+    shown = [ax for ax in axes if ax.get_visible()] or axes
+    y_space = max(_y_space_in(ax) for ax in shown if ax.axison) if any(ax.axison for ax in shown) else 0.1
+    left, right, gap_x = y_space + 0.08, 0.18, y_space + 0.3
+    if left + right + (ncols - 1) * gap_x > 0.75 * width_in:  # tick labels wider than the figure
+        scale = 0.75 * width_in / (left + right + (ncols - 1) * gap_x)
+        left, right, gap_x = left * scale, right * scale, gap_x * scale
+    grid.update(left=left / width_in, right=1 - right / width_in,
+                wspace=gap_x / max((width_in - left - right - (ncols - 1) * gap_x) / ncols, 0.1))
+    _place_axes(fig, axes)
+    _wrap_titles(fig, fig.canvas.get_renderer())
+
+    def rows(span):
+        return range(span.rowspan.start, span.rowspan.stop)
+
+    above, below = [4 * _PT_IN] * nrows, [2 * _PT_IN] * nrows
+    for ax in shown:
+        span = ax.get_subplotspec()
+        above[span.rowspan.start] = max(above[span.rowspan.start], _above_in(ax))
+        if ax.axison:
+            below[span.rowspan.stop - 1] = max(below[span.rowspan.stop - 1], _below_in(ax))
+    top = 0.08
+    if fig._suptitle is not None and fig._suptitle.get_text():
+        size = fig._suptitle.get_fontsize()
+        top += (_lines(fig._suptitle.get_text()) * _LINE * size + 4) * _PT_IN
+        fig._suptitle.set_y(1 - 0.06 / height_in)
+        fig._suptitle.set_va("top")
+    bottom = 0.06
+    for legend in fig.legends:
+        n = len(legend.texts)
+        ncols_legend = max(1, legend._ncols)
+        size = legend.prop.get_size_in_points()
+        n_rows = -(-n // ncols_legend)
+        # rows of text, the spacing between them and the frame's padding
+        bottom += (n_rows * _LINE + (n_rows - 1) * 0.5 + 1.0) * size * _PT_IN + 0.06
+        legend.set_bbox_to_anchor((0.5, 0.02 / height_in), transform=fig.transFigure)
+        legend.set_loc("lower center")
+    top += above[0]
+    bottom += below[-1]
+    gap_y = max([below[r] + above[r + 1] for r in range(nrows - 1)], default=0.0) + 0.06
+    spare = height_in - top - bottom - (nrows - 1) * gap_y
+    if spare < 0.25 * height_in:
+        # texts taller than the figure (a title of thousands of characters): the panels keep a
+        # quarter of the height and the margins shrink in proportion (texts may then overlap)
+        scale = 0.75 * height_in / (top + bottom + (nrows - 1) * gap_y)
+        top, bottom, gap_y = top * scale, bottom * scale, gap_y * scale
+    axes_h = max((height_in - top - bottom - (nrows - 1) * gap_y) / nrows, 0.01)
+    grid.update(top=1 - top / height_in, bottom=bottom / height_in, hspace=gap_y / axes_h)
+    _place_axes(fig, axes)
+
+
+def _place_axes(fig, axes) -> None:
+    """Move every axes to its cell of the grid (GridSpec.update does not move existing axes)."""
+    for ax in axes:
+        ax.set_position(ax.get_subplotspec().get_position(fig))
 
 
 def _finish(fig, ds) -> None:
     """Last touches of every figure: titles that fit their panels, and the synthetic mark."""
     if is_synthetic(ds):
-        # first line of the figure title: the constrained layout keeps it clear of everything else
+        # first line of the figure title: _fixed_layout keeps it clear of everything else
         title = fig._suptitle.get_text() if fig._suptitle is not None else ""
         if SYNTHETIC_MARK not in title:
             size = fig._suptitle.get_fontsize() if fig._suptitle is not None else None
             fig.suptitle(f"[{SYNTHETIC_MARK}]" + (f"\n{title}" if title else ""), fontsize=size)
-    _fit_titles(fig)
+    _fixed_layout(fig)
 
 
 # ----------------------------------------------------------------------------- notes and layout
@@ -420,7 +539,8 @@ def draw_stiffness(fig, ds):
     if no_fit:
         ax.text(0.98, 0.03, "no fit: " + ", ".join(no_fit), transform=ax.transAxes, ha="right", va="bottom",
                 color="0.3", bbox={"fc": "white", "ec": "0.7"})
-    ax.set_title(r"$k_B = k_B(0) + A_K\,x^a$ (Eq. 4); solid: fitted, dashed: paper Table 2", loc="left")
+    # plain text, not mathtext: its parser costs a third of a second in every process
+    ax.set_title("kB = kB(0) + AK x\u1d43 (Eq. 4); solid: fitted, dashed: paper Table 2", loc="left")
     fig.suptitle("Structural stiffness against displacement (cf. Fig. 8 of Goodwill & Haake 2004)")
 
 
@@ -897,7 +1017,13 @@ def qc_file_stem(impact_id: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", str(impact_id)) or "impact"
 
 
-def save_all(ds, out_dir) -> list[Path]:
+def _keep_pixels(images, key: str, fig: Figure) -> None:
+    """Store the pixels just saved (RGBA, uint8) of a figure under ``key`` when ``images`` is a dict."""
+    if images is not None:
+        images[key] = np.array(fig.canvas.buffer_rgba(), dtype=np.uint8, copy=True)
+
+
+def save_all(ds, out_dir, images: dict | None = None) -> list[Path]:
     """Write every report figure as PNG (dpi 150) into ``out_dir``, QC traces into ``out_dir/qc``.
 
     Files: ``<stem>.png`` for each figure of
@@ -911,6 +1037,11 @@ def save_all(ds, out_dir) -> list[Path]:
         Session archive.
     out_dir : str or Path
         Output folder (created if needed).
+    images : dict, optional
+        When given, filled with the pixels of every file written (RGBA, uint8, the PNG's
+        own pixels) under its path relative to ``out_dir`` (``<stem>.png``,
+        ``qc/<impact>.png``), so that :func:`ballimpact.report.write_report` places them
+        without decoding the files again.
 
     Returns
     -------
@@ -922,7 +1053,12 @@ def save_all(ds, out_dir) -> list[Path]:
     qc_dir.mkdir(parents=True, exist_ok=True)
     written = []
     for spec in REPORT_FIGURES:
-        written.append(save_figure(render(spec.draw, ds), out_dir / spec.file_name))
+        fig = render(spec.draw, ds)
+        written.append(save_figure(fig, out_dir / spec.file_name))
+        _keep_pixels(images, spec.file_name, fig)
     for impact_id, _, _ in excluded_impacts(ds):
-        written.append(save_figure(fig_qc_impact(ds, impact_id), qc_dir / f"{qc_file_stem(impact_id)}.png"))
+        fig = fig_qc_impact(ds, impact_id)
+        name = f"{qc_file_stem(impact_id)}.png"
+        written.append(save_figure(fig, qc_dir / name))
+        _keep_pixels(images, f"{QC_DIR_NAME}/{name}", fig)
     return written

@@ -24,6 +24,7 @@ __all__ = [
     "stiffness_curve",
     "itf_drop_test",
     "impact_model_curve",
+    "impact_model_curves",
     "kelvin_voigt_force",
     "kelvin_voigt_contact",
     "add_model_forces",
@@ -249,6 +250,55 @@ def impact_model_curve(params, vin_m_s: float, mass_kg: float | None = None):
     return sim.time_s[good], np.asarray(sim.force_N)[good], np.asarray(sim.displacement_m)[good]
 
 
+#: Impacts simulated together by :func:`impact_model_curves` (bounds the recorded series' memory).
+CURVE_BATCH = 64
+
+
+def impact_model_curves(params, vin_m_s, mass_kg):
+    """:func:`impact_model_curve` of many impacts of one ball type, simulated together.
+
+    Eq. (14) in Goodwill & Haake 2004 (:func:`ballimpact.model.simulate_impact`, which
+    steps many impacts at once, each by its own arithmetic, so each curve is the one
+    :func:`impact_model_curve` gives), in batches of :data:`CURVE_BATCH` impacts.
+
+    Parameters
+    ----------
+    params : tuple of float or None
+        (mass [kg], kB(0) [N/m], AK [N m^-(1+a)], a [-], AC [N s/m^3]); None gives all None.
+    vin_m_s : array_like
+        Inbound speed of each impact [m/s]; not finite or not positive gives None.
+    mass_kg : array_like
+        Ball mass of each impact [kg]; the fitted mass where NaN or not positive.
+
+    Returns
+    -------
+    list
+        Per impact, (time since first contact [s], force [N], displacement [m]) or None.
+    """
+    from .model import simulate_impact
+
+    vin = np.asarray(vin_m_s, dtype=float).ravel()
+    out = [None] * vin.size
+    if params is None:
+        return out
+    m, kb0, ak, a, ac = params
+    mass = np.asarray(mass_kg, dtype=float).ravel()
+    with np.errstate(invalid="ignore"):
+        mass = np.where(np.isfinite(mass) & (mass > 0), mass, m)
+        todo = np.flatnonzero(np.isfinite(vin) & (vin > 0))
+    for start in range(0, todo.size, CURVE_BATCH):
+        batch = todo[start:start + CURVE_BATCH]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sim = simulate_impact(vin[batch], mass[batch], kb0, ak, a, ac, record=True)
+        for k, i in enumerate(batch):
+            force = sim.force_N[:, k]
+            good = np.isfinite(force)
+            if good.sum() >= 2:
+                out[i] = (sim.time_s[good], force[good], sim.displacement_m[:, k][good])
+    return out
+
+
 def kelvin_voigt_force(time_s: np.ndarray, vin_m_s, mass_kg, kv_kN_m, kv_N_s_m) -> np.ndarray:
     """Kelvin-Voigt force F = kB x + cB x' (Eqs. (1)-(3)) of one impact on given times [N].
 
@@ -374,14 +424,15 @@ def add_model_forces(ds):
         params = fitted_parameters(ds, ball)
         if params is None:
             continue
-        for i in np.flatnonzero(balls == ball):
-            t, f_meas = ds["time_s"].values[i], ds["force_N"].values[i]
-            mass = float(ds["impact_mass_kg"].values[i]) if "impact_mass_kg" in ds else None
-            if (np.isfinite(t) & np.isfinite(f_meas)).sum() < 2:
-                continue
-            curve = impact_model_curve(params, float(ds["vin_m_s"].values[i]), mass)
+        rows = [i for i in np.flatnonzero(balls == ball)
+                if (np.isfinite(ds["time_s"].values[i]) & np.isfinite(ds["force_N"].values[i])).sum() >= 2]
+        masses = ds["impact_mass_kg"].values[rows] if "impact_mass_kg" in ds else np.full(len(rows), np.nan)
+        # every impact of the ball simulated together (impact_model_curves): the same curves
+        curves = impact_model_curves(params, ds["vin_m_s"].values[rows], masses)
+        for i, curve in zip(rows, curves):
             if curve is None:
                 continue
+            t, f_meas = ds["time_s"].values[i], ds["force_N"].values[i]
             ok, model_force_i, agreement[i], rms[i] = _impact_agreement(t, f_meas, curve)
             model_force[i, ok] = model_force_i
     ds["model_force_N"] = (("impact", "sample"), model_force)

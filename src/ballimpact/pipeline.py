@@ -28,6 +28,7 @@ __all__ = [
     "chunk_impact_ids",
     "process_chunk",
     "collect_impacts",
+    "session_impacts",
     "fit_arrays",
     "fit_ball",
     "fit_balls",
@@ -353,6 +354,51 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
 
 
+def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float | None = None) -> None:
+    """
+    Validate, process and collect a small session in one process.
+
+    Rule ``session_impacts`` (a session of at most config ``fit_batch_impacts`` impacts
+    processed as one chunk): :func:`snapshot_session`, :func:`process_chunk` (chunk 0 of
+    1, into a temporary file) and :func:`collect_impacts` one after the other, the same
+    calls as rules ``validate_session``, ``process_chunk`` and ``collect_impacts``, so
+    the same files; it saves the start-up (Python and its imports) of two processes.
+
+    Parameters
+    ----------
+    session_dir : str or Path
+        The raw session folder.
+    out_json : str or Path
+        The snapshot ``work/session.json`` to write.
+    out_csv : str or Path
+        ``impacts.csv`` to write.
+    out_nc : str or Path
+        ``work/impacts.nc`` to write.
+    mains_hz : float or None, optional
+        Mains frequency [Hz] to remove; None keeps session.yaml ``daq.mains_hz``.
+
+    Raises
+    ------
+    ballimpact.session.SessionError
+        A session-level fault, with a one-line message naming the file.
+    """
+    if mains_hz is not None and (isinstance(mains_hz, bool) or not (math.isfinite(mains_hz) and mains_hz > 0)):
+        raise ValueError(f"mains_hz must be a positive number of Hz or None, got {mains_hz!r}")
+    snapshot_session(session_dir, out_json)
+    out_nc = Path(out_nc)
+    out_nc.parent.mkdir(parents=True, exist_ok=True)
+    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
+    staging = out_nc.parent / f".{out_nc.name}.chunk.tmp"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
+    try:
+        chunk_nc = staging / "chunk_0.nc"
+        process_chunk(session_dir, 0, 1, chunk_nc, mains_hz=mains_hz)
+        collect_impacts(session_dir, [chunk_nc], out_csv, out_nc)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
 def _fit_mask(ds, ball: str):
     """Impacts of one ball type with status ok and positive vin, TC and COR (bool array)."""
     import numpy as np
@@ -634,7 +680,7 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
     logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
 
 
-def make_figures(archive_nc, out_dir) -> None:
+def make_figures(archive_nc, out_dir, *, ds=None, images: dict | None = None) -> None:
     """
     Draw every report figure from the archive as PNG into ``out_dir``.
 
@@ -649,15 +695,21 @@ def make_figures(archive_nc, out_dir) -> None:
         The session archive.
     out_dir : str or Path
         The figures folder ``results/<session_id>/figures``.
+    ds : xarray.Dataset, optional
+        The archive as read from ``archive_nc`` already (not read again).
+    images : dict, optional
+        Filled with the pixels of every PNG written, by path relative to ``out_dir``
+        (:func:`ballimpact.figures.save_all`), for :func:`make_report`.
     """
     from . import archive, figures
 
-    ds = archive.open_dataset(archive_nc)
+    if ds is None:
+        ds = archive.open_dataset(archive_nc)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=".figures.", suffix=".tmp", dir=out_dir))
     try:
-        figures.save_all(ds, staging)
+        figures.save_all(ds, staging, images=images)
         for stem in FIGURE_STEMS:
             os.replace(staging / f"{stem}.png", out_dir / f"{stem}.png")
         qc = out_dir / QC_DIR_NAME
@@ -670,7 +722,7 @@ def make_figures(archive_nc, out_dir) -> None:
                 len(list((out_dir / QC_DIR_NAME).glob("*.png"))), out_dir)
 
 
-def make_report(archive_nc, figures_dir, out_pdf) -> None:
+def make_report(archive_nc, figures_dir, out_pdf, *, ds=None, images: dict | None = None) -> None:
     """
     Write the session report (PDF) from the archive and the figures.
 
@@ -685,12 +737,18 @@ def make_report(archive_nc, figures_dir, out_pdf) -> None:
         on the pages).
     out_pdf : str or Path
         ``report.pdf`` to write (atomically).
+    ds : xarray.Dataset, optional
+        The archive as read from ``archive_nc`` already (not read again).
+    images : dict, optional
+        The pixels of the PNG files as :func:`make_figures` kept them: placed on the
+        pages instead of decoding the files again.
     """
     from . import archive, report
 
-    ds = archive.open_dataset(archive_nc)
+    if ds is None:
+        ds = archive.open_dataset(archive_nc)
     Path(out_pdf).parent.mkdir(parents=True, exist_ok=True)
-    report.write_report(ds, out_pdf, figures_dir=figures_dir)
+    report.write_report(ds, out_pdf, figures_dir=figures_dir, images=images)
     logger.info("report %s: %d pages", out_pdf, report.report_page_count(ds))
 
 
@@ -703,7 +761,8 @@ def session_outputs(session_dir, impacts_nc, balls, out_fits_nc, out_nc, out_par
     :func:`fit_balls`, :func:`write_archive`, :func:`make_figures` and
     :func:`make_report` one after the other, the same calls as rules ``fit_session``,
     ``archive``, ``figures`` and ``report``, so the same files and numbers; it saves
-    the start-up (Python and its imports) of three processes per session.
+    the start-up (Python and its imports) of three processes per session, a reading of
+    the archive and the decoding of the PNG files for the report.
 
     Parameters
     ----------
@@ -732,5 +791,11 @@ def session_outputs(session_dir, impacts_nc, balls, out_fits_nc, out_nc, out_par
     _check_int("seed", seed, 0)
     fit_balls(impacts_nc, balls, session_dir, out_fits_nc, n_bootstrap=n_bootstrap, seed=seed)
     write_archive(session_dir, impacts_nc, [out_fits_nc], out_nc, out_parameters_csv)
-    make_figures(out_nc, figures_dir)
-    make_report(out_nc, figures_dir, out_pdf)
+    # the archive is read once for the figures and the report, and the figures' pixels go
+    # to the report in memory: the same pages as rule report, which reads the PNG files
+    from . import archive
+
+    ds = archive.open_dataset(out_nc)
+    images: dict = {}
+    make_figures(out_nc, figures_dir, ds=ds, images=images)
+    make_report(out_nc, figures_dir, out_pdf, ds=ds, images=images)

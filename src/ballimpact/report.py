@@ -432,11 +432,11 @@ def _caption_block(fig, top_in, title, caption, *, width_chars=105):
              fontsize=8.8, va="top", linespacing=1.35)
 
 
-def _place_png(fig, png: Path, top_in: float, max_h_in: float):
-    """Put a PNG on the page below top_in, as wide as the text, within max_h_in."""
+def _place_png(fig, png, top_in: float, max_h_in: float):
+    """Put a PNG (a file, or its pixels as an array) on the page below top_in, as wide as the text, within max_h_in."""
     import matplotlib.image as mpimg
 
-    img = mpimg.imread(str(png))
+    img = png if isinstance(png, np.ndarray) else mpimg.imread(str(png))
     w, h = A4_PORTRAIT_IN
     avail_w = w - 2 * _MARGIN_IN
     aspect = img.shape[0] / img.shape[1]
@@ -505,7 +505,16 @@ def _caption_addition(ds, draw_name: str) -> str:
     return ""
 
 
-def _figure_page(ds, info, name, number, figures_dir) -> Figure:
+def _figure_file(figures_dir, name, images):
+    """A figure file of figures_dir to place on a page: its pixels from ``images`` when there,
+    else the file when it exists, else None (the figure is then drawn)."""
+    if images is not None and name in images:
+        return images[name]
+    png = Path(figures_dir) / name if figures_dir is not None else None
+    return png if png is not None and png.is_file() else None
+
+
+def _figure_page(ds, info, name, number, figures_dir, images=None) -> Figure:
     spec = report_figure(name)
     title, caption = spec.title, spec.caption + _caption_addition(ds, spec.draw_name)
     w, h = A4_PORTRAIT_IN
@@ -513,8 +522,8 @@ def _figure_page(ds, info, name, number, figures_dir) -> Figure:
     caption_lines = len(textwrap.wrap(caption, 105))
     caption_h = 0.28 + caption_lines * 8.8 * 1.35 / 72 + 0.25
     max_fig_h = h - top - caption_h - _MARGIN_IN - 0.2
-    png = Path(figures_dir) / name if figures_dir is not None else None
-    if png is not None and png.is_file():
+    png = _figure_file(figures_dir, name, images)
+    if png is not None:
         fig = _page()
         used = _place_png(fig, png, top, max_fig_h)
         fig_h = used
@@ -608,13 +617,13 @@ def _hline(fig, y_in):
                   color="0.6", lw=0.6)
 
 
-def _qc_page(ds, info, impact_id, number, n_total, figures_dir) -> Figure:
+def _qc_page(ds, info, impact_id, number, n_total, figures_dir, images=None) -> Figure:
     w, h = A4_PORTRAIT_IN
     i = ar.impact_position(ds, impact_id)
     ball = _text(ar.text_values(ds["impact_ball"].values)[i])
     reason = _text(ar.text_values(ds["reason"].values)[i]) or "(no reason given)"
-    png = Path(figures_dir) / QC_DIR_NAME / f"{_fig.qc_file_stem(impact_id)}.png" if figures_dir is not None else None
-    use_png = png is not None and png.is_file()
+    png = _figure_file(figures_dir, f"{QC_DIR_NAME}/{_fig.qc_file_stem(impact_id)}.png", images)
+    use_png = png is not None
     if use_png:
         fig = _page()
     else:
@@ -659,7 +668,7 @@ def report_page_count(ds) -> int:
     return 1 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(ar.excluded_impacts(ds))
 
 
-def write_report(ds, out_pdf, figures_dir=None) -> Path:
+def write_report(ds, out_pdf, figures_dir=None, images=None) -> Path:
     """Write the session report as an A4 PDF, atomically.
 
     Pages: (1) title, session metadata (with a red warning for synthetic data),
@@ -679,6 +688,10 @@ def write_report(ds, out_pdf, figures_dir=None) -> Path:
         Folder written by :func:`ballimpact.figures.save_all`. When given, its PNG
         files are placed on the pages (identical to the figure files); figures
         missing there, or all when None, are drawn from ``ds`` as vector graphics.
+    images : dict, optional
+        The pixels of those files (RGBA, uint8) by path relative to ``figures_dir``, as
+        :func:`ballimpact.figures.save_all` fills them: placed instead of reading the
+        files again (the same pixels).
 
     Returns
     -------
@@ -706,10 +719,10 @@ def write_report(ds, out_pdf, figures_dir=None) -> Path:
         with PdfPages(tmp, metadata=metadata) as pdf:
             pdf.savefig(_summary_page(ds, info))
             for number, name in enumerate(FIGURE_CAPTIONS, 1):
-                pdf.savefig(_figure_page(ds, info, name, number, figures_dir))
+                pdf.savefig(_figure_page(ds, info, name, number, figures_dir, images))
             for page in _excluded_pages(ds, info):
                 pdf.savefig(page)
             excluded = ar.excluded_impacts(ds)
             for k, (impact_id, _, _) in enumerate(excluded, 1):
-                pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir))
+                pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir, images))
     return out_pdf

@@ -169,6 +169,11 @@ SMALL_SESSIONS = [
 ]
 # the session wildcard of session_outputs matches exactly these names ("(?!)" matches none)
 SMALL_SESSION_PATTERN = "|".join(re.escape(s) for s in SMALL_SESSIONS) or "(?!)"
+# Small sessions processed as one chunk (config chunk_size, min_chunks) are also validated,
+# processed and collected by one job (rule session_impacts) instead of validate_session,
+# process_chunk and collect_impacts.
+ONE_JOB_SESSIONS = [s for s in SMALL_SESSIONS if SESSION_INFO[s]["n_chunks"] == 1]
+ONE_JOB_SESSION_PATTERN = "|".join(re.escape(s) for s in ONE_JOB_SESSIONS) or "(?!)"
 
 
 # ------------------------------------------------------------------------ paths
