@@ -44,7 +44,7 @@ FITTING_CORE = (
 )
 SELECTION = (
     ["ballimpact.model.*", "ballimpact.gates.*", "ballimpact.calibration.*",
-     "ballimpact.conditioning.*", "ballimpact.contact.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
+     "ballimpact.conditioning.*", "ballimpact.plate.*", "ballimpact.contact.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
     + [f"ballimpact.fitting.x_{name}__mutmut_*" for name in FITTING_CORE]
 )
 

@@ -180,3 +180,37 @@ def test_conditioning_does_not_undo_a_contact_that_runs_to_the_record_end():
     # with 10 ms more record the same contact is undone
     volts, fs = _ringing_volts(14000.0, 0.05, 0.0005, record_s=0.036)
     assert condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf).plate is not None
+
+
+def test_a_stretch_shorter_than_the_instruments_need_identifies_nothing():
+    # a clean decaying oscillation, 20 samples: too few for the instruments 5 samples back (16 + 5 + 1
+    # second differences needed); 60 samples of the same are enough
+    n = np.arange(60)
+    ring = np.exp(-0.02 * n) * np.sin(1.0 * n)
+    assert identify_plate_resonance(ring[:20], 5e4) is None
+    plate = identify_plate_resonance(ring, 5e4)
+    assert plate is not None
+    assert_allclose(plate.frequency_hz * 2 * math.pi / 5e4, math.hypot(1.0, 0.02), rtol=1e-6)
+
+
+def test_the_smallest_lag_is_allowed():
+    n = np.arange(200)
+    plate = identify_plate_resonance(np.exp(-0.02 * n) * np.sin(1.0 * n), 5e4, lag=3)
+    assert plate is not None
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(frequency_hz=0.0, damping_ratio=0.05, sample_rate_hz=5e4), "need frequency_hz > 0"),
+    (dict(frequency_hz=5e3, damping_ratio=-0.1, sample_rate_hz=5e4), "need frequency_hz > 0"),
+    (dict(frequency_hz=5e3, damping_ratio=0.05, sample_rate_hz=0.0), "need frequency_hz > 0"),
+])
+def test_undo_rejects_a_plate_that_is_no_plate(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        undo_plate_resonance(np.zeros(10), **kwargs)
+
+
+def test_undo_rejects_non_finite_samples():
+    x = np.zeros(50)
+    x[3] = np.inf
+    with pytest.raises(ValueError, match="sensed holds non-finite samples"):
+        undo_plate_resonance(x, 5e4, 5e3, 0.05)
