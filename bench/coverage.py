@@ -81,9 +81,14 @@ def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
     truth = {"ak": p.ak, "a": p.a, "ac": p.ac, "kb0": p.kb0_N_m, "kb_20mm": p.kb0_N_m + p.ak * 0.020**p.a}
     rec["hit"] = {nm: bool(getattr(f, f"{nm}_lo") <= truth[nm] <= getattr(f, f"{nm}_hi")) for nm in names}
     rec["width"] = {nm: float((getattr(f, f"{nm}_hi") - getattr(f, f"{nm}_lo")) / truth[nm]) for nm in names}
+    # everything needed to judge another interval rule offline: truth, estimate, reported interval
+    rec["truth"] = {nm: float(truth[nm]) for nm in names}
+    rec["estimate"] = {nm: float(getattr(f, nm if nm in ("ak", "a", "ac") else f"{nm}_N_m")) for nm in names}
+    rec["interval"] = {nm: [float(getattr(f, f"{nm}_lo")), float(getattr(f, f"{nm}_hi"))] for nm in names}
     if f.free_kb0_intervals:  # kB(0) extrapolated: the fit with kB(0) free alone, one half of the hull
         rec["hit_free"] = {nm: bool(f.free_kb0_intervals[nm][0] <= truth[nm] <= f.free_kb0_intervals[nm][1])
                            for nm in names}
+        rec["interval_free"] = {nm: [float(v) for v in f.free_kb0_intervals[nm]] for nm in names}
     return rec
 
 
@@ -221,9 +226,9 @@ def calibration_check(refits=1000, seed=0):
     return rows
 
 
-def truth_world(designs=12, sessions=400):
+def truth_world(designs=12, sessions=400, first=0):
     """Coverage of the calibrated intervals in their Wald form, precisely: for each ball type
-    and each of the bench's designs (the inbound speeds of seeds 0 .. designs-1), the
+    and each of the bench's designs (the inbound speeds of seeds first .. first+designs-1), the
     critical values of ``fit_ball_model`` at the true parameters with the true scatter
     (TC 0.4 %, COR 0.003 / mean COR), then ``sessions`` sessions with the bench's noise
     (COR 0.003 absolute) and with COR noise of that size relative instead, each fitted
@@ -234,7 +239,7 @@ def truth_world(designs=12, sessions=400):
 
     sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
     hits = {key: {"absolute": {}, "relative": {}} for key in sets}
-    for seed in range(designs):
+    for seed in range(first, first + designs):
         rng = np.random.default_rng(1000 + seed)
         for key, p in sets.items():
             vin = session(p, rng)[0]
@@ -297,7 +302,7 @@ def main():
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     if args.truth_world:
-        res = truth_world(args.seeds, args.sessions)
+        res = truth_world(args.seeds, args.sessions, args.first_seed)
         if args.json:
             print(json.dumps(res, indent=2))
             return
