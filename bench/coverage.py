@@ -122,6 +122,12 @@ def summarise(records):
         width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
         free = [r for r in rs if "hit_free" in r]
         pooled_free = {nm: float(np.mean([r["hit_free"][nm] for r in free])) for nm in names} if free else None
+        # the smallest interval that holds the reported (straight-line) estimate and the free-kB(0) profile
+        # interval: what a rule that keeps the paper's estimate could at best report
+        free_est = [r for r in free if "interval_free" in r]
+        pooled_free_est = {nm: float(np.mean([min(r["interval_free"][nm][0], r["estimate"][nm]) <= r["truth"][nm]
+                                              <= max(r["interval_free"][nm][1], r["estimate"][nm]) for r in free_est]))
+                           for nm in names} if free_est else None
         clean = []
         for s in seeds:
             t2 = [r for r in rs if r["seed"] == s and r["ball"] in BALLS]
@@ -134,6 +140,7 @@ def summarise(records):
             "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
             "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
             "pooled_coverage_kb0_free_alone": pooled_free,
+            "pooled_coverage_kb0_free_and_estimate": pooled_free_est,
             "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
             "good_impacts_removed_per_fit": float(np.mean([r["false_removed"] for r in rs])) if rs else float("nan"),
             "planted_outlier_named": float(np.mean(named)) if named else None,
@@ -353,6 +360,9 @@ def _print(summary):
         print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
         if s.get("pooled_coverage_kb0_free_alone"):
             print("  kB(0) free alone " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage_kb0_free_alone"].items()))
+        if s.get("pooled_coverage_kb0_free_and_estimate"):
+            print("  free + estimate  " + "  ".join(f"{nm} {v:.3f}" for nm, v in
+                                                   s["pooled_coverage_kb0_free_and_estimate"].items()))
         print(f"  sessions (4 Table 2 balls) without a good impact removed: {s['sessions_without_false_removal']:.3f}")
         if s["planted_outlier_named"] is not None:
             print(f"  planted outlier named: {s['planted_outlier_named']:.3f} "
