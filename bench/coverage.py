@@ -110,7 +110,9 @@ def run(seeds: int, modes, vmin: float = 14.0, n_impacts: int = 10, first_seed: 
 
 
 def summarise(records):
-    """Coverage per (mode, ball type, quantity), pooled, median widths, outlier figures."""
+    """Coverage per (mode, ball type, quantity), pooled, median widths, outlier figures.
+    A fit recorded twice (the same seed, ball type and mode in two runs) counts once."""
+    records = list({(r["seed"], r["ball"], r["kb0"], r["outlier"]): r for r in records}.values())
     out = {}
     for kb0_mode, outlier in sorted({(r["kb0"], r["outlier"]) for r in records}):
         rs = [r for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "hit" in r]
