@@ -549,6 +549,8 @@ def test_archive_figures_and_report_from_pipeline(synth_raw, tmp_path):
     complete = tmp_path / "complete.nc"
     archive.write_dataset(make_archive(), complete)
     figures = tmp_path / "figures"
+    (figures / ".figures.tmp").mkdir(parents=True)  # left by a run killed while drawing
+    (figures / ".figures.tmp" / "fig_4.png").write_bytes(b"half a PNG")
     pipeline.make_figures(complete, figures)
     assert sorted(p.name for p in figures.glob("*.png")) == sorted(f"{stem}.png" for stem in FINAL_FIGURES)
     assert (figures / "qc").is_dir() and list((figures / "qc").glob("*.png"))
@@ -702,6 +704,8 @@ def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
     pipeline.process_chunk(session, 0, 1, tmp_path / "chunk_0.nc")
     pipeline.collect_impacts(session, [tmp_path / "chunk_0.nc"], tmp_path / "impacts.csv", tmp_path / "impacts.nc")
     balls = sorted({r["ball"] for r in raw_rows(session)})
+    (tmp_path / ".fits.nc.fits.tmp").mkdir()  # left by a run killed while fitting
+    (tmp_path / ".fits.nc.fits.tmp" / "fit_x.nc").write_bytes(b"half a file")
     pipeline.fit_balls(tmp_path / "impacts.nc", balls, session, tmp_path / "fits.nc", n_bootstrap=10, seed=3)
     joined = archive.open_dataset(tmp_path / "fits.nc")
     assert [str(b) for b in joined["ball"].values] == balls
@@ -709,7 +713,7 @@ def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
         pipeline.fit_ball(tmp_path / "impacts.nc", ball, session, tmp_path / f"fit_{ball}.nc", n_bootstrap=10, seed=3)
         single = archive.open_dataset(tmp_path / f"fit_{ball}.nc")
         xr.testing.assert_identical(joined.sel(ball=[ball]), single)
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # staging folder removed
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # staging folders removed, the stale one too
     with pytest.raises(ValueError, match="balls must name at least one ball type"):
         pipeline.fit_balls(tmp_path / "impacts.nc", [], session, tmp_path / "none.nc", n_bootstrap=0, seed=0)
 

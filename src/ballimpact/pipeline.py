@@ -9,7 +9,6 @@ import logging
 import math
 import os
 import shutil
-import tempfile
 import warnings
 from collections import Counter
 from pathlib import Path
@@ -618,7 +617,10 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
         raise ValueError("balls must name at least one ball type, got none")
     out_nc = Path(out_nc)
     out_nc.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_nc.name}.", suffix=".tmp", dir=out_nc.parent))
+    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
+    staging = out_nc.parent / f".{out_nc.name}.fits.tmp"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
     try:
         parts = []
         for ball in balls:
@@ -707,7 +709,10 @@ def make_figures(archive_nc, out_dir, *, ds=None, images: dict | None = None) ->
         ds = archive.open_dataset(archive_nc)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".figures.", suffix=".tmp", dir=out_dir))
+    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
+    staging = out_dir / ".figures.tmp"
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
     try:
         figures.save_all(ds, staging, images=images)
         for stem in FIGURE_STEMS:
