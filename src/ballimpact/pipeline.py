@@ -353,6 +353,21 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
 
 
+@contextlib.contextmanager
+def _staging(folder: Path):
+    """A job's hidden staging folder, removed when the job starts and when it ends.
+
+    One fixed name per job: a run killed inside it leaves the folder behind, and
+    the next run of the same job removes it first.
+    """
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir()
+    try:
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float | None = None) -> None:
     """
     Validate, process and collect a small session in one process.
@@ -386,16 +401,10 @@ def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float |
     snapshot_session(session_dir, out_json)
     out_nc = Path(out_nc)
     out_nc.parent.mkdir(parents=True, exist_ok=True)
-    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
-    staging = out_nc.parent / f".{out_nc.name}.chunk.tmp"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with _staging(out_nc.parent / f".{out_nc.name}.chunk.tmp") as staging:
         chunk_nc = staging / "chunk_0.nc"
         process_chunk(session_dir, 0, 1, chunk_nc, mains_hz=mains_hz)
         collect_impacts(session_dir, [chunk_nc], out_csv, out_nc)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
 
 
 def _fit_mask(ds, ball: str):
@@ -617,11 +626,7 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
         raise ValueError("balls must name at least one ball type, got none")
     out_nc = Path(out_nc)
     out_nc.parent.mkdir(parents=True, exist_ok=True)
-    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
-    staging = out_nc.parent / f".{out_nc.name}.fits.tmp"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with _staging(out_nc.parent / f".{out_nc.name}.fits.tmp") as staging:
         parts = []
         for ball in balls:
             part = staging / f"fit_{ball}.nc"
@@ -630,8 +635,6 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
         joined = xr.concat(parts, dim="ball", data_vars="minimal", coords="minimal", compat="override",
                            join="exact", combine_attrs="drop_conflicts")
         archive.write_dataset(joined, out_nc)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     logger.info("fits of %d ball types (%s) written to %s", len(balls), ", ".join(balls), out_nc)
 
 
@@ -709,11 +712,7 @@ def make_figures(archive_nc, out_dir, *, ds=None, images: dict | None = None) ->
         ds = archive.open_dataset(archive_nc)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    # one fixed name: a run killed here leaves it behind, and the next run of this job removes it
-    staging = out_dir / ".figures.tmp"
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir()
-    try:
+    with _staging(out_dir / ".figures.tmp") as staging:
         figures.save_all(ds, staging, images=images)
         for stem in FIGURE_STEMS:
             os.replace(staging / f"{stem}.png", out_dir / f"{stem}.png")
@@ -721,8 +720,6 @@ def make_figures(archive_nc, out_dir, *, ds=None, images: dict | None = None) ->
         if qc.exists():
             shutil.rmtree(qc)
         os.replace(staging / QC_DIR_NAME, qc)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     logger.info("figures: %d PNG files and %d QC pages in %s", len(FIGURE_STEMS),
                 len(list((out_dir / QC_DIR_NAME).glob("*.png"))), out_dir)
 
