@@ -135,6 +135,12 @@ ZOO_REGRESSION = [
     # ok but wrong with the plate's resonance undone before the record-end guard (the parent of a3f531a)
     ("plate-undone-contact-to-the-record-end", 1, 1184, "24.9 kHz plate, 5 ms post-trigger: the undone contact "
      "ran to the record's end, TC +48 %", False),
+    # ok but wrong on main at commit 58169d8: one line through the low plateau and the drop after it
+    ("punctured-plateau-then-drop", 1, 707, "punctured ball at 0.58 V peak, a 1 % plateau ending in a steep drop: "
+     "TC +1.3 %", False),
+    # ok but wrong on the way to it (never on main), when the spread check split bent feet too: a 953 Hz plate's
+    # lag is a bent tail, and only the one-line refit at twice the threshold sees that the end is not determined
+    ("plate-953Hz-lag-bent-tail", 1, 318, "953 Hz plate, damping 0.28, at 189 kHz: a bent tail, TC +10 %", False),
 ]
 
 
@@ -161,7 +167,6 @@ def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
 ZOO_STILL_WRONG = [
     ("plate-26kHz-above-nyquist", 0, 1974, "26 kHz plate sampled at 33.5 kHz, no anti-aliasing: TC -1.5 %"),
     ("plate-15.5kHz-above-nyquist", 1, 1220, "15.5 kHz plate sampled at 20 kHz, no anti-aliasing: peak +11.7 %"),
-    ("punctured-end-in-the-noise", 1, 707, "punctured ball at 0.58 V peak, convex tail: TC +1.3 %"),
 ]
 
 

@@ -65,6 +65,7 @@ FOOT_MAX_S = 0.2e-3  # longest stretch of rising samples in the hinge fit [s]
 FOOT_PRE_S = 0.15e-3  # stretch before the first sample above the noise in the hinge fit [s]
 FOOT_PRE_SAMPLES = 4  # ... but at least this many samples [samples]
 FOOT_MAX_WIDENINGS = 8  # a slow foot's pre window may grow to this many more FOOT_PRE_S [-]
+KINK_SIGMA = 4.0  # a bend of the rise lowering the residual sum of squares by this many noise deviations squared [-]
 FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample predicted worse than this (standard errors) ends the foot [-]
 SPREAD_FACTOR = 2.0  # the ends are fitted again from samples above this many times the noise thresholds [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
@@ -362,7 +363,7 @@ def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
     return min(max(zero, j_lo - max(n_band, 2), 0.0), float(j_lo + 1)), fallback
 
 
-def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
+def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split: bool = True):
     """Where the force leaves zero before the peak [samples] and whether it jumps there; (None, False) when never zero.
 
     A jump: the force is at zero on one sample and on the next already higher
@@ -387,7 +388,7 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
     if not quiet.size:
         return None, False
     i0 = int(quiet[-1]) + 1
-    ts = _hinge_start(xs, peak_index, sigma, fs, i0)
+    ts = _hinge_start(xs, peak_index, sigma, fs, i0, split)
     if i0 + 1 <= peak_index and abs(ts - (i0 - 1)) < 0.5:
         step, rise = xs[i0] - xs[i0 - 1], xs[i0 + 1] - xs[i0]
         if step - rise > JUMP_SIGMA * math.sqrt(5.0) * sigma:
@@ -395,8 +396,9 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float):
     return ts, False
 
 
-def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: int) -> float:
-    """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise."""
+def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: int, split: bool = True) -> float:
+    """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise;
+    ``split``: the start from the hinge's first straight segment where the rise bends (:func:`_first_segment`)."""
     u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
@@ -435,6 +437,33 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
         if sse_n - sse > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
             break
         wr, ts, b, sse = nxt, ts_n, b_n, sse_n
+    return _first_segment(u, xs, wl, wr, i0, ts, sse, sigma) if split else ts
+
+
+def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigma: float) -> float:
+    """The hinge's start again from its first straight segment when the rise bends [samples].
+
+    The growth of the hinge window stops at the first sample the hinge predicts
+    worse than FOOT_RESIDUAL_SIGMA standard errors, but a rise that bends
+    gradually (a low plateau ending in a steep drop, a foot that steepens) is
+    followed sample by sample and the single line through it meets zero off the
+    corner. The window is split at every rising sample into the hinge before and
+    a free line after; when the best split lowers the residual sum of squares by
+    more than KINK_SIGMA**2 noise variances, the start is that split's hinge.
+    """
+    best, k_best = sse, None
+    for k in range(i0 + FOOT_MIN_SAMPLES - 1, wr - 1):
+        ts_k, b_k = _hinge_fit(u[wl:k + 1], xs[wl:k + 1], float(wl), float(i0))
+        tail_u, tail_y = u[k + 1:wr + 1], xs[k + 1:wr + 1]
+        um, ym = tail_u.mean(), tail_y.mean()
+        suu = float(np.sum((tail_u - um) ** 2))
+        slope = float(np.sum((tail_u - um) * (tail_y - ym)) / suu) if suu > 0 else 0.0
+        sse_k = _hinge_sse(u[wl:k + 1], xs[wl:k + 1], ts_k, b_k) + float(
+            np.sum((tail_y - ym - slope * (tail_u - um)) ** 2))
+        if sse_k < best:
+            best, k_best, ts_best = sse_k, k, ts_k
+    if k_best is not None and sse - best > (KINK_SIGMA * sigma) ** 2:
+        return ts_best
     return ts
 
 
@@ -698,8 +727,10 @@ def _spreads(xs, peak_index, sigma, fs, u_start, u_end) -> tuple[float, float]:
     """How far each end moves when fitted from the samples above SPREAD_FACTOR times the thresholds [s]."""
     n = xs.size
     spreads = [math.nan, math.nan]
-    u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs)
-    e2, _ = _foot_start(xs[::-1], n - 1 - peak_index, SPREAD_FACTOR * sigma, fs)
+    # one line through each foot, never split where it bends: the spread then also measures how far the end
+    # depends on the model of the foot (a bent tail may be the plate's lag, not the ball's force)
+    u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs, split=False)
+    e2, _ = _foot_start(xs[::-1], n - 1 - peak_index, SPREAD_FACTOR * sigma, fs, split=False)
     if u2 is not None:
         spreads[0] = (u2 - u_start) / fs
     if e2 is not None:
