@@ -320,10 +320,12 @@ def compare_sessions(sessions: Sequence[SessionResults], ball: str, *, alpha: fl
     """Did ball type ``ball`` change between sessions? F test of nested least-squares fits.
 
     Separate model: each session's own fit (kB(0), AK, a, AC of Eqs. (4) and (7) of
-    Goodwill & Haake 2004, as archived). Shared model: one fit of AK, a, AC to the
-    good impacts of every session together (:func:`ballimpact.fitting.fit_ball_model`,
-    no bootstrap; kB(0) fixed when every session fixed the same value, else
-    extrapolated from all the impacts). Residuals are the relative TC and COR
+    Goodwill & Haake 2004, as archived). Shared model: one least-squares fit of AK, a,
+    AC to the impacts every session's own fit used (``used_in_fit``), all together
+    (:func:`ballimpact.fitting.fit_ball_model` with no fit-outlier search, no
+    intervals and no bootstrap: the test needs its point estimates and residuals only;
+    kB(0) fixed when every session fixed the same value, else extrapolated from all
+    the impacts). Residuals are the relative TC and COR
     residuals of every impact, each kind divided by its RMS under the separate
     model (so that TC and COR count alike). With n impacts and S sessions
     (2 n residuals, 3 parameters per set),
@@ -395,7 +397,9 @@ def compare_sessions(sessions: Sequence[SessionResults], ball: str, *, alpha: fl
     pooled = {k: np.concatenate([a[k] for a in arrays]) for k in arrays[0]}
     kb0 = _shared_kb0(used, ball)
     try:
-        shared = fit_ball_model(**pooled, kb0_N_m=kb0, n_bootstrap=0)
+        # point estimates on the impacts the sessions' own fits used: the test needs the
+        # shared fit's residuals only (no outlier search, no intervals, no bootstrap)
+        shared = fit_ball_model(**pooled, kb0_N_m=kb0, n_bootstrap=0, detect_outliers=False, intervals=False)
     except FitError as exc:
         return untestable(f"shared fit failed: {exc}", rss=(nan, rss_sep))
     sh_tc, sh_cor = _relative_residuals(pooled, (shared.kb0_N_m, shared.ak, shared.a, shared.ac))
