@@ -388,13 +388,14 @@ def compare_sessions(sessions: Sequence[SessionResults], ball: str, *, alpha: fl
         return untestable(f"in {n_sessions} session(s) with a fit: nothing to compare")
     if df_den <= 0:
         return untestable(f"{n} impacts over {n_sessions} sessions are too few for {3 * n_sessions} parameters")
-    sep = [_relative_residuals(a, p) for a, p in zip(arrays, params)]
-    r_tc = np.concatenate([r[0] for r in sep])
-    r_cor = np.concatenate([r[1] for r in sep])
+    pooled = {k: np.concatenate([a[k] for a in arrays]) for k in arrays[0]}
+    # every session's impacts under its own parameter set, in one call of the model
+    sizes = [a["vin_m_s"].size for a in arrays]
+    own = tuple(np.repeat([p[k] for p in params], sizes) for k in range(4))
+    r_tc, r_cor = _relative_residuals(pooled, own)
     sigma_tc = max(float(np.sqrt(np.nanmean(r_tc**2))), 1e-6)
     sigma_cor = max(float(np.sqrt(np.nanmean(r_cor**2))), 1e-6)
     rss_sep = float(np.nansum((r_tc / sigma_tc) ** 2) + np.nansum((r_cor / sigma_cor) ** 2))
-    pooled = {k: np.concatenate([a[k] for a in arrays]) for k in arrays[0]}
     kb0 = _shared_kb0(used, ball)
     try:
         # point estimates on the impacts the sessions' own fits used: the test needs the
@@ -606,6 +607,8 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
 def _table_variables(table: pd.DataFrame, si: Mapping[str, int], bi: Mapping[str, int]) -> dict:
     """Every column of catalogue.csv (but the ids) on (session, ball): text or float, units of the table."""
     ns, nb = len(si), len(bi)
+    rows = np.array([si[s] for s in table["session_id"]], dtype=int)
+    cols = np.array([bi[b] for b in table["ball"]], dtype=int)
     data = {}
     for col in table.columns:
         if col in ("session_id", "ball", "session_date", "pooled_sessions"):
@@ -615,14 +618,10 @@ def _table_variables(table: pd.DataFrame, si: Mapping[str, int], bi: Mapping[str
         is_text = is_text or col in ("kb0_source", "fit_warnings")
         if is_text:
             arr = np.full((ns, nb), "", dtype=object)
+            arr[rows, cols] = ["" if pd.isna(v) else str(v) for v in table[col]]
         else:
             arr = np.full((ns, nb), np.nan)
-        for _, row in table.iterrows():
-            value = row[col]
-            if is_text:
-                arr[si[row["session_id"]], bi[row["ball"]]] = "" if pd.isna(value) else str(value)
-            else:
-                arr[si[row["session_id"]], bi[row["ball"]]] = float(value) if pd.notna(value) else np.nan
+            arr[rows, cols] = numeric.to_numpy(dtype=float, na_value=np.nan)
         data[col] = (("session", "ball"), arr)
     return data
 
