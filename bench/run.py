@@ -32,7 +32,12 @@ Keys:
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
   catalogue_cpu_seconds_<k>  (--catalogue) CPU time of the catalogue's work (write_catalogue) over k copies of
-                            one 40-impact session, in a fresh process; catalogue_peak_memory_mb_<k>: its peak RSS
+                            one 40-impact session, in a fresh process; catalogue_peak_memory_mb_<k>: its peak RSS;
+                            catalogue_<cpu_seconds|peak_memory_mb>_per_session: slope of the line through them,
+                            _fit_max_residual_<s|mb>: its largest misfit, _100_extrapolated: the line at 100
+  sessions_cpu_seconds_per_session  slope of the CPU line (sessions_<k>x40_cpu_seconds against k): CPU per added
+                            session, all in; sessions_cpu_fit_max_residual_s: its largest misfit
+  --sessions-only --counts K1 K2 ...  the many-sessions figures from runs of K1, K2, ... sessions
   load_average_1min_at_start/_end  the machine's load around the runs (other work inflates wall times);
                             sessions_wall_reliable is false when it exceeded 2.5 or the line does not rise:
                             then only the CPU figures mean something
@@ -337,7 +342,9 @@ def bench_sessions(counts) -> dict:
     out["sessions_measured_counts"] = ks
     # CPU time (user + sys of every process of the run) hardly depends on what else the
     # machine runs; on an otherwise idle machine with 2 cores the wall time is at least half of it
-    cpu100 = extrapolate_linear(ks, [measured[k][2] for k in ks], TARGET_SESSIONS)[0]
+    cpu100, cpu_slope, _, cpu_resid = extrapolate_linear(ks, [measured[k][2] for k in ks], TARGET_SESSIONS)
+    out["sessions_cpu_seconds_per_session"] = cpu_slope
+    out["sessions_cpu_fit_max_residual_s"] = cpu_resid
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu100
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_idle_2core_seconds"] = cpu100 / 2
     out["load_average_1min_at_start"] = load_before
@@ -409,7 +416,7 @@ def bench_session_stages(n_bootstrap: int = 200) -> dict:
     return out
 
 
-CATALOGUE_COUNTS = (4, 8, 16)  # sessions in the catalogue for --catalogue (its cost grows faster than linearly)
+CATALOGUE_COUNTS = (4, 8, 16, 32)  # sessions in the catalogue for --catalogue
 
 
 def _session_results(tmp: Path, n_bootstrap: int = 200) -> Path:
@@ -477,6 +484,13 @@ def bench_catalogue(counts=CATALOGUE_COUNTS) -> dict:
             cpu, mem = json.loads(proc.stdout.strip().splitlines()[-1])
             out[f"catalogue_cpu_seconds_{k}"] = cpu
             out[f"catalogue_peak_memory_mb_{k}"] = mem
+    ks = list(counts)
+    if len(set(ks)) >= 2:  # is it linear? the line through every k, its slope and largest misfit
+        for what, unit in (("cpu_seconds", "s"), ("peak_memory_mb", "mb")):
+            at100, slope, _, resid = extrapolate_linear(ks, [out[f"catalogue_{what}_{k}"] for k in ks], TARGET_SESSIONS)
+            out[f"catalogue_{what}_per_session"] = slope
+            out[f"catalogue_{what}_fit_max_residual_{unit}"] = resid
+            out[f"catalogue_{what}_{TARGET_SESSIONS}_extrapolated"] = at100
     return out
 
 
@@ -492,7 +506,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sessions-only", action="store_true",
                     help="only the many-sessions figures (sessions_*: 100 sessions x 40 impacts, extrapolated)")
     ap.add_argument("--catalogue", action="store_true",
-                    help="only the catalogue job's CPU time and memory at 4, 8 and 16 sessions (catalogue_*)")
+                    help="only the catalogue job's CPU time and memory at 4, 8, 16 and 32 sessions (catalogue_*)")
+    ap.add_argument("--counts", type=int, nargs="+", metavar="K",
+                    help="with --sessions-only: the numbers of 40-impact sessions to run (default 2 4 8, --quick 1 3)")
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
@@ -504,8 +520,11 @@ def main(argv=None) -> int:
         figures.update(bench_catalogue())
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
         return 0
+    if args.counts and (not args.sessions_only or len(set(args.counts)) < 2 or min(args.counts) < 1):
+        ap.error("--counts needs --sessions-only and at least two different numbers of sessions >= 1")
     if args.sessions_only:
-        figures.update(bench_sessions(QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
+        figures.update(bench_sessions(tuple(args.counts) if args.counts else
+                                      QUICK_SESSION_COUNTS if args.quick else SESSION_COUNTS))
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
         return 0
     if not args.fit_only:

@@ -447,3 +447,24 @@ def test_coverage_of_replicate_intervals_judged_from_both_sides(replicate_fits):
         misses, inside_half = int(np.sum(u > 1.0)), int(np.sum(u <= 0.5))
         assert misses <= 3, (name, misses, np.round(u, 2))
         assert 6 <= inside_half <= 14, (name, inside_half, np.round(u, 2))
+
+
+def test_fit_without_intervals_gives_the_same_estimates():
+    """intervals=False (the catalogue's change test) skips the profile intervals only: the
+    point estimates are those of the full fit, near the truth, and every interval is NaN
+    (kB(0) extrapolated: the free-kB(0) fit, made only for the intervals, is skipped too)."""
+    p = BALLS["punctured"].params
+    vin, tc, e = _impacts(p, n=12, seed=5, tc_noise=0.004, cor_noise=0.003)
+    kb0 = None
+    full = fit_ball_model(vin, tc, e, p.mass_kg, kb0_N_m=kb0, n_bootstrap=0, detect_outliers=False)
+    bare = fit_ball_model(vin, tc, e, p.mass_kg, kb0_N_m=kb0, n_bootstrap=0, detect_outliers=False,
+                          intervals=False)
+    for name in ("kb0_N_m", "ak", "a", "ac", "contact_time_scatter", "cor_scatter"):
+        assert_allclose(getattr(bare, name), getattr(full, name), rtol=1e-12, err_msg=name)
+    assert bare.kb0_source == full.kb0_source
+    true = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+    sim = simulate_impact(20.0, p.mass_kg, bare.kb0_N_m, bare.ak, bare.a, bare.ac)
+    assert_allclose([sim.contact_time_s, sim.cor], [true.contact_time_s, true.cor], rtol=0.02)
+    for name in ("kb0", "ak", "a", "ac", "kb_10mm", "kb_20mm"):
+        assert np.isnan(getattr(bare, f"{name}_lo")) and np.isnan(getattr(bare, f"{name}_hi")), name
+    assert bare.free_kb0_intervals == {} and "intervals=False" in bare.interval_method

@@ -320,10 +320,12 @@ def compare_sessions(sessions: Sequence[SessionResults], ball: str, *, alpha: fl
     """Did ball type ``ball`` change between sessions? F test of nested least-squares fits.
 
     Separate model: each session's own fit (kB(0), AK, a, AC of Eqs. (4) and (7) of
-    Goodwill & Haake 2004, as archived). Shared model: one fit of AK, a, AC to the
-    good impacts of every session together (:func:`ballimpact.fitting.fit_ball_model`,
-    no bootstrap; kB(0) fixed when every session fixed the same value, else
-    extrapolated from all the impacts). Residuals are the relative TC and COR
+    Goodwill & Haake 2004, as archived). Shared model: one least-squares fit of AK, a,
+    AC to the impacts every session's own fit used (``used_in_fit``), all together
+    (:func:`ballimpact.fitting.fit_ball_model` with no fit-outlier search, no
+    intervals and no bootstrap: the test needs its point estimates and residuals only;
+    kB(0) fixed when every session fixed the same value, else extrapolated from all
+    the impacts). Residuals are the relative TC and COR
     residuals of every impact, each kind divided by its RMS under the separate
     model (so that TC and COR count alike). With n impacts and S sessions
     (2 n residuals, 3 parameters per set),
@@ -386,16 +388,19 @@ def compare_sessions(sessions: Sequence[SessionResults], ball: str, *, alpha: fl
         return untestable(f"in {n_sessions} session(s) with a fit: nothing to compare")
     if df_den <= 0:
         return untestable(f"{n} impacts over {n_sessions} sessions are too few for {3 * n_sessions} parameters")
-    sep = [_relative_residuals(a, p) for a, p in zip(arrays, params)]
-    r_tc = np.concatenate([r[0] for r in sep])
-    r_cor = np.concatenate([r[1] for r in sep])
+    pooled = {k: np.concatenate([a[k] for a in arrays]) for k in arrays[0]}
+    # every session's impacts under its own parameter set, in one call of the model
+    sizes = [a["vin_m_s"].size for a in arrays]
+    own = tuple(np.repeat([p[k] for p in params], sizes) for k in range(4))
+    r_tc, r_cor = _relative_residuals(pooled, own)
     sigma_tc = max(float(np.sqrt(np.nanmean(r_tc**2))), 1e-6)
     sigma_cor = max(float(np.sqrt(np.nanmean(r_cor**2))), 1e-6)
     rss_sep = float(np.nansum((r_tc / sigma_tc) ** 2) + np.nansum((r_cor / sigma_cor) ** 2))
-    pooled = {k: np.concatenate([a[k] for a in arrays]) for k in arrays[0]}
     kb0 = _shared_kb0(used, ball)
     try:
-        shared = fit_ball_model(**pooled, kb0_N_m=kb0, n_bootstrap=0)
+        # point estimates on the impacts the sessions' own fits used: the test needs the
+        # shared fit's residuals only (no outlier search, no intervals, no bootstrap)
+        shared = fit_ball_model(**pooled, kb0_N_m=kb0, n_bootstrap=0, detect_outliers=False, intervals=False)
     except FitError as exc:
         return untestable(f"shared fit failed: {exc}", rss=(nan, rss_sep))
     sh_tc, sh_cor = _relative_residuals(pooled, (shared.kb0_N_m, shared.ak, shared.a, shared.ac))
@@ -602,6 +607,8 @@ def catalogue_dataset(sessions: Sequence[SessionResults], table: pd.DataFrame, t
 def _table_variables(table: pd.DataFrame, si: Mapping[str, int], bi: Mapping[str, int]) -> dict:
     """Every column of catalogue.csv (but the ids) on (session, ball): text or float, units of the table."""
     ns, nb = len(si), len(bi)
+    rows = np.array([si[s] for s in table["session_id"]], dtype=int)
+    cols = np.array([bi[b] for b in table["ball"]], dtype=int)
     data = {}
     for col in table.columns:
         if col in ("session_id", "ball", "session_date", "pooled_sessions"):
@@ -611,14 +618,10 @@ def _table_variables(table: pd.DataFrame, si: Mapping[str, int], bi: Mapping[str
         is_text = is_text or col in ("kb0_source", "fit_warnings")
         if is_text:
             arr = np.full((ns, nb), "", dtype=object)
+            arr[rows, cols] = ["" if pd.isna(v) else str(v) for v in table[col]]
         else:
             arr = np.full((ns, nb), np.nan)
-        for _, row in table.iterrows():
-            value = row[col]
-            if is_text:
-                arr[si[row["session_id"]], bi[row["ball"]]] = "" if pd.isna(value) else str(value)
-            else:
-                arr[si[row["session_id"]], bi[row["ball"]]] = float(value) if pd.notna(value) else np.nan
+            arr[rows, cols] = numeric.to_numpy(dtype=float, na_value=np.nan)
         data[col] = (("session", "ball"), arr)
     return data
 

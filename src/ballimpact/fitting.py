@@ -1257,6 +1257,7 @@ def fit_ball_model(
     detect_outliers=True,
     outlier_level=OUTLIER_LEVEL,
     max_outlier_share=OUTLIER_MAX_SHARE,
+    intervals=True,
 ) -> BallFit:
     """Fit kB(0), AK, a and AC of one ball type to its impacts, with calibrated intervals.
 
@@ -1309,6 +1310,10 @@ def fit_ball_model(
         Search for fit outliers first.
     outlier_level, max_outlier_share : float
         Level of the outlier test per ball type [-] and largest share removed [-].
+    intervals : bool
+        Compute the profile intervals (step 4). False: point estimates only, every
+        interval end NaN (for a fit whose residuals alone are needed, e.g. the
+        catalogue's change test, :func:`ballimpact.catalogue.compare_sessions`).
 
     Returns
     -------
@@ -1329,14 +1334,18 @@ def fit_ball_model(
         messages.append(f"only {n} impacts: the intervals are rough")
     kv = kv_all[used] if kv_all is not None else kelvin_voigt_parameters(mass, tc, e)[0]
     kb0, kb0_source, kb0_fit, line = _kb0_choice(vin, kv, kb0_N_m, confidence)
-    main, free = _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, start)
+    main, free = _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, start, intervals=intervals)
     theta = main["theta"]
     if kb0_source == "fitted":
         kb0 = float(np.exp(theta[3]))
     ak, a, ac = (float(v) for v in _from_theta(theta[:3]))
     messages += _bound_messages(theta[:3])
-    lo_hi = _interval_ends(main, free, kb0_source, kb0_fit, messages)
-    method = _interval_method(kb0_source)
+    if intervals:
+        lo_hi = _interval_ends(main, free, kb0_source, kb0_fit, messages)
+        method = _interval_method(kb0_source)
+    else:
+        lo_hi = {k: (float("nan"), float("nan")) for k in ("kb0", "ak", "a", "ac", "kb_10mm", "kb_20mm")}
+        method = "none (intervals=False: point estimates only)"
     tc_m, cor_m = _simulate(theta, vin, mass, kb0)
     s_tc, s_cor = main["sigma_tc"], main["sigma_cor"]
     boot, dropped, corr = np.empty((0, 4)), 0, float("nan")
@@ -1360,7 +1369,8 @@ def fit_ball_model(
         kb0_linear_N_m=line[0][0] if line else float("nan"),
         kb0_quadratic_N_m=line[1][0] if line else float("nan"),
         free_kb0_intervals=({k: ((float(lo), float(hi)) if k == "a" else (float(np.exp(lo)), float(np.exp(hi))))
-                             for k, (lo, hi, _) in free["intervals"].items()} if kb0_source == "extrapolated" else {}),
+                             for k, (lo, hi, _) in free["intervals"].items()}
+                            if kb0_source == "extrapolated" and intervals else {}),
     )
 
 
@@ -1411,15 +1421,16 @@ def _kb0_choice(vin, kv, kb0_N_m, confidence):
     return kb0_fit.kb0_N_m, source, kb0_fit, line
 
 
-def _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, robust_start):
+def _joint_fits(vin, tc, e, mass, kb0, kb0_source, confidence, robust_start, intervals=True):
     """The joint fit with kB(0) fixed, and with kB(0) free unless it comes from the config:
-    (the one the parameters come from, the free one or None)."""
+    (the one the parameters come from, the free one or None). Without ``intervals`` the
+    free fit of an extrapolated kB(0) (only there for the intervals' hull) is not made."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        cond = _joint_fit(vin, tc, e, mass, kb0, None, confidence, robust_start=robust_start)
+        cond = _joint_fit(vin, tc, e, mass, kb0, None, confidence, robust_start=robust_start, intervals=intervals)
         free = None
-        if kb0_source != "config":
-            free = _joint_fit(vin, tc, e, mass, kb0, cond, confidence)
+        if kb0_source == "fitted" or (kb0_source != "config" and intervals):
+            free = _joint_fit(vin, tc, e, mass, kb0, cond, confidence, intervals=intervals)
     return (free if kb0_source == "fitted" else cond), free
 
 
@@ -1477,7 +1488,7 @@ def _interval_method(kb0_source):
     return method
 
 
-def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None):
+def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None, intervals=True):
     """Joint fit of AK, a, AC (start None: kB(0) fixed) or of AK, a, AC, kB(0) (start: the
     fixed-kB(0) result, kB(0) then free from its value), weights re-estimated to the
     unbiased scatter of each kind, then the profile intervals. ``robust_start`` (theta,
@@ -1508,6 +1519,9 @@ def _joint_fit(vin, tc, e, mass, kb0, start, confidence, robust_start=None):
         s_tc, s_cor = new_tc, new_cor
         if done:
             break
+    if not intervals:  # point estimates only (fit_ball_model(intervals=False))
+        return {"theta": theta, "sigma_tc": s_tc, "sigma_cor": s_cor, "dof_tc": dof_tc, "dof_cor": dof_cor,
+                "intervals": None, "result": res}
     crit = _calibrated_critical_values(vin, tc, e, mass, kb0, theta, s_tc, s_cor, confidence)
     iv = _profile_intervals(vin, tc, e, mass, kb0, s_tc, s_cor, dof_tc, dof_cor, theta, confidence, critical=crit)
     return {"theta": theta, "sigma_tc": s_tc, "sigma_cor": s_cor, "dof_tc": dof_tc, "dof_cor": dof_cor,

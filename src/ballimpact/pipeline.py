@@ -540,17 +540,26 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
     """
     _check_int("n_bootstrap", n_bootstrap, 0)
     _check_int("seed", seed, 0)
-    from . import archive, fitting
+    from . import archive
     from .session import read_session
 
-    session = read_session(session_dir)
+    fit_ds = _fit_ball_dataset(archive.open_dataset(impacts_nc), ball, read_session(session_dir),
+                               n_bootstrap=n_bootstrap, seed=seed)
+    Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
+    archive.write_dataset(fit_ds, out_nc)
+
+
+def _fit_ball_dataset(impacts, ball: str, session, *, n_bootstrap: int, seed: int):
+    """The dataset :func:`fit_ball` writes (one ball type on dim ``ball``), from the
+    impacts already read (``work/impacts.nc``) and the session (:func:`ballimpact.session.read_session`)."""
+    from . import archive, fitting
+
     if ball not in session.meta.balls:
         raise ValueError(
             f"ball {ball!r} is not defined in {session.path / 'session.yaml'} balls "
             f"(defined: {', '.join(session.meta.balls)})"
         )
     ball_type = session.meta.balls[ball]
-    impacts = archive.open_dataset(impacts_nc)
     arrays = fit_arrays(impacts, ball, ball_type.mass_kg)
     n_used = arrays["vin_m_s"].size
     kb0_source = "config" if ball_type.kb0_N_m is not None else "extrapolated"
@@ -587,9 +596,7 @@ def fit_ball(impacts_nc, ball: str, session_dir, out_nc, *, n_bootstrap: int, se
             **itf_kw,
         )
     fit_ds["n_fit_outliers"] = ("ball", [len(outliers)])
-    fit_ds = archive.set_variable_attrs(fit_ds)
-    Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
-    archive.write_dataset(fit_ds, out_nc)
+    return archive.set_variable_attrs(fit_ds)
 
 
 def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed: int) -> None:
@@ -599,8 +606,9 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
     Rule ``fit_session`` (sessions of at most config ``fit_batch_impacts`` impacts):
     the same fits as one ``fit_ball`` job per ball type, with the same seed, so the
     same numbers; it saves the start-up of a process per ball type. The per-ball
-    datasets are joined on the ``ball`` dimension, in the order given, into one
-    file that rule ``archive`` takes in place of the per-ball files.
+    datasets (what ``fit_ball`` writes) are joined in memory on the ``ball``
+    dimension, in the order given, into one file that rule ``archive`` takes in
+    place of the per-ball files; the impacts are read once.
 
     Parameters
     ----------
@@ -620,21 +628,25 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
     import xarray as xr
 
     from . import archive
+    from .session import read_session
 
+    _check_int("n_bootstrap", n_bootstrap, 0)
+    _check_int("seed", seed, 0)
     balls = [str(b) for b in balls]
     if not balls:
         raise ValueError("balls must name at least one ball type, got none")
     out_nc = Path(out_nc)
     out_nc.parent.mkdir(parents=True, exist_ok=True)
-    with _staging(out_nc.parent / f".{out_nc.name}.fits.tmp") as staging:
-        parts = []
-        for ball in balls:
-            part = staging / f"fit_{ball}.nc"
-            fit_ball(impacts_nc, ball, session_dir, part, n_bootstrap=n_bootstrap, seed=seed)
-            parts.append(archive.open_dataset(part))
-        joined = xr.concat(parts, dim="ball", data_vars="minimal", coords="minimal", compat="override",
-                           join="exact", combine_attrs="drop_conflicts")
-        archive.write_dataset(joined, out_nc)
+    # the staging folder of earlier versions (one file per ball type), left by a killed run
+    shutil.rmtree(out_nc.parent / f".{out_nc.name}.fits.tmp", ignore_errors=True)
+    # the impacts and session.yaml are read once, and each ball type's dataset (the one
+    # fit_ball writes) is joined in memory: no file per ball type
+    impacts = archive.open_dataset(impacts_nc)
+    session = read_session(session_dir)
+    parts = [_fit_ball_dataset(impacts, ball, session, n_bootstrap=n_bootstrap, seed=seed) for ball in balls]
+    joined = xr.concat(parts, dim="ball", data_vars="minimal", coords="minimal", compat="override",
+                       join="exact", combine_attrs="drop_conflicts")
+    archive.write_dataset(joined, out_nc)
     logger.info("fits of %d ball types (%s) written to %s", len(balls), ", ".join(balls), out_nc)
 
 
