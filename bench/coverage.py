@@ -352,7 +352,7 @@ def lr_check(designs=4, sessions=500, first=0):
     use, the profile deviance (likelihood ratio), distributed at the truth like the
     linearised statistic their critical value is calibrated with? For each ball type and
     each of the bench's designs first .. first+designs-1: ``sessions`` sessions simulated at
-    the true parameters (TC 0.4 %, COR 0.003 / mean COR, relative), each fitted with the
+    the true parameters with the bench's noise (TC 0.4 % relative, COR 0.003 absolute), each fitted with the
     full model like the data (``_refit_sessions``), then its profile deviance at the true
     value of every quantity (the other parameters refitted with the full model, batched
     Levenberg-Marquardt); the critical value is ``fit_ball_model``'s at the truth. Pooled
@@ -373,7 +373,7 @@ def lr_check(designs=4, sessions=500, first=0):
             th0 = F._to_theta(p.ak, p.a, p.ac)
             s_cor = 0.003 / float(np.mean(st.cor))
             z = np.random.default_rng(5000 + seed).standard_normal((2, sessions, n))
-            tc_b, cor_b = st.contact_time_s * (1 + 0.004 * z[0]), st.cor * (1 + s_cor * z[1])
+            tc_b, cor_b = st.contact_time_s * (1 + 0.004 * z[0]), st.cor + 0.003 * z[1]
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, th0, 0.004,
@@ -419,10 +419,13 @@ def lr_check(designs=4, sessions=500, first=0):
             for j, spec in enumerate(specs):
                 d = np.maximum(dev[j][ok], 0.0)
                 sign = np.sign(spec.fwd(th_b[ok]) - spec.fwd(th0))
-                a = acc.setdefault(spec.key, {"ratio": [], "root": []})
+                a = acc.setdefault(spec.key, {"ratio": [], "root": [], "ball": []})
                 a["ratio"].extend((d / crit[spec.key]).tolist())
                 a["root"].extend((sign * np.sqrt(d)).tolist())
+                a["ball"].extend([key] * d.size)
     return {q: {"sessions": len(a["ratio"]), "coverage": float(np.mean(np.array(a["ratio"]) <= 1.0)),
+                "per_ball": {b: float(np.mean(np.array(a["ratio"])[np.array(a["ball"]) == b] <= 1.0))
+                             for b in dict.fromkeys(a["ball"])},
                 "q95_deviance_over_critical": float(np.quantile(a["ratio"], 0.95)),
                 "signed_root_mean": float(np.mean(a["root"])), "signed_root_sd": float(np.std(a["root"]))}
             for q, a in acc.items()}
@@ -558,7 +561,8 @@ def main():
         for q, r in res.items() if not args.json else []:
             print(f"{q:8s} {r['sessions']} sessions: coverage {r['coverage']:.3f}, 0.95 quantile of deviance / "
                   f"critical value {r['q95_deviance_over_critical']:.3f}, signed root mean {r['signed_root_mean']:+.3f}"
-                  f" sd {r['signed_root_sd']:.3f}")
+                  f" sd {r['signed_root_sd']:.3f}; per ball type "
+                  + ", ".join(f"{b} {v:.3f}" for b, v in r["per_ball"].items()))
         return
     if args.truth_stat:
         records = truth_stat(args.seeds, args.first_seed, args.jsonl)
