@@ -123,6 +123,9 @@ def summarise(records):
         names = list(rs[0]["hit"]) if rs else []
         cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
         pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
+        # the fits in which the outlier search left out no good impact (what it costs the coverage)
+        kept = [r for r in rs if r.get("false_removed", 0) == 0]
+        pooled_kept = {nm: float(np.mean([r["hit"][nm] for r in kept])) for nm in names} if kept else None
         width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
         free = [r for r in rs if "hit_free" in r]
         pooled_free = {nm: float(np.mean([r["hit_free"][nm] for r in free])) for nm in names} if free else None
@@ -143,6 +146,7 @@ def summarise(records):
             "seeds": len(seeds), "fits": len(rs),
             "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
             "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "fits_without_false_removal": len(kept), "pooled_coverage_without_false_removal": pooled_kept,
             "pooled_coverage_kb0_free_alone": pooled_free,
             "pooled_coverage_kb0_free_and_estimate": pooled_free_est,
             "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
@@ -515,6 +519,9 @@ def _print(summary):
             print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
         print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
         print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        if s.get("pooled_coverage_without_false_removal") and s["fits_without_false_removal"] < s["fits"]:
+            print(f"  the {s['fits_without_false_removal']} fits without a good impact removed "
+                  + "  ".join(f"{nm} {v:.4f}" for nm, v in s["pooled_coverage_without_false_removal"].items()))
         if s.get("pooled_coverage_kb0_free_alone"):
             print("  kB(0) free alone " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage_kb0_free_alone"].items()))
         if s.get("pooled_coverage_kb0_free_and_estimate"):
