@@ -18,6 +18,8 @@ removal at all).
     python bench/coverage.py --calibration-check [--refits 1000]  # the critical values themselves
     python bench/coverage.py --truth-world --seeds 12 [--sessions 400] [--first-seed 0]  # many sessions
     python bench/coverage.py --diagnose --seeds 20 [--first-seed 0]  # where kB(0)-fixed misses come from
+    python bench/coverage.py --truth-stat --seeds 100 [--first-seed 0] --jsonl bench/out/ts.jsonl  # same sessions
+    python bench/coverage.py --lr-check --seeds 12 [--sessions 400]  # likelihood ratio at the truth
 
 With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
 run can be stopped and summarised at any time.
@@ -121,6 +123,9 @@ def summarise(records):
         names = list(rs[0]["hit"]) if rs else []
         cov = {b: {nm: float(np.mean([r["hit"][nm] for r in rs if r["ball"] == b])) for nm in names} for b in balls}
         pooled = {nm: float(np.mean([r["hit"][nm] for r in rs])) for nm in names}
+        # the fits in which the outlier search left out no good impact (what it costs the coverage)
+        kept = [r for r in rs if r.get("false_removed", 0) == 0]
+        pooled_kept = {nm: float(np.mean([r["hit"][nm] for r in kept])) for nm in names} if kept else None
         width = {nm: float(np.median([r["width"][nm] for r in rs])) for nm in names}
         free = [r for r in rs if "hit_free" in r]
         pooled_free = {nm: float(np.mean([r["hit_free"][nm] for r in free])) for nm in names} if free else None
@@ -141,6 +146,7 @@ def summarise(records):
             "seeds": len(seeds), "fits": len(rs),
             "failures": sum(1 for r in records if r["kb0"] == kb0_mode and r["outlier"] == outlier and "fail" in r),
             "coverage": cov, "pooled_coverage": pooled, "median_relative_width": width,
+            "fits_without_false_removal": len(kept), "pooled_coverage_without_false_removal": pooled_kept,
             "pooled_coverage_kb0_free_alone": pooled_free,
             "pooled_coverage_kb0_free_and_estimate": pooled_free_est,
             "sessions_without_false_removal": float(np.mean(clean)) if clean else float("nan"),
@@ -276,6 +282,159 @@ def truth_world(designs=12, sessions=400, first=0):
             for key, k in hits.items()}
 
 
+def truth_stat(seeds=100, first=0, jsonl=None):
+    """The ``--truth-world`` statistic on the bench's own sessions (``--kb0 config --outlier
+    no``, the same seeds draw the same impacts): per fit, the sessions refitted like the data
+    (``_refit_sessions``), the Wald statistic at the truth against the critical value at the
+    truth. No profile grid, no plug-in, no outlier search; about 0.5 s per fit. Paired with
+    the bench's records of the same seeds by ``--summarise`` (both record kinds in one call),
+    it shows whether a shortfall of the bench comes from the intervals or from its sessions.
+    Records: {seed, ball, kb0: "truth-stat", hit_truth_stat: {quantity: bool}}."""
+    from ballimpact import fitting as F
+
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    records = []
+    for seed in range(first, first + seeds):
+        rng = np.random.default_rng(1000 + seed)
+        for key, p in sets.items():
+            vin, tc, e, _ = session(p, rng)
+            mass = np.full(vin.size, p.mass_kg)
+            st = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+            th0 = F._to_theta(p.ak, p.a, p.ac)
+            s_cor = 0.003 / float(np.mean(st.cor))
+            rec = {"seed": seed, "ball": key, "kb0": "truth-stat", "outlier": False}
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, th0, 0.004,
+                                                     s_cor, 0.95)
+                jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, st.contact_time_s, st.cor, mass,
+                                                               p.kb0_N_m, 1.0, 1.0), th0)
+                th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, th0, tc[None], e[None], 0.004, s_cor,
+                                                      jac_raw)
+            if not conv[0]:
+                rec["fail"] = "refit did not converge"
+            else:
+                rec["hit_truth_stat"] = {}
+                for spec in F._quantities(3, p.kb0_N_m):
+                    g = F._quantity_gradient(spec, th0)
+                    stat = float((spec.fwd(th_b[0]) - spec.fwd(th0)) ** 2 / (g @ cov_b[0] @ g))
+                    rec["hit_truth_stat"][spec.key] = bool(stat <= crit[spec.key])
+            records.append(rec)
+            if jsonl:
+                with open(jsonl, "a") as fh:
+                    fh.write(json.dumps(rec) + "\n")
+    return records
+
+
+def summarise_truth_stat(records):
+    """Coverage of ``--truth-stat`` records, pooled and per ball type, and paired with the
+    bench's kB(0)-fixed, no-outlier records of the same (seed, ball type) when given:
+    {"fits", "seeds", "pooled", "per_ball", "paired": {quantity: {fits, interval, statistic,
+    only_interval, only_statistic}}}."""
+    ts = {(r["seed"], r["ball"]): r for r in records if r.get("kb0") == "truth-stat" and "hit_truth_stat" in r}
+    bench = {(r["seed"], r["ball"]): r for r in records
+             if r.get("kb0") == "config" and not r.get("outlier") and "hit" in r}
+    rs = list(ts.values())
+    names = list(rs[0]["hit_truth_stat"]) if rs else []
+    out = {"fits": len(rs), "seeds": len({r["seed"] for r in rs}),
+           "pooled": {q: float(np.mean([r["hit_truth_stat"][q] for r in rs])) for q in names},
+           "per_ball": {b: {q: float(np.mean([r["hit_truth_stat"][q] for r in rs if r["ball"] == b])) for q in names}
+                        for b in dict.fromkeys(r["ball"] for r in rs)}, "paired": {}}
+    both = [k for k in ts if k in bench]
+    for q in names:
+        if not both or q not in bench[both[0]]["hit"]:
+            continue
+        a = np.array([ts[k]["hit_truth_stat"][q] for k in both])
+        b = np.array([bench[k]["hit"][q] for k in both])
+        out["paired"][q] = {"fits": len(both), "interval": float(b.mean()), "statistic": float(a.mean()),
+                            "only_interval": int(np.sum(b & ~a)), "only_statistic": int(np.sum(a & ~b))}
+    return out
+
+
+def lr_check(designs=4, sessions=500, first=0):
+    """Hypotheses (a) and (b) for the kB(0)-fixed intervals: is the statistic the intervals
+    use, the profile deviance (likelihood ratio), distributed at the truth like the
+    linearised statistic their critical value is calibrated with? For each ball type and
+    each of the bench's designs first .. first+designs-1: ``sessions`` sessions simulated at
+    the true parameters with the bench's noise (TC 0.4 % relative, COR 0.003 absolute), each fitted with the
+    full model like the data (``_refit_sessions``), then its profile deviance at the true
+    value of every quantity (the other parameters refitted with the full model, batched
+    Levenberg-Marquardt); the critical value is ``fit_ball_model``'s at the truth. Pooled
+    per quantity: coverage (deviance <= critical value), the 0.95 quantile of deviance /
+    critical value (<= 1 is calibrated), and the mean and standard deviation of the signed
+    root sign(q_b - q) sqrt(deviance) (0 and 1 without bias)."""
+    from ballimpact import fitting as F
+
+    sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
+    acc = {}
+    for seed in range(first, first + designs):
+        rng = np.random.default_rng(1000 + seed)
+        for key, p in sets.items():
+            vin = session(p, rng)[0]
+            n = vin.size
+            mass = np.full(n, p.mass_kg)
+            st = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+            th0 = F._to_theta(p.ak, p.a, p.ac)
+            s_cor = 0.003 / float(np.mean(st.cor))
+            z = np.random.default_rng(5000 + seed).standard_normal((2, sessions, n))
+            tc_b, cor_b = st.contact_time_s * (1 + 0.004 * z[0]), st.cor + 0.003 * z[1]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, th0, 0.004,
+                                                     s_cor, 0.95)
+                jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, st.contact_time_s, st.cor, mass,
+                                                               p.kb0_N_m, 1.0, 1.0), th0)
+                th_b, conv, _ = F._refit_sessions(vin, mass, p.kb0_N_m, th0, tc_b, cor_b, 0.004, s_cor, jac_raw)
+                # each session's scatter at its estimate, as the data's profile uses it
+                tcm, corm = F._simulate(th_b, vin, mass, p.kb0_N_m)
+                w = np.concatenate([np.full(n, 0.004**-2), np.full(n, s_cor**-2)])
+                cov = np.linalg.pinv(jac_raw.T @ (jac_raw * w[:, None]))
+                h = np.einsum("ip,pq,iq,i->i", jac_raw, cov, jac_raw, w)
+                s_tc = np.sqrt(np.sum(((tcm - tc_b) / tc_b) ** 2, 1) / (n - h[:n].sum()))[:, None]
+                s_co = np.sqrt(np.sum(((corm - cor_b) / cor_b) ** 2, 1) / (n - h[n:].sum()))[:, None]
+                specs = F._quantities(3, p.kb0_N_m)
+                q_of_row = np.repeat(np.arange(len(specs)), sessions)
+                sess = np.tile(np.arange(sessions), len(specs))
+                keeps = [[i for i in range(3) if i != s.drop] for s in specs]
+                lo_b, hi_b = F._full_bounds(3)
+
+                def to_theta(pts, rows):
+                    out = np.empty(pts.shape[:-1] + (3,))
+                    for j, spec in enumerate(specs):
+                        sel = np.flatnonzero(q_of_row[rows] == j)
+                        th = np.zeros(pts.shape[:-2] + (sel.size, 3))
+                        th[..., keeps[j]] = pts[..., sel, :]
+                        th[..., spec.drop] = spec.inv(float(spec.fwd(th0)), th)
+                        out[..., sel, :] = th
+                    return out
+
+                def resid(pts, rows):
+                    r = sess[rows]
+                    return F._residuals(to_theta(pts, rows), vin, tc_b[r], cor_b[r], mass, p.kb0_N_m, s_tc[r], s_co[r])
+
+                p0 = np.concatenate([th_b[:, k] for k in keeps])
+                lo = np.concatenate([np.broadcast_to(lo_b[k], (sessions, 2)) for k in keeps])
+                hi = np.concatenate([np.broadcast_to(hi_b[k], (sessions, 2)) for k in keeps])
+                pc, okc = F._batched_lm(resid, p0, lo, hi, max_iter=50)
+                s_min = np.sum(F._residuals(th_b, vin, tc_b, cor_b, mass, p.kb0_N_m, s_tc, s_co) ** 2, axis=1)
+                dev = np.sum(resid(pc[None], np.arange(pc.shape[0]))[0] ** 2, axis=1).reshape(len(specs), sessions)
+                dev = dev - s_min
+                ok = conv & okc.reshape(len(specs), sessions).all(axis=0)
+            for j, spec in enumerate(specs):
+                d = np.maximum(dev[j][ok], 0.0)
+                sign = np.sign(spec.fwd(th_b[ok]) - spec.fwd(th0))
+                a = acc.setdefault(spec.key, {"ratio": [], "root": [], "ball": []})
+                a["ratio"].extend((d / crit[spec.key]).tolist())
+                a["root"].extend((sign * np.sqrt(d)).tolist())
+                a["ball"].extend([key] * d.size)
+    return {q: {"sessions": len(a["ratio"]), "coverage": float(np.mean(np.array(a["ratio"]) <= 1.0)),
+                "per_ball": {b: float(np.mean(np.array(a["ratio"])[np.array(a["ball"]) == b] <= 1.0))
+                             for b in dict.fromkeys(a["ball"])},
+                "q95_deviance_over_critical": float(np.quantile(a["ratio"], 0.95)),
+                "signed_root_mean": float(np.mean(a["root"])), "signed_root_sd": float(np.std(a["root"]))}
+            for q, a in acc.items()}
+
+
 def _profile_deviance(vin, tc, e, mass, kb0, theta, s_tc, s_cor, spec, q):
     """Profile deviance S(q) - S_min of one quantity at q, the other parameters refitted to
     tight tolerance by scipy's least squares (no grid, no interpolation) [-]."""
@@ -360,6 +519,9 @@ def _print(summary):
             print(f"  {k:15s} " + "  ".join(f"{nm} {v:.2f}" for nm, v in c.items()))
         print("  pooled          " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage"].items()))
         print("  median width    " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["median_relative_width"].items()))
+        if s.get("pooled_coverage_without_false_removal") and s["fits_without_false_removal"] < s["fits"]:
+            print(f"  the {s['fits_without_false_removal']} fits without a good impact removed "
+                  + "  ".join(f"{nm} {v:.4f}" for nm, v in s["pooled_coverage_without_false_removal"].items()))
         if s.get("pooled_coverage_kb0_free_alone"):
             print("  kB(0) free alone " + "  ".join(f"{nm} {v:.3f}" for nm, v in s["pooled_coverage_kb0_free_alone"].items()))
         if s.get("pooled_coverage_kb0_free_and_estimate"):
@@ -391,8 +553,30 @@ def main():
     ap.add_argument("--sessions", type=int, default=400, help="sessions per design of --truth-world")
     ap.add_argument("--diagnose", action="store_true",
                     help="only where the kB(0)-fixed misses come from: grid, plug-in or the statistic")
+    ap.add_argument("--truth-stat", action="store_true",
+                    help="only the --truth-world statistic on the bench's own sessions (kB(0) fixed, no outlier); "
+                         "--summarise pairs its records with the bench's")
+    ap.add_argument("--lr-check", action="store_true",
+                    help="only the profile deviance (likelihood ratio) at the truth over --seeds designs x "
+                         "--sessions full-model refits against the calibrated critical value")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
+    if args.lr_check:
+        res = lr_check(args.seeds, args.sessions, args.first_seed)
+        if args.json:
+            print(json.dumps(res, indent=2))
+        for q, r in res.items() if not args.json else []:
+            print(f"{q:8s} {r['sessions']} sessions: coverage {r['coverage']:.3f}, 0.95 quantile of deviance / "
+                  f"critical value {r['q95_deviance_over_critical']:.3f}, signed root mean {r['signed_root_mean']:+.3f}"
+                  f" sd {r['signed_root_sd']:.3f}; per ball type "
+                  + ", ".join(f"{b} {v:.3f}" for b, v in r["per_ball"].items()))
+        return
+    if args.truth_stat:
+        records = truth_stat(args.seeds, args.first_seed, args.jsonl)
+        res = summarise_truth_stat(records)
+        print(json.dumps(res, indent=2) if args.json else
+              f"{res['fits']} fits: " + "  ".join(f"{q} {v:.3f}" for q, v in res["pooled"].items()))
+        return
     if args.diagnose:
         res = diagnose(args.seeds, args.first_seed)
         if args.json:
@@ -451,11 +635,20 @@ def main():
         records = run(args.seeds, [(k, o) for k in kb0s for o in outs], vmin=args.vmin,
                       first_seed=args.first_seed, jsonl=args.jsonl)
         print(f"({time.perf_counter() - t0:.0f} s)")
-    summary = summarise(records)
+    truth = [r for r in records if r.get("kb0") == "truth-stat"]
+    summary = summarise([r for r in records if r.get("kb0") != "truth-stat"])
+    ts = summarise_truth_stat(records) if truth else None
     if args.json:
-        print(json.dumps(summary, indent=2))
-    else:
-        _print(summary)
+        print(json.dumps(summary | ({"truth_stat": ts} if ts else {}), indent=2))
+        return
+    _print(summary)
+    if ts:
+        print(f"statistic at the truth (--truth-stat), {ts['seeds']} seeds, {ts['fits']} fits: "
+              + "  ".join(f"{q} {v:.3f}" for q, v in ts["pooled"].items()))
+        for q, r in ts["paired"].items():
+            print(f"  paired with the kB(0)-fixed bench on {r['fits']} fits: {q} interval {r['interval']:.3f}, "
+                  f"statistic {r['statistic']:.3f} ({r['only_interval']} hit only by the interval, "
+                  f"{r['only_statistic']} only by the statistic)")
 
 
 if __name__ == "__main__":

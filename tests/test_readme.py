@@ -107,7 +107,7 @@ def test_no_developer_wording():
         assert phrase not in text, phrase
     # one wording for the intervals: nominal 95 %, with the coverage measured by bench/coverage.py
     assert "nominal 95 %" in text and "read them as about 90 %" not in text
-    assert "0.937-0.951 for AK, a, AC and kB(20 mm)" in text
+    assert "0.948-0.951 for AK, a, AC and kB(20 mm)" in text
 
 
 @pytest.mark.slow
