@@ -75,7 +75,8 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
-from .plate import PlateResonance, identify_plate_resonance, undo_plate_resonance
+from .plate import (PlateResonance, gaussian_sigma_samples, identify_plate_resonance, lowpass_zero_phase,
+                    undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -140,6 +141,12 @@ PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most t
 PLATE_START_LATE = 1.0  # the undone contact may start this much later than the sensed one at most [samples]
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
+PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
+PLATE_LOWPASS_BIAS = 8.0  # the low-pass may move the contact's ends apart by this many kernel deviations [-]
+PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
+PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
+PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
+PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -630,9 +637,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                                           float(contact.peak_V), scale))
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if undone is not None:
-            y, contact, plate = undone
+            y, contact, plate, cutoff = undone
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
-                            f"{plate.damping_ratio:.2g}) identified from its ringing and undone")
+                            f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
+                            + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
             return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, [], t0_s, scale, spikes,
                            it.mains, mains_source, it.contact_integral, plate)
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
@@ -661,7 +669,7 @@ def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
 
 
 def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
-    """The force with the plate's resonance undone, its contact and the resonance; None when not trusted.
+    """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; or None.
 
     Tried only when every problem is one plate ringing causes and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
@@ -680,6 +688,16 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     is left where the force departs from the first-order hold the inverse
     assumes (a jump between samples leaves an alternating tail decaying by the
     zeros of the sampled plate).
+
+    An undone force refused by these checks is tried again through a
+    zero-phase Gaussian low-pass (``ballimpact.plate.lowpass_zero_phase``,
+    cutoffs from :func:`_plate_cutoffs`), which trades the noise amplified
+    above the resonance against the force's sharp features: the same checks,
+    with PLATE_LOWPASS_BIAS kernel deviations added to TC's uncertainty (the
+    hinge fitted to a smoothed end finds the kernel's tail, a bias of a few
+    deviations, measured up to about that on half-sines with and without
+    jumps) and the peak's loss to the kernel (from its curvature) at most
+    PLATE_LOWPASS_PEAK.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -696,32 +714,90 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
         if plate is None:
             return None
-        y = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
-        c = detect_contact(y, fs, t0_s=t0_s, spread=True)
-        if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
-                or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
+        exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
+        for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
+            y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
+            c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+            if c is not None:
+                found.append((y, c, plate, cutoff))
+                break
+        else:
             return None
-        noise = float(c.noise_rms_V)
-        if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
-            return None  # the largest sample of so noisy a force is a biased peak
-        checked = replace(fit, noise=noise)
-        cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-        if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
-                                                                                  ce_u, cs_u, ce_u):
-            return None
-        if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) > PLATE_TC_FRACTION * (ce_u - cs_u):
-            return None
-        inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
-        if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
-            return None  # a pull in the contact: the force is not what this plate's inverse assumes
-        if cs_u > s_u + PLATE_START_LATE:
-            return None  # the undone force starts later than the sensed one: a foot lost in its noise
-        found.append((y, c, plate))
-    (y, c, plate), (_, c2, _) = found
+    (y, c, plate, cutoff), (_, c2, _, _) = found
     if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
             or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
         return None
-    return y, c, plate
+    return y, c, plate, cutoff
+
+
+def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
+    """Low-passes to try on an undone force that was refused: their half-amplitude frequencies [Hz], highest first.
+
+    From fs / 2 down in PLATE_LOWPASS_STEPS steps of sqrt(2), not below
+    PLATE_LOWPASS_MIN_FN times the resonance (the force would lose what it
+    holds there): the first that brings the undone force's noise (the sensed
+    noise through the inverse and the low-pass) to PLATE_LOWPASS_NOISE of
+    the peak, and the next PLATE_LOWPASS_TRIES - 1 below it (less noise,
+    more smoothing: which one passes every check depends on the force).
+    """
+    if not (peak > 0 and noise >= 0):
+        return []
+    out = []
+    cutoff = 0.5 * fs
+    for _ in range(PLATE_LOWPASS_STEPS):
+        cutoff /= math.sqrt(2.0)
+        if cutoff < PLATE_LOWPASS_MIN_FN * plate.frequency_hz or len(out) >= PLATE_LOWPASS_TRIES:
+            break
+        if out or noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio, cutoff) \
+                <= PLATE_LOWPASS_NOISE * peak:
+            out.append(cutoff)
+    return out
+
+def _smoothed_peak_loss(y, fs, sigma):
+    """Fraction of its peak that a Gaussian low-pass of ``sigma`` samples took from a force, from its curvature [-].
+
+    A Gaussian of deviation sigma lowers a smooth peak by about
+    ``sigma^2 |F''| / 2`` (F'' its second derivative there, per sample^2);
+    read on the smoothed force over +-sigma samples (at least one), which
+    underestimates it a little for a peak as sharp as the kernel.
+    """
+    k = int(np.argmax(y))
+    h = max(int(round(sigma)), 1)
+    if k - h < 0 or k + h >= y.size or not y[k] > 0:
+        return math.inf
+    curvature = (float(y[k + h]) - 2.0 * float(y[k]) + float(y[k - h])) / (h * h)
+    return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
+
+
+def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
+    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`, else None."""
+    c = detect_contact(y, fs, t0_s=t0_s, spread=True)
+    if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
+            or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
+        return None
+    noise = float(c.noise_rms_V)
+    if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
+        return None  # the largest sample of so noisy a force is a biased peak
+    checked = replace(fit, noise=noise)
+    cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
+    if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
+                                                                              ce_u, cs_u, ce_u):
+        return None
+    bias = 0.0
+    if not math.isinf(cutoff):
+        # a low-pass spreads a jump of the force at an end symmetrically: the hinge fitted to it starts early
+        sigma = gaussian_sigma_samples(fs, cutoff)
+        bias = PLATE_LOWPASS_BIAS * sigma
+        if _smoothed_peak_loss(y, fs, sigma) > PLATE_LOWPASS_PEAK:
+            return None  # the low-pass flattens a peak sharper than its kernel
+    if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias > PLATE_TC_FRACTION * (ce_u - cs_u):
+        return None
+    inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
+    if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
+        return None  # a pull in the contact: the force is not what this plate's inverse assumes
+    if cs_u > s_u + PLATE_START_LATE:
+        return None  # the undone force starts later than the sensed one: a foot lost in its noise
+    return c
 
 
 def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):

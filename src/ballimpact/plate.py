@@ -44,7 +44,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance"]
+__all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
+           "undone_noise_gain", "gaussian_sigma_samples"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -243,3 +244,96 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
         else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1
             w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[::-1])[::-1]
     return w
+
+
+#: The Gaussian kernel's standard deviation times its half-amplitude frequency: sqrt(ln 2 / 2) / pi [-].
+_GAUSS_SIGMA_TIMES_CUTOFF = math.sqrt(math.log(2.0) / 2.0) / math.pi
+
+
+def gaussian_sigma_samples(sample_rate_hz: float, cutoff_hz: float) -> float:
+    """Standard deviation of the :func:`lowpass_zero_phase` kernel of half amplitude at ``cutoff_hz`` [samples].
+
+    ``sqrt(ln 2 / 2) / pi * fs / cutoff_hz``: a Gaussian kernel of deviation
+    sigma [s] has the amplitude response ``exp(-2 pi^2 sigma^2 f^2)``.
+    """
+    return _GAUSS_SIGMA_TIMES_CUTOFF * float(sample_rate_hz) / float(cutoff_hz)
+
+
+def lowpass_zero_phase(force, sample_rate_hz: float, cutoff_hz: float) -> np.ndarray:
+    """A zero-phase Gaussian low-pass of a trace: half amplitude at ``cutoff_hz``, unit static gain.
+
+    The kernel is a sampled Gaussian of standard deviation
+    ``sqrt(ln 2 / 2) / (pi cutoff_hz)``, normalised to unit sum: symmetric
+    (no delay, so a contact's ends do not move as a whole), non-negative (no
+    overshoot, so a force that starts from zero does not dip below it) and
+    of unit static gain (the impulse, so kCAL, is kept). Its amplitude
+    response is ``exp(-ln 2 (f / cutoff_hz)^2)``: it cuts the noise that
+    undoing a plate resonance amplifies by ``(f / fn)^2`` above the
+    resonance. Not in the paper; see the README, "Plate resonance".
+
+    Parameters
+    ----------
+    force : array_like
+        Trace, proportional to force (any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    cutoff_hz : float
+        Frequency of half amplitude [Hz]; ``inf`` returns the trace unchanged.
+
+    Returns
+    -------
+    numpy.ndarray
+        The smoothed trace, same unit and length [V]; the record's ends are
+        reflected.
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate or cutoff, or non-finite samples.
+    """
+    from scipy.ndimage import gaussian_filter1d
+
+    fs = float(sample_rate_hz)
+    if not (math.isfinite(fs) and fs > 0):
+        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    if not cutoff_hz > 0:
+        raise ValueError(f"cutoff_hz must be positive, got {cutoff_hz!r}")
+    x = np.asarray(force, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("force holds non-finite samples")
+    if math.isinf(cutoff_hz):
+        return x.copy()
+    return gaussian_filter1d(x, gaussian_sigma_samples(fs, cutoff_hz), mode="reflect", truncate=5.0)
+
+
+def undone_noise_gain(sample_rate_hz: float, frequency_hz: float, damping_ratio: float,
+                      cutoff_hz: float = math.inf) -> float:
+    """Rms gain of white noise through the plate's inverse and a :func:`lowpass_zero_phase` at ``cutoff_hz`` [-].
+
+    The square root of the sum of squares of the chain's impulse response:
+    the undone force's noise is this times the sensed trace's white noise.
+
+    Parameters
+    ----------
+    sample_rate_hz, frequency_hz : float
+        Sample rate and the plate's resonance [Hz].
+    damping_ratio : float
+        The plate's damping ratio [-].
+    cutoff_hz : float
+        Half-amplitude frequency of the low-pass [Hz]; ``inf`` for none.
+
+    Returns
+    -------
+    float
+        Rms gain [-]: ``(fs / 2 fn)^2``-ish near the Nyquist frequency for the
+        bare inverse, about 1 for a cutoff at the resonance.
+    """
+    fs = float(sample_rate_hz)
+    sigma = 0.0 if math.isinf(cutoff_hz) else gaussian_sigma_samples(fs, cutoff_hz)
+    half = 64 + int(math.ceil(5.0 * sigma))
+    impulse = np.zeros(2 * half + 1)
+    impulse[half] = 1.0
+    h = undo_plate_resonance(impulse, fs, frequency_hz, damping_ratio)
+    if sigma > 0:
+        h = lowpass_zero_phase(h, fs, cutoff_hz)
+    return float(np.sqrt(np.sum(h * h)))
