@@ -12,7 +12,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.plate import identify_plate_resonance, lowpass_zero_phase, undo_plate_resonance, undone_noise_gain
+from ballimpact.plate import (identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
+                              undo_plate_resonance, undone_noise_gain)
 from ballimpact.problems import ProblemKind
 
 
@@ -219,17 +220,18 @@ def test_undo_rejects_non_finite_samples():
 # ------------------------------------------------------------------ the low-pass of an undone force
 
 
-@pytest.mark.parametrize("ratio", [0.5, 1.0, 2.0])
-def test_lowpass_passes_a_sinusoid_as_a_gaussian_would(ratio):
-    # a Gaussian kernel's amplitude response is exp(-2 pi^2 sigma^2 f^2); half amplitude at the cutoff
-    fs, cutoff = 1.0e5, 8.0e3
+@pytest.mark.parametrize("ratio, gain", [(0.5, 0.848826), (1.0, 0.5), (1.5, 0.169765), (2.0, 0.0)])
+def test_lowpass_passes_a_sinusoid_as_a_hann_window_would(ratio, gain):
+    # a continuous Hann window of full width T = 1 / cutoff has the amplitude response
+    # sinc(f T) / (1 - (f T)^2) (normalised sinc): 0.5 at the cutoff, zero at twice it
+    fs, cutoff = 1.0e6, 8.0e3
     f = ratio * cutoff
-    t = np.arange(20000) / fs
+    t = np.arange(200_000) / fs
     y = lowpass_zero_phase(np.sin(2 * math.pi * f * t), fs, cutoff)
-    mid = slice(5000, 15000)
+    mid = slice(50_000, 150_000)
     amp = 2 * math.hypot(np.mean(y[mid] * np.sin(2 * math.pi * f * t[mid])),
                          np.mean(y[mid] * np.cos(2 * math.pi * f * t[mid])))
-    assert_allclose(amp, 0.5 ** (ratio ** 2), rtol=2e-3)
+    assert_allclose(amp, gain, atol=2e-3)
 
 
 def test_lowpass_keeps_the_impulse_a_ramp_and_the_sign():
@@ -274,18 +276,31 @@ def test_lowpass_rejects_non_finite_samples():
 
 @pytest.mark.parametrize("width_over_sigma", [3.0, 5.0, 10.0])
 def test_peak_loss_to_the_lowpass_is_read_from_the_curvature(width_over_sigma):
-    # a Gaussian bump of deviation w through a Gaussian kernel of deviation s is a Gaussian of deviation
-    # sqrt(w^2 + s^2) with the same area: its peak drops to w / sqrt(w^2 + s^2)
+    # the truth: a Gaussian bump of deviation w averaged by a continuous Hann window of half-width W
+    # (numerical quadrature); the kernel's deviation is W sqrt(1/3 - 2/pi^2)
+    from scipy.integrate import quad
+
     from ballimpact.conditioning import _smoothed_peak_loss
 
-    fs, sigma = 1e5, 2.0
+    fs, w_half = 1e5, 8.0  # [Hz], [samples]
+    sigma = w_half * math.sqrt(1 / 3 - 2 / math.pi ** 2)
     w = width_over_sigma * sigma
+    hann = lambda s: 0.5 * (1 + math.cos(math.pi * s / w_half))  # noqa: E731
+    truth = 1 - quad(lambda s: hann(s) * math.exp(-0.5 * (s / w) ** 2), -w_half, w_half)[0] / w_half
     n = np.arange(2001)
-    bump = np.exp(-0.5 * ((n - 1000) / w) ** 2)
-    y = lowpass_zero_phase(bump, fs, fs * math.sqrt(math.log(2) / 2) / math.pi / sigma)
-    truth = 1.0 - w / math.hypot(w, sigma)
-    assert_allclose(1.0 - y.max(), truth, rtol=1e-3)  # the kernel is the Gaussian said
+    y = lowpass_zero_phase(np.exp(-0.5 * ((n - 1000) / w) ** 2), fs, fs / (2 * w_half))
+    assert_allclose(1.0 - y.max(), truth, rtol=0.02)  # the kernel is the Hann window said
+    assert_allclose(lowpass_spread_samples(fs, fs / (2 * w_half)), (w_half, sigma), rtol=0.01)
     assert_allclose(_smoothed_peak_loss(y, fs, sigma), truth, rtol=0.2)
+
+
+def test_lowpass_spreads_a_force_by_its_half_width_only():
+    # compact support: a force zero before t0 stays exactly zero before t0 - W
+    fs, cutoff = 5e4, 5e3  # W = 5 samples
+    force = np.zeros(200)
+    force[100:150] = 1.0
+    y = lowpass_zero_phase(force, fs, cutoff)
+    assert np.all(y[:95] == 0.0) and y[96] > 0 and np.all(y[155:] == 0.0) and y[153] > 0
 
 
 @pytest.mark.parametrize("fn_hz, noise_V", [(10e3, 0.0003), (12e3, 0.0005), (20e3, 0.001)])

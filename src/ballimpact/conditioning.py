@@ -75,7 +75,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
-from .plate import (PlateResonance, gaussian_sigma_samples, identify_plate_resonance, lowpass_zero_phase,
+from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
                     undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
@@ -142,7 +142,7 @@ PLATE_START_LATE = 1.0  # the undone contact may start this much later than the 
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
-PLATE_LOWPASS_BIAS = 8.0  # the low-pass may move the contact's ends apart by this many kernel deviations [-]
+PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
@@ -690,14 +690,14 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     zeros of the sampled plate).
 
     An undone force refused by these checks is tried again through a
-    zero-phase Gaussian low-pass (``ballimpact.plate.lowpass_zero_phase``,
+    zero-phase low-pass on a compact kernel (``ballimpact.plate.lowpass_zero_phase``,
     cutoffs from :func:`_plate_cutoffs`), which trades the noise amplified
     above the resonance against the force's sharp features: the same checks,
-    with PLATE_LOWPASS_BIAS kernel deviations added to TC's uncertainty (the
-    hinge fitted to a smoothed end finds the kernel's tail, a bias of a few
-    deviations, measured up to about that on half-sines with and without
-    jumps) and the peak's loss to the kernel (from its curvature) at most
-    PLATE_LOWPASS_PEAK.
+    with PLATE_LOWPASS_BIAS kernel half-widths added to TC's uncertainty (the
+    kernel is compact: the smoothed force starts at most a half-width before
+    the force and ends at most one after it, so the hinge fitted to a
+    smoothed end cannot find more) and the peak's loss to the kernel (from
+    its curvature) at most PLATE_LOWPASS_PEAK.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -754,12 +754,13 @@ def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
     return out
 
 def _smoothed_peak_loss(y, fs, sigma):
-    """Fraction of its peak that a Gaussian low-pass of ``sigma`` samples took from a force, from its curvature [-].
+    """Fraction of its peak that a symmetric low-pass of deviation ``sigma`` samples took from a force [-].
 
-    A Gaussian of deviation sigma lowers a smooth peak by about
-    ``sigma^2 |F''| / 2`` (F'' its second derivative there, per sample^2);
-    read on the smoothed force over +-sigma samples (at least one), which
-    underestimates it a little for a peak as sharp as the kernel.
+    A unit-sum symmetric kernel of standard deviation sigma lowers a smooth
+    peak by about ``sigma^2 |F''| / 2`` (F'' its second derivative there, per
+    sample^2; Taylor to second order); read on the smoothed force over
+    +-sigma samples (at least one), which underestimates it a little for a
+    peak as sharp as the kernel.
     """
     k = int(np.argmax(y))
     h = max(int(round(sigma)), 1)
@@ -785,9 +786,10 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
         return None
     bias = 0.0
     if not math.isinf(cutoff):
-        # a low-pass spreads a jump of the force at an end symmetrically: the hinge fitted to it starts early
-        sigma = gaussian_sigma_samples(fs, cutoff)
-        bias = PLATE_LOWPASS_BIAS * sigma
+        # the low-pass spreads the force by its kernel's half-width at each end (its support): the contact
+        # found on it may be longer by up to twice that
+        half_width, sigma = lowpass_spread_samples(fs, cutoff)
+        bias = PLATE_LOWPASS_BIAS * half_width
         if _smoothed_peak_loss(y, fs, sigma) > PLATE_LOWPASS_PEAK:
             return None  # the low-pass flattens a peak sharper than its kernel
     if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias > PLATE_TC_FRACTION * (ce_u - cs_u):
