@@ -117,6 +117,8 @@ RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
 RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
 RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
+RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins below it (at least this many) ... [-]
+RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
@@ -1253,7 +1255,13 @@ def _ringing_line(xc, fs, noise):
     and 0.45 fs is a line when it exceeds RING_LINE_PROMINENCE times the median
     amplitude within a factor 1.6 of its frequency (the smooth contact and the
     noise have no lines), and RING_LINE_NOISE_FACTOR times the amplitude white
-    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window).
+    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window). The
+    force's own spectrum falls steeply with frequency (as f^-2 to f^-4): one
+    of its side lobes just above RING_LINE_MIN_HZ stands out of the quieter
+    frequencies above it only. A bump that does not stand out of the median
+    below it alone and is below RING_LINE_EDGE_FRACTION of the peak is not
+    taken for a line (ideal-plate zoo traces: 0.007-0.023 % of the peak at
+    3.0-3.4 kHz).
     """
     n = xc.size
     if n < MIN_CONTACT_SAMPLES:
@@ -1269,12 +1277,16 @@ def _ringing_line(xc, fs, noise):
         return None
     k = int(band[np.argmax(amp[band])])
     lo, hi = np.searchsorted(f, [f[k] / 1.6, f[k] * 1.6])
-    ref = np.concatenate([amp[lo:max(k - 12, lo)], amp[k + 12:hi]])
+    below, above = amp[lo:max(k - 12, lo)], amp[k + 12:hi]
+    ref = np.concatenate([below, above])
     if ref.size < 8:
         return None
     prominence = float(amp[k] / max(np.median(ref), 1e-300))
     if prominence <= RING_LINE_PROMINENCE or amp[k] <= RING_LINE_NOISE_FACTOR * 1.73 * noise / math.sqrt(n):
         return None
+    if below.size >= RING_LINE_SIDE_BINS and amp[k] <= RING_LINE_PROMINENCE * float(np.median(below)) \
+            and amp[k] < RING_LINE_EDGE_FRACTION * float(np.max(xc)):
+        return None  # a tiny bump on the force's own spectrum, which falls steeply above the band's edge
     return float(f[k]), float(amp[k]), prominence
 
 
