@@ -313,3 +313,32 @@ def test_conditioning_lowpasses_an_undone_force_too_noisy_for_its_peak(fn_hz, no
     assert any("low-passed at" in w for w in c.warnings)
     assert_allclose(c.contact.contact_time_s, 4.2e-3, rtol=0.01)
     assert_allclose(c.contact.peak_V * 400.0, 1000.0, rtol=0.03)
+
+
+@pytest.mark.parametrize("jump_start, jump_end", [(0.0, 0.0), (0.2, 0.0), (0.5, 0.0), (0.2, 0.2)])
+@pytest.mark.parametrize("half_width", [4, 8])
+@pytest.mark.parametrize("noise", [2e-4, 2.5e-3])
+def test_lowpass_lengthens_a_contact_by_less_than_its_support(jump_start, jump_end, half_width, noise):
+    # the truth: a half-sine of 4 ms on a pedestal that jumps from zero at the start and/or the end. Through
+    # the low-pass of half-width W samples, the contact found (where its ends pass the spread check, as
+    # conditioning demands) is longer by less than 2 W: the budget the plate's low-pass is charged
+    from ballimpact.contact import detect_contact
+
+    fs, tc = 5.0e4, 4.0e-3
+    rng = np.random.default_rng(17)
+    cutoff = fs / (2 * half_width)
+    t = np.arange(int(0.06 * fs)) / fs
+    longer = []
+    for _ in range(6):
+        t0 = 0.02 + rng.uniform(0.0, 1.0 / fs)
+        u = (t - t0) / tc
+        inside = (u > 0) & (u < 1)
+        force = np.where(inside, np.sin(np.pi * u) * (1 - jump_start * (1 - u) - jump_end * u)
+                         + jump_start * (1 - u) + jump_end * u, 0.0)
+        white = rng.normal(0.0, 1.0, t.size)
+        white *= noise / np.std(lowpass_zero_phase(white, fs, cutoff))  # the smoothed noise is `noise` of the peak
+        c = detect_contact(lowpass_zero_phase(force + white, fs, cutoff), fs, spread=True)
+        if max(abs(c.start_spread_s), abs(c.end_spread_s)) <= 0.005 * c.contact_time_s:
+            longer.append((c.contact_time_s - tc) * fs)
+    assert longer, "every contact refused by the spread check"
+    assert max(longer) < 2 * half_width

@@ -697,9 +697,10 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     above the resonance against the force's sharp features: the same checks,
     with PLATE_LOWPASS_BIAS kernel half-widths added to TC's uncertainty (the
     kernel is compact: the smoothed force starts at most a half-width before
-    the force and ends at most one after it, so the hinge fitted to a
-    smoothed end cannot find more) and the peak's loss to the kernel (from
-    its curvature) at most PLATE_LOWPASS_PEAK.
+    the force and ends at most one after it; on half-sines with and without
+    jumps the contact found on it, where its ends pass the spread check, is
+    less than two half-widths longer, see tests/test_plate.py) and the
+    peak's loss to the kernel (from its curvature) at most PLATE_LOWPASS_PEAK.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
