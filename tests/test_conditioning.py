@@ -696,3 +696,26 @@ def test_event_before_the_contact_is_left_out_of_the_baseline():
     assert_allclose(_impulse(knocked, truth), _impulse(plain, truth), rtol=2e-4)
     assert_allclose(knocked.contact.contact_time_s, plain.contact.contact_time_s, rtol=2e-3)
     assert_allclose(_impulse(knocked, truth), truth.impulse_V_s, rtol=3e-3)
+
+
+@pytest.mark.parametrize("f_hz, fraction", [(3100.0, 1e-2), (3100.0, 1e-3), (10000.0, 1e-3)])
+def test_a_ringing_line_is_found_above_the_force_spectrum_or_large_enough(f_hz, fraction):
+    # the Goodwill & Haake force of a pressurised ball at 50 kHz plus a sinusoid of 1 % or 0.1 % of the peak
+    # at 3.1 kHz (just above the band's edge, on the force's steep spectrum) or 0.1 % at 10 kHz: each is a
+    # line, although the bumps of the force's own spectrum at the band's edge are not; the force alone has none
+    from ballimpact.balls import BALLS
+    from ballimpact.model import simulate_impact
+
+    from ballimpact.conditioning import _ringing_line
+
+    p = BALLS["pressurised"].params
+    sim = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac, record=True)
+    fs = 5.0e4
+    t = np.arange(0.0, float(sim.contact_time_s), 1.0 / fs)
+    force = np.maximum(np.interp(t, sim.time_s, sim.force_N), 0.0)
+    force /= force.max()
+    noise = np.random.default_rng(3).normal(0.0, 1e-6, t.size)
+    assert _ringing_line(force + noise, fs, 1e-6) is None
+    found = _ringing_line(force + noise + fraction * np.sin(2 * np.pi * f_hz * t), fs, 1e-6)
+    assert found is not None
+    assert_allclose(found[0], f_hz, rtol=0.05)

@@ -12,7 +12,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.plate import identify_plate_resonance, undo_plate_resonance
+from ballimpact.plate import (identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
+                              undo_plate_resonance, undone_noise_gain)
 from ballimpact.problems import ProblemKind
 
 
@@ -214,3 +215,130 @@ def test_undo_rejects_non_finite_samples():
     x[3] = np.inf
     with pytest.raises(ValueError, match="sensed holds non-finite samples"):
         undo_plate_resonance(x, 5e4, 5e3, 0.05)
+
+
+# ------------------------------------------------------------------ the low-pass of an undone force
+
+
+@pytest.mark.parametrize("ratio, gain", [(0.5, 0.848826), (1.0, 0.5), (1.5, 0.169765), (2.0, 0.0)])
+def test_lowpass_passes_a_sinusoid_as_a_hann_window_would(ratio, gain):
+    # a continuous Hann window of full width T = 1 / cutoff has the amplitude response
+    # sinc(f T) / (1 - (f T)^2) (normalised sinc): 0.5 at the cutoff, zero at twice it
+    fs, cutoff = 1.0e6, 8.0e3
+    f = ratio * cutoff
+    t = np.arange(200_000) / fs
+    y = lowpass_zero_phase(np.sin(2 * math.pi * f * t), fs, cutoff)
+    mid = slice(50_000, 150_000)
+    amp = 2 * math.hypot(np.mean(y[mid] * np.sin(2 * math.pi * f * t[mid])),
+                         np.mean(y[mid] * np.cos(2 * math.pi * f * t[mid])))
+    assert_allclose(amp, gain, atol=2e-3)
+
+
+def test_lowpass_keeps_the_impulse_a_ramp_and_the_sign():
+    fs = 5.0e4
+    t = np.arange(4000) / fs
+    force = np.interp(t, [0.02, 0.02 + 1e-9, 0.022, 0.0242], [0.0, 0.6, 1.0, 0.0], left=0.0, right=0.0)
+    y = lowpass_zero_phase(force, fs, 6.0e3)
+    assert_allclose(np.sum(y), np.sum(force), rtol=1e-12)  # unit static gain: the impulse, so kCAL
+    assert np.min(y) >= -1e-15  # a non-negative kernel: no dip below zero next to the jump
+    ramp = 0.3 + 2.0 * t
+    assert_allclose(lowpass_zero_phase(ramp, fs, 6.0e3)[100:-100], ramp[100:-100], rtol=1e-12)
+    assert_allclose(lowpass_zero_phase(force, fs, math.inf), force)
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs, cutoff", [(5e3, 0.05, 1e5, math.inf), (5e3, 0.05, 1e5, 2e4),
+                                                     (12e3, 0.2, 1.6e5, 3e4)])
+def test_undone_noise_gain_is_that_of_undone_white_noise(fn_hz, zeta, fs, cutoff):
+    noise = np.random.default_rng(11).normal(0.0, 1.0, 200_000)
+    y = lowpass_zero_phase(undo_plate_resonance(noise, fs, fn_hz, zeta), fs, cutoff)
+    assert_allclose(np.std(y[1000:-1000]), undone_noise_gain(fs, fn_hz, zeta, cutoff), rtol=0.02)
+
+
+def test_undone_noise_gain_grows_as_the_square_of_the_nyquist_over_the_resonance():
+    # above the resonance the inverse's gain grows as (f / fn)^2: halving fn quadruples the noise near Nyquist
+    g1, g2 = undone_noise_gain(1e5, 4e3, 0.05), undone_noise_gain(1e5, 2e3, 0.05)
+    assert_allclose(g2 / g1, 4.0, rtol=0.1)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(sample_rate_hz=0.0, cutoff_hz=1e3), "sample_rate_hz must be positive"),
+    (dict(sample_rate_hz=5e4, cutoff_hz=0.0), "cutoff_hz must be positive"),
+])
+def test_lowpass_rejects_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        lowpass_zero_phase(np.zeros(10), **kwargs)
+
+
+def test_lowpass_rejects_non_finite_samples():
+    with pytest.raises(ValueError, match="force holds non-finite samples"):
+        lowpass_zero_phase(np.array([0.0, np.nan, 1.0]), 5e4, 1e3)
+
+
+@pytest.mark.parametrize("width_over_sigma", [3.0, 5.0, 10.0])
+def test_peak_loss_to_the_lowpass_is_read_from_the_curvature(width_over_sigma):
+    # the truth: a Gaussian bump of deviation w averaged by a continuous Hann window of half-width W
+    # (numerical quadrature); the kernel's deviation is W sqrt(1/3 - 2/pi^2)
+    from scipy.integrate import quad
+
+    from ballimpact.conditioning import _smoothed_peak_loss
+
+    fs, w_half = 1e5, 8.0  # [Hz], [samples]
+    sigma = w_half * math.sqrt(1 / 3 - 2 / math.pi ** 2)
+    w = width_over_sigma * sigma
+    hann = lambda s: 0.5 * (1 + math.cos(math.pi * s / w_half))  # noqa: E731
+    truth = 1 - quad(lambda s: hann(s) * math.exp(-0.5 * (s / w) ** 2), -w_half, w_half)[0] / w_half
+    n = np.arange(2001)
+    y = lowpass_zero_phase(np.exp(-0.5 * ((n - 1000) / w) ** 2), fs, fs / (2 * w_half))
+    assert_allclose(1.0 - y.max(), truth, rtol=0.02)  # the kernel is the Hann window said
+    assert_allclose(lowpass_spread_samples(fs, fs / (2 * w_half)), (w_half, sigma), rtol=0.01)
+    assert_allclose(_smoothed_peak_loss(y, fs, sigma), truth, rtol=0.2)
+
+
+def test_lowpass_spreads_a_force_by_its_half_width_only():
+    # compact support: a force zero before t0 stays exactly zero before t0 - W
+    fs, cutoff = 5e4, 5e3  # W = 5 samples
+    force = np.zeros(200)
+    force[100:150] = 1.0
+    y = lowpass_zero_phase(force, fs, cutoff)
+    assert np.all(y[:95] == 0.0) and y[96] > 0 and np.all(y[155:] == 0.0) and y[153] > 0
+
+
+@pytest.mark.parametrize("fn_hz, noise_V", [(10e3, 0.0003), (12e3, 0.0005), (20e3, 0.001)])
+def test_conditioning_lowpasses_an_undone_force_too_noisy_for_its_peak(fn_hz, noise_V):
+    # at 190 kHz the exact inverse amplifies the noise near the Nyquist frequency (fs / 2 fn)^2-fold, past
+    # 0.5 % of the peak: the undone force is low-passed, and TC and the peak are still the force's own
+    volts, fs = _ringing_volts(fn_hz, 0.05, noise_V, fs=190e3)
+    c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
+    assert c.plate is not None and not c.problems
+    assert any("low-passed at" in w for w in c.warnings)
+    assert_allclose(c.contact.contact_time_s, 4.2e-3, rtol=0.01)
+    assert_allclose(c.contact.peak_V * 400.0, 1000.0, rtol=0.03)
+
+
+@pytest.mark.parametrize("jump_start, jump_end", [(0.0, 0.0), (0.2, 0.0), (0.5, 0.0), (0.2, 0.2)])
+@pytest.mark.parametrize("half_width", [4, 8])
+@pytest.mark.parametrize("noise", [2e-4, 2.5e-3])
+def test_lowpass_lengthens_a_contact_by_less_than_its_support(jump_start, jump_end, half_width, noise):
+    # the truth: a half-sine of 4 ms on a pedestal that jumps from zero at the start and/or the end. Through
+    # the low-pass of half-width W samples, the contact found (where its ends pass the spread check, as
+    # conditioning demands) is longer by less than 2 W: the budget the plate's low-pass is charged
+    from ballimpact.contact import detect_contact
+
+    fs, tc = 5.0e4, 4.0e-3
+    rng = np.random.default_rng(17)
+    cutoff = fs / (2 * half_width)
+    t = np.arange(int(0.06 * fs)) / fs
+    longer = []
+    for _ in range(6):
+        t0 = 0.02 + rng.uniform(0.0, 1.0 / fs)
+        u = (t - t0) / tc
+        inside = (u > 0) & (u < 1)
+        force = np.where(inside, np.sin(np.pi * u) * (1 - jump_start * (1 - u) - jump_end * u)
+                         + jump_start * (1 - u) + jump_end * u, 0.0)
+        white = rng.normal(0.0, 1.0, t.size)
+        white *= noise / np.std(lowpass_zero_phase(white, fs, cutoff))  # the smoothed noise is `noise` of the peak
+        c = detect_contact(lowpass_zero_phase(force + white, fs, cutoff), fs, spread=True)
+        if max(abs(c.start_spread_s), abs(c.end_spread_s)) <= 0.005 * c.contact_time_s:
+            longer.append((c.contact_time_s - tc) * fs)
+    assert longer, "every contact refused by the spread check"
+    assert max(longer) < 2 * half_width

@@ -75,7 +75,8 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
-from .plate import PlateResonance, identify_plate_resonance, undo_plate_resonance
+from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
+                    undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -116,6 +117,8 @@ RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
 RING_LINE_MIN_HZ = 3000.0  # plate resonances looked for in the contact above this [Hz]
 RING_LINE_PROMINENCE = 3.8  # a spectral line this many times its neighbourhood is plate ringing [-]
 RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in a bin [-]
+RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins below it (at least this many) ... [-]
+RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
@@ -140,6 +143,12 @@ PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most t
 PLATE_START_LATE = 1.0  # the undone contact may start this much later than the sensed one at most [samples]
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
+PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
+PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
+PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
+PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
+PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
+PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -630,9 +639,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                                           float(contact.peak_V), scale))
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if undone is not None:
-            y, contact, plate = undone
+            y, contact, plate, cutoff = undone
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
-                            f"{plate.damping_ratio:.2g}) identified from its ringing and undone")
+                            f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
+                            + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
             return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, [], t0_s, scale, spikes,
                            it.mains, mains_source, it.contact_integral, plate)
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
@@ -661,7 +671,7 @@ def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
 
 
 def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
-    """The force with the plate's resonance undone, its contact and the resonance; None when not trusted.
+    """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; or None.
 
     Tried only when every problem is one plate ringing causes and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
@@ -680,6 +690,17 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     is left where the force departs from the first-order hold the inverse
     assumes (a jump between samples leaves an alternating tail decaying by the
     zeros of the sampled plate).
+
+    An undone force refused by these checks is tried again through a
+    zero-phase low-pass on a compact kernel (``ballimpact.plate.lowpass_zero_phase``,
+    cutoffs from :func:`_plate_cutoffs`), which trades the noise amplified
+    above the resonance against the force's sharp features: the same checks,
+    with PLATE_LOWPASS_BIAS kernel half-widths added to TC's uncertainty (the
+    kernel is compact: the smoothed force starts at most a half-width before
+    the force and ends at most one after it; on half-sines with and without
+    jumps the contact found on it, where its ends pass the spread check, is
+    less than two half-widths longer, see tests/test_plate.py) and the
+    peak's loss to the kernel (from its curvature) at most PLATE_LOWPASS_PEAK.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -696,32 +717,92 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
         if plate is None:
             return None
-        y = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
-        c = detect_contact(y, fs, t0_s=t0_s, spread=True)
-        if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
-                or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
+        exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
+        for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
+            y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
+            c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+            if c is not None:
+                found.append((y, c, plate, cutoff))
+                break
+        else:
             return None
-        noise = float(c.noise_rms_V)
-        if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
-            return None  # the largest sample of so noisy a force is a biased peak
-        checked = replace(fit, noise=noise)
-        cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-        if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
-                                                                                  ce_u, cs_u, ce_u):
-            return None
-        if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) > PLATE_TC_FRACTION * (ce_u - cs_u):
-            return None
-        inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
-        if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
-            return None  # a pull in the contact: the force is not what this plate's inverse assumes
-        if cs_u > s_u + PLATE_START_LATE:
-            return None  # the undone force starts later than the sensed one: a foot lost in its noise
-        found.append((y, c, plate))
-    (y, c, plate), (_, c2, _) = found
+    (y, c, plate, cutoff), (_, c2, _, _) = found
     if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
             or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
         return None
-    return y, c, plate
+    return y, c, plate, cutoff
+
+
+def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
+    """Low-passes to try on an undone force that was refused: their half-amplitude frequencies [Hz], highest first.
+
+    From fs / 2 down in PLATE_LOWPASS_STEPS steps of sqrt(2), not below
+    PLATE_LOWPASS_MIN_FN times the resonance (the force would lose what it
+    holds there): the first that brings the undone force's noise (the sensed
+    noise through the inverse and the low-pass) to PLATE_LOWPASS_NOISE of
+    the peak, and the next PLATE_LOWPASS_TRIES - 1 below it (less noise,
+    more smoothing: which one passes every check depends on the force).
+    """
+    if not (peak > 0 and noise >= 0):
+        return []
+    out = []
+    cutoff = 0.5 * fs
+    for _ in range(PLATE_LOWPASS_STEPS):
+        cutoff /= math.sqrt(2.0)
+        if cutoff < PLATE_LOWPASS_MIN_FN * plate.frequency_hz or len(out) >= PLATE_LOWPASS_TRIES:
+            break
+        if out or noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio, cutoff) \
+                <= PLATE_LOWPASS_NOISE * peak:
+            out.append(cutoff)
+    return out
+
+def _smoothed_peak_loss(y, fs, sigma):
+    """Fraction of its peak that a symmetric low-pass of deviation ``sigma`` samples took from a force [-].
+
+    A unit-sum symmetric kernel of standard deviation sigma lowers a smooth
+    peak by about ``sigma^2 |F''| / 2`` (F'' its second derivative there, per
+    sample^2; Taylor to second order); read on the smoothed force over
+    +-sigma samples (at least one), which underestimates it a little for a
+    peak as sharp as the kernel.
+    """
+    k = int(np.argmax(y))
+    h = max(int(round(sigma)), 1)
+    if k - h < 0 or k + h >= y.size or not y[k] > 0:
+        return math.inf
+    curvature = (float(y[k + h]) - 2.0 * float(y[k]) + float(y[k - h])) / (h * h)
+    return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
+
+
+def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
+    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`, else None."""
+    c = detect_contact(y, fs, t0_s=t0_s, spread=True)
+    if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
+            or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
+        return None
+    noise = float(c.noise_rms_V)
+    if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
+        return None  # the largest sample of so noisy a force is a biased peak
+    checked = replace(fit, noise=noise)
+    cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
+    if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
+                                                                              ce_u, cs_u, ce_u):
+        return None
+    bias = 0.0
+    if not math.isinf(cutoff):
+        # the low-pass spreads the force by its kernel's half-width at each end (its support): the contact
+        # found on it may be longer by up to twice that
+        half_width, sigma = lowpass_spread_samples(fs, cutoff)
+        bias = PLATE_LOWPASS_BIAS * half_width
+        if _smoothed_peak_loss(y, fs, sigma) > PLATE_LOWPASS_PEAK:
+            return None  # the low-pass flattens a peak sharper than its kernel
+    if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias > PLATE_TC_FRACTION * (ce_u - cs_u):
+        return None
+    inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
+    if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
+        return None  # a pull in the contact: the force is not what this plate's inverse assumes
+    if cs_u > s_u + PLATE_START_LATE:
+        return None  # the undone force starts later than the sensed one: a foot lost in its noise
+    return c
 
 
 def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):
@@ -1175,7 +1256,13 @@ def _ringing_line(xc, fs, noise):
     and 0.45 fs is a line when it exceeds RING_LINE_PROMINENCE times the median
     amplitude within a factor 1.6 of its frequency (the smooth contact and the
     noise have no lines), and RING_LINE_NOISE_FACTOR times the amplitude white
-    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window).
+    noise gives a bin (``1.73 noise / sqrt(n)`` with the Hann window). The
+    force's own spectrum falls steeply with frequency (as f^-2 to f^-4): one
+    of its side lobes just above RING_LINE_MIN_HZ stands out of the quieter
+    frequencies above it only. A bump that does not stand out of the median
+    below it alone and is below RING_LINE_EDGE_FRACTION of the peak is not
+    taken for a line (ideal-plate zoo traces: 0.007-0.023 % of the peak at
+    3.0-3.4 kHz).
     """
     n = xc.size
     if n < MIN_CONTACT_SAMPLES:
@@ -1191,12 +1278,16 @@ def _ringing_line(xc, fs, noise):
         return None
     k = int(band[np.argmax(amp[band])])
     lo, hi = np.searchsorted(f, [f[k] / 1.6, f[k] * 1.6])
-    ref = np.concatenate([amp[lo:max(k - 12, lo)], amp[k + 12:hi]])
+    below, above = amp[lo:max(k - 12, lo)], amp[k + 12:hi]
+    ref = np.concatenate([below, above])
     if ref.size < 8:
         return None
     prominence = float(amp[k] / max(np.median(ref), 1e-300))
     if prominence <= RING_LINE_PROMINENCE or amp[k] <= RING_LINE_NOISE_FACTOR * 1.73 * noise / math.sqrt(n):
         return None
+    if below.size >= RING_LINE_SIDE_BINS and amp[k] <= RING_LINE_PROMINENCE * float(np.median(below)) \
+            and amp[k] < RING_LINE_EDGE_FRACTION * float(np.max(xc)):
+        return None  # a tiny bump on the force's own spectrum, which falls steeply above the band's edge
     return float(f[k]), float(amp[k]), prominence
 
 

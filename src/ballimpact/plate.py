@@ -44,7 +44,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance"]
+__all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
+           "undone_noise_gain", "lowpass_kernel",
+           "lowpass_spread_samples"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -54,6 +56,7 @@ MAX_DAMPING_RATIO = 0.5  # a "resonance" more damped than this is no ringing [-]
 MIN_DAMPING_RATIO = 0.005  # ... and one damped less (rings for > 30 periods per e-fold) is no plate on its mounts [-]
 RING_NOISE_FACTOR = 3.0  # the ringing's second difference stands out of the noise's by this in rms [-]
 REFINEMENTS = 2  # fits repeated with the smoothing chosen from the last estimate [-]
+START_SMOOTHING = (1, 2, 4, 8, 16)  # moving averages tried in turn for a first estimate [samples]
 
 
 @dataclass(frozen=True)
@@ -115,7 +118,10 @@ def identify_plate_resonance(force, sample_rate_hz: float, *, lag: int = IV_LAG,
 
     The recursion of the free response holds for any linear filtering of the
     trace, so it is fitted to the second difference of the trace smoothed by a
-    moving average of k samples: k = 1 first, then k chosen from that
+    moving average of k samples: k = 1 first (then 2, 4, ... of
+    START_SMOOTHING while nothing stands out of the noise or no decaying
+    oscillation is found: a resonance far below fs bends the raw second
+    difference little), then k chosen from that
     estimate (a quarter of the resonance's period: the ringing passes at 90 %,
     the noise above it is cut) and the fit repeated, REFINEMENTS times. The
     smoothed noise is correlated over k + 1 samples, so the instruments go
@@ -165,22 +171,38 @@ def identify_plate_resonance(force, sample_rate_hz: float, *, lag: int = IV_LAG,
     if not np.all(np.isfinite(x)):
         raise ValueError("force holds non-finite samples")
     lag = int(lag)
-    res = None
-    k = 1
-    for _ in range(1 + REFINEMENTS):
+
+    def fit(k):
+        """(resonance or None, the smoothed second difference is noise only) for a moving average of k samples."""
         smooth = np.convolve(x, np.ones(k) / k, mode="valid") if k > 1 else x
         d = np.diff(smooth, 2)
         if noise_rms is not None and _noise_only(d, k, noise_rms):
-            return None
+            return None, True
         coef = _iv_recursion(d, lag + k - 1)
-        found = None if coef is None else _resonance_from_recursion(*coef, fs)
-        if found is None:
+        return (None if coef is None else _resonance_from_recursion(*coef, fs)), False
+
+    res = None
+    # a resonance far below fs bends the raw second difference little (by (2 pi fn / fs)^2) and its
+    # noise may hide it: when k = 1 finds nothing, the trace is smoothed more, as long as the
+    # resonance found is slow enough for that smoothing (at least 2 k samples per period)
+    for k in START_SMOOTHING:
+        found, _ = fit(k)
+        if found is not None and (k == 1 or fs / found.frequency_hz >= 2.0 * k):
+            res = found
             break
-        res = found
+    if res is None:
+        return None
+    for _ in range(REFINEMENTS):
         k_next = max(int(fs / (4.0 * res.frequency_hz)), 1)
         if k_next == k:
             break
         k = k_next
+        found, noise_only = fit(k)
+        if noise_only:
+            return None
+        if found is None:
+            break
+        res = found
     if res is None or not (MIN_FREQUENCY_FRACTION * fs <= res.frequency_hz <= MAX_FREQUENCY_FRACTION * fs) \
             or not MIN_DAMPING_RATIO <= res.damping_ratio <= MAX_DAMPING_RATIO:
         return None
@@ -243,3 +265,106 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
         else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1
             w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[::-1])[::-1]
     return w
+
+
+def lowpass_kernel(sample_rate_hz: float, cutoff_hz: float) -> np.ndarray:
+    """The taps of the :func:`lowpass_zero_phase` kernel with half amplitude at ``cutoff_hz`` [-].
+
+    A Hann (raised-cosine) window ``0.5 (1 + cos(pi n / W))`` over
+    ``|n| <= W`` samples, ``W = fs / (2 cutoff_hz)``, normalised to unit sum;
+    ``2 floor(W) + 1`` taps, centred. A continuous Hann window of full width
+    T has half amplitude at f = 1 / T and its first zero at 2 / T.
+    """
+    w_half = 0.5 * float(sample_rate_hz) / float(cutoff_hz)  # [samples]
+    n = np.arange(-math.floor(w_half), math.floor(w_half) + 1)
+    taps = 0.5 * (1.0 + np.cos(np.pi * n / w_half)) if w_half > 0 else np.ones(1)
+    return taps / np.sum(taps)
+
+
+def lowpass_spread_samples(sample_rate_hz: float, cutoff_hz: float) -> tuple[float, float]:
+    """Half-width (its support) and standard deviation of the :func:`lowpass_zero_phase` kernel [samples]."""
+    taps = lowpass_kernel(sample_rate_hz, cutoff_hz)
+    n = np.arange(taps.size) - taps.size // 2
+    return float(taps.size // 2), float(math.sqrt(np.sum(taps * n * n)))
+
+
+def lowpass_zero_phase(force, sample_rate_hz: float, cutoff_hz: float) -> np.ndarray:
+    """A zero-phase low-pass of a trace on a compact kernel: half amplitude near ``cutoff_hz``, unit static gain.
+
+    The kernel (:func:`lowpass_kernel`) is a Hann window of half-width
+    ``W = fs / (2 cutoff_hz)`` samples, normalised to unit sum: symmetric
+    (no delay, so a contact's ends do not move as a whole), non-negative (no
+    overshoot, so a force that starts from zero does not dip below it), of
+    unit static gain (the impulse, so kCAL, is kept) and compact: a force
+    that is zero before t0 stays exactly zero before t0 - W / fs, so a
+    contact can grow by at most W samples at each end (no tail to find in
+    the noise, as a Gaussian's is). Its response falls to half at about
+    ``cutoff_hz`` and to zero at twice it: it cuts the noise that undoing a
+    plate resonance amplifies by ``(f / fn)^2`` above the resonance. Not in
+    the paper; see the README, "Plate resonance".
+
+    Parameters
+    ----------
+    force : array_like
+        Trace, proportional to force (any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    cutoff_hz : float
+        Frequency of half amplitude [Hz]; ``inf`` returns the trace unchanged.
+
+    Returns
+    -------
+    numpy.ndarray
+        The smoothed trace, same unit and length [V]; the record's ends are
+        reflected.
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate or cutoff, or non-finite samples.
+    """
+    from scipy.ndimage import convolve1d
+
+    fs = float(sample_rate_hz)
+    if not (math.isfinite(fs) and fs > 0):
+        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    if not cutoff_hz > 0:
+        raise ValueError(f"cutoff_hz must be positive, got {cutoff_hz!r}")
+    x = np.asarray(force, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("force holds non-finite samples")
+    if math.isinf(cutoff_hz):
+        return x.copy()
+    return convolve1d(x, lowpass_kernel(fs, cutoff_hz), mode="reflect")
+
+
+def undone_noise_gain(sample_rate_hz: float, frequency_hz: float, damping_ratio: float,
+                      cutoff_hz: float = math.inf) -> float:
+    """Rms gain of white noise through the plate's inverse and a :func:`lowpass_zero_phase` at ``cutoff_hz`` [-].
+
+    The square root of the sum of squares of the chain's impulse response:
+    the undone force's noise is this times the sensed trace's white noise.
+
+    Parameters
+    ----------
+    sample_rate_hz, frequency_hz : float
+        Sample rate and the plate's resonance [Hz].
+    damping_ratio : float
+        The plate's damping ratio [-].
+    cutoff_hz : float
+        Half-amplitude frequency of the low-pass [Hz]; ``inf`` for none.
+
+    Returns
+    -------
+    float
+        Rms gain [-]: ``(fs / 2 fn)^2``-ish near the Nyquist frequency for the
+        bare inverse, about 1 for a cutoff at the resonance.
+    """
+    fs = float(sample_rate_hz)
+    half = 64 + (0 if math.isinf(cutoff_hz) else int(math.ceil(0.5 * fs / cutoff_hz)))
+    impulse = np.zeros(2 * half + 1)
+    impulse[half] = 1.0
+    h = undo_plate_resonance(impulse, fs, frequency_hz, damping_ratio)
+    if not math.isinf(cutoff_hz):
+        h = lowpass_zero_phase(h, fs, cutoff_hz)
+    return float(np.sqrt(np.sum(h * h)))
