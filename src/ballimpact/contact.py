@@ -444,12 +444,15 @@ def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigm
     """The hinge's start again from its first straight segment when the rise bends [samples].
 
     The growth of the hinge window stops at the first sample the hinge predicts
-    worse than FOOT_RESIDUAL_SIGMA standard errors, but a rise that bends
-    gradually (a low plateau ending in a steep drop, a foot that steepens) is
-    followed sample by sample and the single line through it meets zero off the
-    corner. The window is split at every rising sample into the hinge before and
-    a free line after; when the best split lowers the residual sum of squares by
-    more than KINK_SIGMA**2 noise variances, the start is that split's hinge.
+    worse than FOOT_RESIDUAL_SIGMA standard errors, but a rise that flattens
+    gradually (read from the end: a low plateau ending in a steep drop) is
+    followed sample by sample and the single line through it meets zero after
+    the drop's foot. The window is split at every rising sample into the hinge
+    before and a free, flatter line after; when the best such split lowers the
+    residual sum of squares by more than KINK_SIGMA**2 noise variances, the
+    start is that split's hinge. A rise that steepens (a cloth foot, a force
+    smoothed by a low-pass) keeps the single line: its foot is what the hinge
+    and the spread check were built for.
     """
     best, k_best = sse, None
     for k in range(i0 + FOOT_MIN_SAMPLES - 1, wr - 1):
@@ -460,7 +463,7 @@ def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigm
         slope = float(np.sum((tail_u - um) * (tail_y - ym)) / suu) if suu > 0 else 0.0
         sse_k = _hinge_sse(u[wl:k + 1], xs[wl:k + 1], ts_k, b_k) + float(
             np.sum((tail_y - ym - slope * (tail_u - um)) ** 2))
-        if sse_k < best:
+        if sse_k < best and b_k > slope:  # the rise flattens after the split: a drop from a low plateau
             best, k_best, ts_best = sse_k, k, ts_k
     if k_best is not None and sse - best > (KINK_SIGMA * sigma) ** 2:
         return ts_best
