@@ -95,6 +95,13 @@ def fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=14.0, n_impacts=10):
     return rec
 
 
+def _append(jsonl, rec):
+    """Append one record to the jsonl file ``jsonl`` (nothing when None)."""
+    if jsonl:
+        with open(jsonl, "a") as fh:
+            fh.write(json.dumps(rec) + "\n")
+
+
 def run(seeds: int, modes, vmin: float = 14.0, n_impacts: int = 10, first_seed: int = 0, jsonl=None):
     """Records of every (seed, mode, ball type); modes: list of (kb0_mode, outlier)."""
     sets = {k: b.params for k, b in BALLS.items()} | {"unlike_table2": UNLIKE_TABLE2}
@@ -105,9 +112,7 @@ def run(seeds: int, modes, vmin: float = 14.0, n_impacts: int = 10, first_seed: 
             for key, p in sets.items():
                 rec = fit_one(key, p, seed, kb0_mode, outlier, rng, vmin=vmin, n_impacts=n_impacts)
                 records.append(rec)
-                if jsonl:
-                    with open(jsonl, "a") as fh:
-                        fh.write(json.dumps(rec) + "\n")
+                _append(jsonl, rec)
     return records
 
 
@@ -320,9 +325,7 @@ def truth_stat(seeds=100, first=0, jsonl=None):
                     stat = float((spec.fwd(th_b[0]) - spec.fwd(th0)) ** 2 / (g @ cov_b[0] @ g))
                     rec["hit_truth_stat"][spec.key] = bool(stat <= crit[spec.key])
             records.append(rec)
-            if jsonl:
-                with open(jsonl, "a") as fh:
-                    fh.write(json.dumps(rec) + "\n")
+            _append(jsonl, rec)
     return records
 
 
