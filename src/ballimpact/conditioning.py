@@ -756,6 +756,7 @@ def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
             out.append(cutoff)
     return out
 
+
 def _smoothed_peak_loss(y, fs, sigma):
     """Fraction of its peak that a symmetric low-pass of deviation ``sigma`` samples took from a force [-].
 
