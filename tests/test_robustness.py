@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import HealthCheck, Phase, assume, example, given, settings
 from hypothesis import strategies as st
 
 import zoo
@@ -118,7 +118,9 @@ ZOO_REGRESSION = [
     ("plate-8kHz-damped-overshoot", 0, 1560, "8.1 kHz plate, damping 0.23, overshoot of the jump: peak +6.3 %",
      False),
     ("jump-20kHz", 0, 1, "20 kHz, the force jumps from zero between samples: TC +1.4 %", False),
-    ("jump-23kHz", 0, 757, "23 kHz, the force jumps from zero between samples: TC +1.2 % (now +0.5 %)", True),
+    # ok and right from 977d5e3 to 042c839; since then excluded: its spike's samples rise by 37 % of the peak
+    # and then by 13 % before the drop, so its top may be above the largest sample (peak between samples)
+    ("jump-23kHz", 0, 757, "23 kHz, the force jumps from zero between samples: TC +1.2 % (now +0.5 %)", False),
     ("tail-fades-172kHz", 0, 1550, "punctured ball's 1 % tail fades into the noise: TC +1.6 %", False),
     ("tail-fades-50kHz", 0, 567, "punctured ball at 0.5 V peak, tail in the noise: TC +1.5 %", False),
     # ok but wrong on main at commit 977d5e3 (seeds 0 and 1 of the benchmark)
@@ -250,6 +252,10 @@ def test_process_impact_always_gives_ok_or_a_reason(seed, mode):
 
 @settings(max_examples=N_EXAMPLES, **PROPERTY)
 @given(seed=SEEDS, mode=MODES)
+# found by this property under pytest-xdist (another draw of examples) on main 042c839: a 23.3 kHz rig whose
+# pre-buckling spike's top fell between the samples while the smooth part of the contact later held the largest
+# sample; ok with the peak 5.9 % low
+@example(seed=4000, mode="sample_rate")
 def test_never_ok_and_wrong(seed, mode):
     trace = zoo.make_trace(np.random.default_rng(seed), mode, truncate="", clip_factor=0.0, second=None)
     result, judgement = zoo.run_trace(trace)
