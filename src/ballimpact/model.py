@@ -421,7 +421,8 @@ def _step_force(s: _Active, step: int, c: _StepConstants, record: bool):
     when recording, the components (kB x, cB x', cM x') [N], else None. The count spares
     the steps where every impact compresses, or none does, the work that changes nothing
     there (cM x' is zero in restitution: not computed; the flags multiply by one in
-    compression: not applied); the numbers are those of the full formula.
+    compression: not applied); the numbers are those of the full formula (whose cM is
+    finite while the flattened section weighs less than the ball, M1 > 0).
     """
     v = s.x - s.x_prev
     v *= 1.0 / c.dt_s
