@@ -29,6 +29,8 @@ Keys:
                             otherwise idle 2-core machine if both cores stay busy (a lower bound)
   sessions_<k>x40_job_cpu    that run's CPU time by rule: {rule: [jobs, CPU seconds, largest peak RSS MB]}
                             ("snakemake": its main process), recorded by bench/cpu_hook/sitecustomize.py
+  model_call_cpu_ms_<n>     (--model-only, with model_impacts_per_s) CPU time of one simulate_impact call of n
+                            impacts: 9 and 36 as a fit's Levenberg-Marquardt batches, 7200 as a bootstrap's
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
   catalogue_cpu_seconds_<k>  (--catalogue) CPU time of the catalogue's work (write_catalogue) over k copies of
@@ -89,6 +91,40 @@ def bench_model(n: int, repeats: int = 3) -> float:
         simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
         best = min(best, time.perf_counter() - t0)
     return n / best
+
+
+MODEL_CALL_SIZES = (9, 36, 7200)  # impacts per simulate_impact call: a fit's LM batches (9-36), a bootstrap's
+
+
+def bench_model_calls(sizes=MODEL_CALL_SIZES, seconds: float = 0.5) -> dict:
+    """CPU time [ms] of one simulate_impact call of n impacts (``model_call_cpu_ms_<n>``).
+
+    The fits call the model on a few dozen impacts at a time (one ball type's impacts at
+    the current point and its finite-difference neighbours), where the cost is the numpy
+    calls of each of the ~450 time steps, not the impacts; the bootstrap and the model
+    curves on thousands. Table 2 ball 1 with AK, a and AC spread by +-20 %, speeds 14-30
+    m/s (seed 0); the best of 3 rounds of about ``seconds`` each.
+    """
+    from ballimpact.balls import BALLS
+    from ballimpact.model import simulate_impact
+
+    p = BALLS["pressurised"].params
+    out = {}
+    for n in sizes:
+        rng = np.random.default_rng(0)
+        vin = rng.uniform(14, 30, n)
+        ak, a, ac = (p.ak * rng.uniform(0.8, 1.2, n), p.a * rng.uniform(0.8, 1.2, n), p.ac * rng.uniform(0.8, 1.2, n))
+        t0 = time.process_time()
+        simulate_impact(vin, p.mass_kg, p.kb0_N_m, ak, a, ac)
+        reps = max(1, int(seconds / max(time.process_time() - t0, 1e-4)))
+        best = np.inf
+        for _ in range(3):
+            t0 = time.process_time()
+            for _ in range(reps):
+                simulate_impact(vin, p.mass_kg, p.kb0_N_m, ak, a, ac)
+            best = min(best, (time.process_time() - t0) / reps)
+        out[f"model_call_cpu_ms_{n}"] = 1e3 * best
+    return out
 
 
 def bench_model_reference_c(n: int, repeats: int = 3, n_check: int = 8) -> dict:
@@ -501,6 +537,8 @@ def main(argv=None) -> int:
     ap.add_argument("--skip-workflow", action="store_true", help="only model and fit figures")
     ap.add_argument("--fit-only", action="store_true",
                     help="only the fit figures (demo and the demo made with synth --no-kb0)")
+    ap.add_argument("--model-only", action="store_true",
+                    help="only the model figures: model_impacts_per_s and model_call_cpu_ms_<n> (no C reference)")
     ap.add_argument("--stages", action="store_true",
                     help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
     ap.add_argument("--sessions-only", action="store_true",
@@ -512,6 +550,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     figures: dict = {"quick": args.quick}
+    if args.model_only:
+        figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
+        figures.update(bench_model_calls())
+        print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
+        return 0
     if args.stages:
         figures.update(bench_session_stages())
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))

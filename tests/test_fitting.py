@@ -468,3 +468,28 @@ def test_fit_without_intervals_gives_the_same_estimates():
     for name in ("kb0", "ak", "a", "ac", "kb_10mm", "kb_20mm"):
         assert np.isnan(getattr(bare, f"{name}_lo")) and np.isnan(getattr(bare, f"{name}_hi")), name
     assert bare.free_kb0_intervals == {} and "intervals=False" in bare.interval_method
+
+
+@pytest.mark.parametrize(("func", "args", "expected"), [
+    # textbook quantiles: t(10) 97.5 %, t(1) 97.5 % = tan(0.475 pi), F(1, 10) 95 % = t(10) 97.5 % squared,
+    # chi-squared(2) 99 % = -2 ln(0.01), t(10) upper tail at its 97.5 % point
+    ("_t_ppf", (0.975, 10), 2.2281388519649385),
+    ("_t_ppf", (0.975, 1), np.tan(0.475 * np.pi)),
+    ("_f_ppf", (0.95, 1, 10), 2.2281388519649385**2),
+    ("_chi2_ppf", (0.99, 2), -2 * np.log(0.01)),
+    ("_t_sf", (2.2281388519649385, 10), 0.025),
+])
+def test_distribution_quantiles_without_scipy_stats(func, args, expected):
+    import ballimpact.fitting as fitting
+
+    assert_allclose(getattr(fitting, func)(*args), expected, rtol=1e-10)
+
+
+def test_fitting_does_not_import_scipy_stats():
+    # a session's jobs import fitting; scipy.stats (about 0.4 CPU-s) only for the regressions
+    import subprocess
+    import sys
+
+    code = "import sys, ballimpact.fitting, ballimpact.pipeline; print('scipy.stats' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

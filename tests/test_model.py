@@ -146,6 +146,37 @@ def test_vectorised_equals_one_by_one():
         assert_allclose(batch.peak_force_N[i], one.peak_force_N, rtol=1e-12)
 
 
+def test_impacts_ending_at_different_steps_equal_one_by_one():
+    # ended impacts stay in the arrays, marked, until they are a quarter of them: a batch
+    # of 24 whose impacts end over ~100 steps gives each impact's own simulation
+    rng = np.random.default_rng(5)
+    p = BALLS["pressurised"].params
+    vin = rng.uniform(3.0, 35.0, 24)
+    ak, a, ac = p.ak * rng.uniform(0.7, 1.3, 24), p.a * rng.uniform(0.9, 1.1, 24), p.ac * rng.uniform(0.5, 1.5, 24)
+    batch = simulate_impact(vin, p.mass_kg, p.kb0_N_m, ak, a, ac)
+    for i in range(vin.size):
+        one = simulate_impact(vin[i], p.mass_kg, p.kb0_N_m, ak[i], a[i], ac[i])
+        for key in ("contact_time_s", "rebound_speed_m_s", "peak_force_N", "time_to_peak_s", "max_displacement_m"):
+            assert_allclose(getattr(batch, key)[i], getattr(one, key), rtol=1e-12, err_msg=key)
+
+
+def test_unended_impacts_beside_an_ended_one():
+    # one impact of eight ends (still marked in the arrays when the others run out of time)
+    p = BALLS["pressurised"].params
+    kb0 = np.array([10.0] * 7 + [p.kb0_N_m])
+    ak = np.array([0.0] * 7 + [p.ak])
+    with pytest.warns(RuntimeWarning, match="7 simulated impact"):
+        r = simulate_impact(20.0, p.mass_kg, kb0, ak, p.a, 0.0)
+    one = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, p.ak, p.a, 0.0)
+    assert np.isnan(r.contact_time_s[:7]).all() and np.isnan(r.cor[:7]).all()
+    assert_allclose(r.contact_time_s[7], one.contact_time_s, rtol=1e-12)
+    assert_allclose(r.cor[7], one.cor, rtol=1e-12)
+    with pytest.warns(RuntimeWarning, match="1 simulated impact"):
+        soft = simulate_impact(20.0, p.mass_kg, 10.0, 0.0, p.a, 0.0)
+    assert_allclose(r.max_displacement_m[:7], soft.max_displacement_m, rtol=1e-12)
+    assert_allclose(r.peak_force_N[:7], soft.peak_force_N, rtol=1e-12)
+
+
 def test_broadcast_shape():
     p = BALLS["pressurised"].params
     r = simulate_impact(np.array([[15.0], [25.0]]), p.mass_kg, p.kb0_N_m, np.array([1e7, 1.6e7, 2e7]), p.a, p.ac)

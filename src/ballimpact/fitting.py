@@ -46,9 +46,34 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize, special
 
 from .model import kelvin_voigt_parameters, simulate_impact
+
+# scipy.stats costs about 0.4 CPU-s to import, in every job that fits: the quantiles and
+# tail probabilities of a fit are the special functions its distributions call (the same
+# numbers), and scipy.stats is imported only where a regression needs it.
+
+
+def _t_ppf(q, dof):
+    """Quantile of Student's t [-], as scipy.stats.t.ppf(q, dof) (which calls this function)."""
+    return special.stdtrit(dof, q)
+
+
+def _t_sf(x, dof):
+    """Upper tail probability of Student's t [-], as scipy.stats.t.sf(x, dof)."""
+    return special.stdtr(dof, -x)
+
+
+def _f_ppf(q, dof_num, dof_den):
+    """Quantile of Fisher's F [-], as scipy.stats.f.ppf(q, dof_num, dof_den)."""
+    return special.fdtri(dof_num, dof_den, q)
+
+
+def _chi2_ppf(q, dof):
+    """Quantile of chi-squared [-], as scipy.stats.chi2.ppf(q, dof)."""
+    return 2 * special.gammaincinv(dof / 2, q)
+
 
 __all__ = [
     "REFERENCE_DISPLACEMENT_M",
@@ -283,8 +308,10 @@ def fit_kb0(vin_m_s, kv_stiffness_N_m, *, confidence=0.95) -> Kb0Fit:
         raise FitError(f"kB(0) extrapolation needs at least 3 impacts, got {vin.size}")
     if np.ptp(vin) <= 0:
         raise FitError("kB(0) extrapolation needs impacts at more than one inbound speed")
+    from scipy import stats
+
     reg = stats.linregress(vin, kv)
-    t = stats.t.ppf(0.5 + confidence / 2, vin.size - 2)
+    t = _t_ppf(0.5 + confidence / 2, vin.size - 2)
     lo, hi = reg.intercept - t * reg.intercept_stderr, reg.intercept + t * reg.intercept_stderr
     if not reg.intercept > 0:
         raise FitError(
@@ -809,7 +836,7 @@ def _profile_grid(spec, theta, cov, jac, n, dof_tc, dof_cor, confidence, offsets
     var = float(grad @ cov @ grad)
     se = np.sqrt(max(var, 1e-12))
     dof = _satterthwaite_dof(grad, jac, n, dof_tc, dof_cor)
-    crit = stats.f.ppf(confidence, 1, max(dof, 1.0))
+    crit = _f_ppf(confidence, 1, max(dof, 1.0))
     grid = qh + offsets * se
     if spec.key == "a":
         grid = np.clip(grid, lo_b[1], hi_b[1])
@@ -1018,7 +1045,7 @@ def _kb0_lines(vin, kv, confidence):
         dof = vin.size - deg - 1
         s2 = float(r @ r) / dof
         se = float(np.sqrt(s2 * np.linalg.inv(x.T @ x)[0, 0]))
-        t = stats.t.ppf(0.5 + confidence / 2, dof)
+        t = _t_ppf(0.5 + confidence / 2, dof)
         out.append((float(coef[0]), float(coef[0] - t * se), float(coef[0] + t * se)))
     return out
 
@@ -1061,6 +1088,8 @@ def _robust_kb0(vin, kv):
     """Robust (Theil-Sen) straight-line intercept of the Kelvin-Voigt stiffness [N/m]."""
     if np.ptp(vin) <= 0:
         return float(np.median(kv))
+    from scipy import stats
+
     slope, intercept, *_ = stats.theilslopes(kv, vin)
     return float(intercept) if intercept > 0 else float(np.median(kv) * 0.5)
 
@@ -1135,7 +1164,7 @@ def detect_fit_outliers(vin_m_s, contact_time_s, cor, mass_kg, *, kb0_N_m=None, 
         theta, mad_tc, mad_cor, r_tc, r_cor = _robust_fit(vin, tc, e, mass, kb0)
         result.start = (theta.copy(), mad_tc, mad_cor)
         d2 = (r_tc / mad_tc) ** 2 + (r_cor / mad_cor) ** 2
-        suspects = np.flatnonzero(d2 > stats.chi2.ppf(0.99, 2))
+        suspects = np.flatnonzero(d2 > _chi2_ppf(0.99, 2))
         suspects = suspects[np.argsort(-d2[suspects])][: max(n - 6, 0)]
         if not suspects.size:
             return result
@@ -1235,9 +1264,9 @@ def _most_extreme(vin, tc, e, mass, kb0, keep, theta, s_tc, s_cor):
         u = -np.array([s_v_tc / (sd_tc * f_tc), (1 + s_v_cor) / (sd_cor * f_cor)])
         z_v = float(u @ np.array([z_tc, z_cor]) / np.linalg.norm(u))
         tests = {
-            "contact time": 2 * stats.t.sf(abs(z_tc), dof_tc),
-            "COR": 2 * stats.t.sf(abs(z_cor), dof_cor),
-            "inbound speed": 2 * stats.t.sf(abs(z_v), min(dof_tc, dof_cor)),
+            "contact time": 2 * _t_sf(abs(z_tc), dof_tc),
+            "COR": 2 * _t_sf(abs(z_cor), dof_cor),
+            "inbound speed": 2 * _t_sf(abs(z_v), min(dof_tc, dof_cor)),
         }
         kind = min(tests, key=tests.get)
         p = min(1.0, 3 * tests[kind])
@@ -1544,6 +1573,8 @@ def _bootstrap(vin, tc, e, mass, kv, kb0, theta, s_tc, s_cor, kb0_source, n_boot
     weights = np.stack([np.bincount(row, minlength=n) for row in idx]).astype(float)
     kb0_b = np.full(n_bootstrap, kb0)
     if kb0_source == "extrapolated":
+        from scipy import stats
+
         for i, row in enumerate(idx):
             if np.ptp(vin[row]) > 0:
                 reg = stats.linregress(vin[row], kv[row])
@@ -1621,7 +1652,7 @@ def model_curves(fit: BallFit, speeds_m_s, *, confidence=0.95, max_band_samples=
                "cor": getattr(fit, "cor_scatter", np.nan)}
     dof = getattr(fit, "scatter_dof", np.nan)
     if np.isfinite(dof) and dof > 0:
-        t = stats.t.ppf(0.5 + confidence / 2, dof)
+        t = _t_ppf(0.5 + confidence / 2, dof)
         for key in half:
             if np.isfinite(scatter[key]):
                 w = np.sqrt(half[key] ** 2 + (t * scatter[key] * out[key]) ** 2)

@@ -274,20 +274,24 @@ def simulate_impact(
     rec = _Recorder(n_steps, vin) if record else None
     cloth_phase = cloth_displacement_m > 0  # until every impact has passed the cloth
     step = 1
-    while s.idx.size and step < n_steps:
+    while s.n_alive and step < n_steps:
         t = step * dt_s
-        v, d2, compress, f, parts = _step_force(s, step, c, record)
+        v, d2, compress, n_compress, f, parts = _step_force(s, step, c, record)
         if cloth_phase:
             f, parts, cloth_phase = _apply_cloth(s.x, compress, f, parts, c)
         if rec is not None:
             rec.store(step, s.idx, s.x, v, f, parts)
-        s.track_extremes(f, t)
-        ended = f <= 0.0
-        ended &= ~compress
-        if ended.any():
-            d2, f, v = s.retire(ended, t, dt_s, d2, f, v, out)
-            if not s.idx.size:
-                break
+        s.track_extremes(f, t, n_compress)
+        if n_compress < s.idx.size:  # an impact ends only in restitution
+            ended = f <= 0.0
+            if n_compress:
+                ended &= ~compress
+            if s.alive is not None:
+                ended &= s.alive
+            if np.count_nonzero(ended):
+                d2, f, v = s.retire(ended, t, dt_s, d2, f, v, out, compact_now=record)
+                if not s.n_alive:
+                    break
         s.advance(d2, f, v)
         step += 1
     return _finish(s, out, vin, shape, max_contact_time_s, rec, min(step + 1, n_steps), dt_s)
@@ -334,10 +338,16 @@ class _Outcome:
 
 class _Active:
     """The simulations still being stepped, compacted: state at t and t - dt, parameters and
-    running extremes. ``idx`` maps each back to its place in the flattened input."""
+    running extremes. ``idx`` maps each back to its place in the flattened input.
+
+    Ended impacts are dropped from the arrays once they are a quarter of them (``alive``
+    marks the others until then, None when all are); stepping a few ended ones costs
+    less than copying every array at each end.
+    """
 
     # compacted when impacts end (d2_prev, f_prev, v_prev are replaced by advance())
-    _FIELDS = ("idx", "x", "x_prev", "mass", "kb0", "ak", "a", "ac", "dt2m", "fluxc", "peak", "t_peak", "x_max")
+    _FIELDS = ("idx", "x", "x_prev", "mass", "kb0", "ak", "a", "ac", "dt2m", "fluxc", "peak", "t_peak", "x_max",
+               "zeros")
 
     def __init__(self, vin, mass, kb0, ak, a, ac, dt_s, rho_area_kg_m2):
         n = vin.size
@@ -348,18 +358,26 @@ class _Active:
         self.dt2m = dt_s * dt_s / mass
         self.fluxc = mass * rho_area_kg_m2 * np.pi / (4.0 * dt_s)  # Eq. (13), divided by M1 each step
         self.peak, self.t_peak, self.x_max = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.zeros = np.zeros(n)  # max(x, 0) against an array: faster than against the scalar
+        self.alive, self.n_alive = None, n
 
-    def track_extremes(self, f, t):
-        """Running peak force [N], its time [s] and the largest displacement [m]."""
+    def track_extremes(self, f, t, n_compress):
+        """Running peak force [N], its time [s] and the largest displacement [m].
+
+        x grows only in compression: with none of ``n_compress`` impacts compressing,
+        x <= x(t - dt) <= x_max already, and x_max is left as it is.
+        """
         np.copyto(self.t_peak, t, where=f > self.peak)
         np.maximum(self.peak, f, out=self.peak)
-        np.maximum(self.x_max, self.x, out=self.x_max)
+        if n_compress:
+            np.maximum(self.x_max, self.x, out=self.x_max)
 
-    def retire(self, ended, t, dt_s, d2, f, v, out: _Outcome):
+    def retire(self, ended, t, dt_s, d2, f, v, out: _Outcome, compact_now: bool = False):
         """Record the impacts whose force crossed zero in restitution and drop them.
 
         The crossing is interpolated linearly between the previous step and this one
-        (end of impact, section 3.3). Returns this step's d2, f, v of those kept.
+        (end of impact, section 3.3). Returns this step's d2, f, v of those kept in the
+        arrays (all of them until the ended ones are dropped, see the class).
         """
         fp, fc = self.f_prev[ended], f[ended]
         denom = fp - fc
@@ -368,9 +386,22 @@ class _Active:
         out.t_end[sel] = t - dt_s + frac * dt_s
         out.v_end[sel] = self.v_prev[ended] + frac * (v[ended] - self.v_prev[ended])
         out.peak[sel], out.t_peak[sel], out.x_max[sel] = self.peak[ended], self.t_peak[ended], self.x_max[ended]
-        keep = ~ended
+        self.n_alive -= np.count_nonzero(ended)
+        if self.alive is None:
+            self.alive = ~ended
+        else:
+            self.alive &= ~ended
+        if compact_now or 4 * (self.idx.size - self.n_alive) >= self.idx.size:
+            return self.compact(d2, f, v)
+        return d2, f, v
+
+    def compact(self, d2=None, f=None, v=None):
+        """Drop the ended impacts from every array; returns d2, f, v (if given) of those kept."""
+        keep, self.alive = self.alive, None
         for name in self._FIELDS:
             setattr(self, name, getattr(self, name)[keep])
+        if d2 is None:
+            return None
         return d2[keep], f[keep], v[keep]
 
     def advance(self, d2, f, v):
@@ -386,11 +417,18 @@ def _step_force(s: _Active, step: int, c: _StepConstants, record: bool):
     """Force on the ball at one step, Eq. (14), with kB from Eq. (4) (kCONST before buckling),
     dCONT from Eq. (5), cB from Eq. (7) and cM from Eq. (13) in compression only.
 
-    Returns velocity [m/s], dCONT^2 [m^2], compression flags, force [N] and, when
-    recording, the components (kB x, cB x', cM x') [N], else None.
+    Returns velocity [m/s], dCONT^2 [m^2], compression flags, their count, force [N] and,
+    when recording, the components (kB x, cB x', cM x') [N], else None. The count spares
+    the steps where every impact compresses, or none does, the work that changes nothing
+    there (cM x' is zero in restitution: not computed; the flags multiply by one in
+    compression: not applied); the numbers are those of the full formula (whose cM is
+    finite while the flattened section weighs less than the ball, M1 > 0).
     """
-    v = (s.x - s.x_prev) * (1.0 / c.dt_s)
-    xc = np.maximum(s.x, 0.0)
+    v = s.x - s.x_prev
+    v *= 1.0 / c.dt_s
+    compress = v > 0.0
+    n_compress = np.count_nonzero(compress)
+    xc = np.maximum(s.x, s.zeros)
     c4, c3, c2, c1, _ = _DCONT_COEFFS
     d = c4 * xc  # Eq. (5), Horner form, in place
     d += c3
@@ -407,19 +445,20 @@ def _step_force(s: _Active, step: int, c: _StepConstants, record: bool):
         fs *= s.ak
         fs += s.kb0
         fs *= s.x
-    compress = v > 0.0
-    cm = d2 - s.d2_prev  # Eq. (13)
-    cm *= s.fluxc
-    cm /= s.mass - c.quarter_rho_pi * d2
-    cm *= compress
     cb = s.ac * d2  # Eq. (7)
-    if record:
-        fd, fm = cb * v, cm * v
-        return v, d2, compress, fs + fd + fm, (fs, fd, fm)
-    cb += cm
+    if n_compress or record:
+        cm = d2 - s.d2_prev  # Eq. (13)
+        cm *= s.fluxc
+        cm /= s.mass - c.quarter_rho_pi * d2
+        if record or n_compress < v.size:
+            cm *= compress
+        if record:
+            fd, fm = cb * v, cm * v
+            return v, d2, compress, n_compress, fs + fd + fm, (fs, fd, fm)
+        cb += cm
     cb *= v
     cb += fs
-    return v, d2, compress, cb, None
+    return v, d2, compress, n_compress, cb, None
 
 
 def _apply_cloth(x, compress, f, parts, c: _StepConstants):
@@ -458,6 +497,8 @@ class _Recorder:
 
 def _finish(s: _Active, out: _Outcome, vin, shape, max_contact_time_s, rec, last, dt_s) -> ImpactSimulation:
     """The ImpactSimulation: impacts still active keep their extremes, NaN end and a warning."""
+    if s.alive is not None:
+        s.compact()
     if s.idx.size:
         out.peak[s.idx], out.t_peak[s.idx], out.x_max[s.idx] = s.peak, s.t_peak, s.x_max
         warnings.warn(
