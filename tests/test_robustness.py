@@ -280,3 +280,24 @@ def test_undone_plate_is_reported_on_the_impact(tmp_path):
     # an ideal plate has none
     result, _ = zoo.run_trace(zoo.trace_for(0, 1), tmp_path)
     assert math.isnan(result.plate_resonance_hz)
+
+
+#: Traces of the benchmark excluded on main at 042c839 for "no quiet baseline both before and at least 2 ms
+#: after the contact" although measurable: a record ending 1.9-3.2 ms after the contact. The post stretch of the
+#: baseline fit now starts 0.5 ms after the contact when the 2 ms ringing guard leaves too little, and the
+#: decay's standard error decides: ok and right (name, seed, index, what).
+ZOO_SHORT_POST = [
+    ("short-post-tau-16s-60Hz-absent", 0, 602, "2.0 ms after the contact, 16 s amplifier not given, 20 mV of "
+     "60 Hz hum, mains absent"),
+    ("short-post-dc-1.9ms", 1, 794, "1.9 ms after the contact, DC amplifier not given, 21.8 kHz plate"),
+    ("short-post-dc-short-pre", 1, 1804, "1.8 ms pre-trigger and 3.2 ms after the contact, DC amplifier not given"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_SHORT_POST])
+def test_zoo_short_post_trigger_decay_measured(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable, name
+    assert (trace.voltage_V.size - 1) / trace.sample_rate_hz - trace.truth.end_s < 4.0e-3, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)

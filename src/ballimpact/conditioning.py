@@ -88,6 +88,8 @@ POST_WINDOW_S = 0.05  # longest post-contact stretch used for the baseline fit [
 MIN_QUIET_SAMPLES = 20  # fewest samples for a pre or post baseline [samples]
 MIN_PRE_SAMPLES = 8  # fewest pre-contact samples for an offset at all [samples]
 MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the decay [s]
+SHORT_POST_GUARD_S = 0.5e-3  # a record too short for MIN_POST_S after POST_GUARD_S: the post stretch from this on ... [s]
+SHORT_MIN_POST_S = 0.5e-3  # ... when it is at least this long (the decay's standard error then decides) [s]
 UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
 TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
@@ -242,6 +244,7 @@ class _BaselineFit:
     quiet: np.ndarray  # samples used [bool]
     pre: np.ndarray  # pre-contact quiet samples [bool]
     post: np.ndarray  # post-contact quiet samples [bool]
+    no_post: str = ""  # why kappa could not be estimated (what the record lacks), "" when it could
 
 
 def remove_spikes(voltage_V, noise_rms_V: float | None = None):
@@ -314,8 +317,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     n = v.size
     if mask is None:
         mask = np.zeros(n, dtype=bool)
-    pre, post, quiet, has_post, use_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask,
-                                                          with_decay, kappa_given)
+    pre, post, quiet, has_post, use_post, no_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard,
+                                                                   mask, with_decay, kappa_given)
     t = np.arange(n) / fs
     qi = np.flatnonzero(quiet)
     tq = t[qi]
@@ -364,15 +367,36 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         "kappa_se_per_s": float(kappa_se),
     }
     return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                        noise, amps, bic, quiet, pre, post)
+                        noise, amps, bic, quiet, pre, post, no_post)
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
-    """Quiet samples of the baseline fit: (pre, post, quiet, has_post, use_post), boolean masks and flags."""
+    """Quiet samples of the baseline fit: (pre, post, quiet, has_post, use_post, no_post).
+
+    Boolean masks and flags; ``no_post`` says what the record lacks when the
+    decay cannot be measured ("" when it can). The post stretch starts
+    post_guard after the contact; when that leaves fewer than MIN_POST_S of
+    it (a short post-trigger), it starts SHORT_POST_GUARD_S after the contact
+    and needs SHORT_MIN_POST_S only: the standard error of kappa then says in
+    _choose_tau whether a decay hidden in the noise could bias the impulse.
+    """
     pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
+    if with_decay and np.count_nonzero(post) < min_post and post_guard > SHORT_POST_GUARD_S * fs:
+        short = _regions(n, fs, start_u, end_u, pre_guard, SHORT_POST_GUARD_S * fs, mask)[1]
+        min_short = max(MIN_QUIET_SAMPLES, int(round(SHORT_MIN_POST_S * fs)))
+        if np.count_nonzero(short) >= np.count_nonzero(post):
+            post, min_post = short, min_short
     has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
     has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
+    no_post = ""
+    if with_decay and not has_pre:
+        no_post = (f"only {np.count_nonzero(pre)} quiet samples before the contact (at least {MIN_PRE_SAMPLES} "
+                   "needed) to measure the undershoot against")
+    elif with_decay and not has_post:
+        no_post = (f"only {1e3 * np.count_nonzero(post) / fs:.2g} ms of quiet record after the contact (at least "
+                   f"{1e3 * min_post / fs:.2g} ms from {1e3 * min(post_guard / fs, SHORT_POST_GUARD_S):.2g} ms after "
+                   "its end needed) to measure the undershoot")
     if not with_decay or not has_pre:
         post = post & False if has_pre else post
     quiet = pre | post
@@ -385,7 +409,7 @@ def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_deca
     if not has_post and has_pre and with_decay:
         quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
         post = np.zeros(n, dtype=bool)
-    return pre, post, quiet, has_post, use_post
+    return pre, post, quiet, has_post, use_post, no_post
 
 
 def _design(v, fs, t, t_mid, trig, qi, post_q, start_u, use_post):
@@ -1304,8 +1328,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if tau_s is not None:
         return float(tau_s), "given", [], []
     if not fit.has_post:
-        msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
-               f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
+        msg = f"charge-amplifier decay not corrected: {fit.no_post or 'no quiet baseline to measure the undershoot'}"
         return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg + " (give plate.time_constant_s)")]
     kappa, se = fit.kappa, fit.kappa_se
     undershoot = kappa * integral
