@@ -293,11 +293,21 @@ ZOO_SHORT_POST = [
     ("short-post-dc-short-pre", 1, 1804, "1.8 ms pre-trigger and 3.2 ms after the contact, DC amplifier not given"),
 ]
 
+#: ... and for "charge-amplifier undershoot not measurable" (or a window that did not settle over it) with no hum
+#: or little: 5 hum harmonics fitted over about one period took up the undershoot's step; the fit with fewer of
+#: them, of least BIC, measures it (name, seed, index, what).
+ZOO_FEWER_HARMONICS = [
+    ("no-hum-60Hz-given-5.5ms-pre", 1, 742, "5.5 ms pre, 16 ms post, no hum, 60 Hz given, 10 s amplifier not given"),
+    ("no-hum-50Hz-given-3.4ms-pre", 0, 1346, "3.4 ms pre, 22 ms post, no hum, 50 Hz given, 24 s amplifier not given"),
+    ("hum-0.7mV-3.7ms-pre", 1, 236, "3.7 ms pre, 29 ms post, 0.7 mV of 50 Hz given, 1.9 s amplifier not given"),
+]
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_SHORT_POST])
+
+@pytest.mark.parametrize("name, seed, index, what",
+                         [pytest.param(*c, id=c[0]) for c in ZOO_SHORT_POST + ZOO_FEWER_HARMONICS])
 def test_zoo_short_post_trigger_decay_measured(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
-    assert (trace.voltage_V.size - 1) / trace.sample_rate_hz - trace.truth.end_s < 4.0e-3, name
+    assert trace.rig.tau_known is False, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, must_be_ok=True)

@@ -303,7 +303,7 @@ def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
 
 
 def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, with_decay=False,
-                  kappa_given=None) -> _BaselineFit:
+                  kappa_given=None, reduce=True) -> _BaselineFit:
     """Robust least squares of the baseline model on the quiet samples (see the module docstring).
 
     Pre-contact quiet samples: ``v = B`` with ``B = sum_j theta_j phi_j`` (offset,
@@ -313,6 +313,12 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     the running integrals of v and phi_j). For a given kappa this is linear in
     theta; kappa (when not given) minimises the residual sum of squares, found
     on a grid and refined, with normal equations built once (quadratic in kappa).
+
+    When kappa comes out too uncertain for the impulse (a decay hidden in its
+    standard error could bias it by more than BIAS_EXCLUDE_FRACTION, see
+    _choose_tau) and ``reduce``, the fits with fewer hum harmonics (down to
+    none) are tried too: the harmonics can take up the undershoot's step in a
+    short record, and the fit of least BIC is returned.
     """
     n = v.size
     if mask is None:
@@ -366,8 +372,17 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         "kappa_per_s": float(kappa),
         "kappa_se_per_s": float(kappa_se),
     }
-    return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                        noise, amps, bic, quiet, pre, post, no_post)
+    fit = _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
+                       noise, amps, bic, quiet, pre, post, no_post)
+    hidden = UNDERSHOOT_SIGNIFICANCE * kappa_se
+    if (reduce and freqs and use_post and kappa_given is None and hidden > abs(kappa)
+            and (end_u - start_u) / fs * hidden / 2.0 > BIAS_EXCLUDE_FRACTION):
+        for k in range(len(freqs)):
+            alt = _fit_baseline(v, fs, freqs[:k], start_u, end_u, pre_guard, post_guard, mask, with_decay,
+                                kappa_given, reduce=False)
+            if alt.bic < fit.bic:
+                fit = alt
+    return fit
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
