@@ -305,7 +305,7 @@ ZOO_FEWER_HARMONICS = [
 
 @pytest.mark.parametrize("name, seed, index, what",
                          [pytest.param(*c, id=c[0]) for c in ZOO_SHORT_POST + ZOO_FEWER_HARMONICS])
-def test_zoo_short_post_trigger_decay_measured(name, seed, index, what, tmp_path):
+def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
     assert trace.rig.tau_known is False, name
