@@ -762,3 +762,25 @@ def test_a_ringing_line_is_found_above_the_force_spectrum_or_large_enough(f_hz, 
     found = _ringing_line(force + noise + fraction * np.sin(2 * np.pi * f_hz * t), fs, 1e-6)
     assert found is not None
     assert_allclose(found[0], f_hz, rtol=0.05)
+
+
+def test_unstable_contact_window_message_names_the_windows():
+    # zoo trace 1:164 (1.5 ms pre-trigger, hum and decay not given): the window goes back and forth between
+    # the contact end (5.9 ms) and 2 ms later as the baseline fitted around it changes; the message says so
+    import zoo
+
+    tr = zoo.trace_for(1, 164)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConditioningWarning)
+        c = condition_voltage(tr.voltage_V, tr.sample_rate_hz, polarity=tr.rig.polarity, n_harmonics=5)
+    msgs = [p.message for p in c.problems if p.kind is ProblemKind.CONTACT_UNSTABLE]
+    assert len(msgs) == 1, c.problems
+    m = re.search(r"still move by (\S+) samples after \d+ iterations \(last from (\S+)-(\S+) ms to (\S+)-(\S+) ms "
+                  r"of the record: the decay, drift and hum fitted around each window move it\)$", msgs[0])
+    assert m, msgs[0]
+    moved, a0, b0, a1, b1 = (float(g) for g in m.groups())
+    # the move is the larger of the two ends' moves, in samples (3 digits of ms: a sample is 0.038 ms)
+    assert_allclose(moved, max(abs(a1 - a0), abs(b1 - b0)) * 1e-3 * tr.sample_rate_hz, rtol=0.1, atol=1.0)
+    # both windows start at the contact (truth 1.54 ms) and end after it starts
+    assert_allclose([a0, a1], tr.truth.start_s * 1e3, atol=0.05)
+    assert min(b0, b1) > tr.truth.start_s * 1e3 + 1.0

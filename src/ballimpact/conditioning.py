@@ -915,6 +915,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
     problems: list[Problem] = []
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
+    windows = [(start_u, end_u)]
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
             fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
@@ -935,13 +936,18 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
         moved = max(abs(new_start - start_u), abs(new_end - end_u))
         same_mask = np.array_equal(new_mask, mask)
         start_u, end_u, mask = new_start, new_end, new_mask
+        windows.append((start_u, end_u))
         if moved < CONVERGED_SAMPLES and same_mask and not (len(candidates) > 1 and n_iter < 2):
             break
     else:
         if c.found and moved > UNSTABLE_SAMPLES:
+            (a0, b0), (a1, b1) = windows[-2], windows[-1]
             problems.append(Problem(ProblemKind.CONTACT_UNSTABLE,
                                     f"contact window not stable under the baseline fit: its ends still move by "
-                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations"))
+                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations (last from "
+                                    f"{1e3 * a0 / fs:.4g}-{1e3 * b0 / fs:.4g} ms to {1e3 * a1 / fs:.4g}-"
+                                    f"{1e3 * b1 / fs:.4g} ms of the record: the decay, drift and hum fitted "
+                                    "around each window move it)"))
     return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
                       contact_integral)
 
