@@ -1009,8 +1009,23 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
                 out.append(Problem(ProblemKind.BASELINE_RESIDUAL,
                                    f"quiet baseline not explained by offset, drift, hum and decay: "
                                    f"{excess * scale * 1e3:.3g} mV rms above the white noise "
-                                   f"({100 * excess / peak:.2g} % of the peak; hum or drift not resolved?)"))
+                                   f"({100 * excess / peak:.2g} % of the peak; "
+                                   f"{_residual_where(y, fit.pre[qi], fit.post[qi], white, peak)})"))
     return out
+
+
+def _residual_where(y, pre, post, white, peak) -> str:
+    """Where a quiet residual that is more than white noise is: after the contact only, or not (for its reason)."""
+    def excess(sel):
+        r = y[sel] - np.median(y[sel])
+        r = np.clip(r, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else r
+        e = math.sqrt(max(float(np.mean(r ** 2)) - white ** 2, 0.0))
+        return e > FLAT_FRACTION * peak and e > white
+
+    if np.count_nonzero(pre) >= MIN_QUIET_SAMPLES and np.count_nonzero(post) >= MIN_QUIET_SAMPLES \
+            and excess(post) and not excess(pre):
+        return "after the contact only: plate ringing that outlasts the guard, or a decay not resolved?"
+    return "hum or drift not resolved?"
 
 
 def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
