@@ -23,9 +23,11 @@ For a given kappa this is linear in the model coefficients theta; kappa (when
 ``tau_s`` is not given) is the value that minimises the residual sum of squares,
 found on a grid and refined, from normal equations that are quadratic in kappa
 and built once per fit. The fit uses the quiet samples only: up to 100 ms of
-pre-trigger and up to 50 ms after a guard for plate ringing, minus every event
-found in the record (second contacts, with guards), with one robust pass that
-drops outliers. Single-sample spikes are replaced by the mean of their
+pre-trigger and up to 50 ms after a guard for plate ringing (2 ms; 0.5 ms when
+the record ends too soon for 2 ms after it), minus every event found in the
+record (second contacts, with guards), with one robust pass that drops
+outliers. When kappa comes out too uncertain for the impulse, the fits with
+fewer hum harmonics are tried too (the least BIC wins). Single-sample spikes are replaced by the mean of their
 neighbours first. When ``tau_s`` is given it is used exactly.
 
 Events before baseline: each iteration decay-corrects the whole record and
