@@ -23,9 +23,11 @@ For a given kappa this is linear in the model coefficients theta; kappa (when
 ``tau_s`` is not given) is the value that minimises the residual sum of squares,
 found on a grid and refined, from normal equations that are quadratic in kappa
 and built once per fit. The fit uses the quiet samples only: up to 100 ms of
-pre-trigger and up to 50 ms after a guard for plate ringing, minus every event
-found in the record (second contacts, with guards), with one robust pass that
-drops outliers. Single-sample spikes are replaced by the mean of their
+pre-trigger and up to 50 ms after a guard for plate ringing (2 ms; 0.5 ms when
+the record ends too soon for 2 ms after it), minus every event found in the
+record (second contacts, with guards), with one robust pass that drops
+outliers. When kappa comes out too uncertain for the impulse, the fits with
+fewer hum harmonics are tried too (the least BIC wins). Single-sample spikes are replaced by the mean of their
 neighbours first. When ``tau_s`` is given it is used exactly.
 
 Events before baseline: each iteration decay-corrects the whole record and
@@ -88,6 +90,8 @@ POST_WINDOW_S = 0.05  # longest post-contact stretch used for the baseline fit [
 MIN_QUIET_SAMPLES = 20  # fewest samples for a pre or post baseline [samples]
 MIN_PRE_SAMPLES = 8  # fewest pre-contact samples for an offset at all [samples]
 MIN_POST_S = 2.0e-3  # shortest post-contact stretch for the decay [s]
+SHORT_POST_GUARD_S = 0.5e-3  # a record too short for MIN_POST_S after POST_GUARD_S: the post stretch from this on ... [s]
+SHORT_MIN_POST_S = 0.5e-3  # ... when it is at least this long (the decay's standard error then decides) [s]
 UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
 TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
@@ -247,6 +251,7 @@ class _BaselineFit:
     quiet: np.ndarray  # samples used [bool]
     pre: np.ndarray  # pre-contact quiet samples [bool]
     post: np.ndarray  # post-contact quiet samples [bool]
+    no_post: str = ""  # why kappa could not be estimated (what the record lacks), "" when it could
 
 
 def remove_spikes(voltage_V, noise_rms_V: float | None = None):
@@ -305,7 +310,7 @@ def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
 
 
 def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, with_decay=False,
-                  kappa_given=None) -> _BaselineFit:
+                  kappa_given=None, reduce=True) -> _BaselineFit:
     """Robust least squares of the baseline model on the quiet samples (see the module docstring).
 
     Pre-contact quiet samples: ``v = B`` with ``B = sum_j theta_j phi_j`` (offset,
@@ -315,12 +320,18 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     the running integrals of v and phi_j). For a given kappa this is linear in
     theta; kappa (when not given) minimises the residual sum of squares, found
     on a grid and refined, with normal equations built once (quadratic in kappa).
+
+    When kappa comes out too uncertain for the impulse (a decay hidden in its
+    standard error could bias it by more than BIAS_EXCLUDE_FRACTION, see
+    _choose_tau) and ``reduce``, the fits with fewer hum harmonics (down to
+    none) are tried too: the harmonics can take up the undershoot's step in a
+    short record, and the fit of least BIC is returned.
     """
     n = v.size
     if mask is None:
         mask = np.zeros(n, dtype=bool)
-    pre, post, quiet, has_post, use_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask,
-                                                          with_decay, kappa_given)
+    pre, post, quiet, has_post, use_post, no_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard,
+                                                                   mask, with_decay, kappa_given)
     t = np.arange(n) / fs
     qi = np.flatnonzero(quiet)
     tq = t[qi]
@@ -368,16 +379,46 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         "kappa_per_s": float(kappa),
         "kappa_se_per_s": float(kappa_se),
     }
-    return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                        noise, amps, bic, quiet, pre, post)
+    fit = _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
+                       noise, amps, bic, quiet, pre, post, no_post)
+    hidden = UNDERSHOOT_SIGNIFICANCE * kappa_se
+    if (reduce and freqs and use_post and kappa_given is None and hidden > abs(kappa)
+            and (end_u - start_u) / fs * hidden / 2.0 > BIAS_EXCLUDE_FRACTION):
+        for k in range(len(freqs)):
+            alt = _fit_baseline(v, fs, freqs[:k], start_u, end_u, pre_guard, post_guard, mask, with_decay,
+                                kappa_given, reduce=False)
+            if alt.bic < fit.bic:
+                fit = alt
+    return fit
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
-    """Quiet samples of the baseline fit: (pre, post, quiet, has_post, use_post), boolean masks and flags."""
+    """Quiet samples of the baseline fit: (pre, post, quiet, has_post, use_post, no_post).
+
+    Boolean masks and flags; ``no_post`` says what the record lacks when the
+    decay cannot be measured ("" when it can). The post stretch starts
+    post_guard after the contact; when that leaves fewer than MIN_POST_S of
+    it (a short post-trigger), it starts SHORT_POST_GUARD_S after the contact
+    and needs SHORT_MIN_POST_S only: the standard error of kappa then says in
+    _choose_tau whether a decay hidden in the noise could bias the impulse.
+    """
     pre, post = _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask)
     min_post = max(MIN_QUIET_SAMPLES, int(round(MIN_POST_S * fs)))
+    if with_decay and np.count_nonzero(post) < min_post and post_guard > SHORT_POST_GUARD_S * fs:
+        short = _regions(n, fs, start_u, end_u, pre_guard, SHORT_POST_GUARD_S * fs, mask)[1]
+        min_short = max(MIN_QUIET_SAMPLES, int(round(SHORT_MIN_POST_S * fs)))
+        if np.count_nonzero(short) >= np.count_nonzero(post):
+            post, min_post = short, min_short
     has_pre = np.count_nonzero(pre) >= MIN_PRE_SAMPLES
     has_post = has_pre and with_decay and np.count_nonzero(post) >= min_post
+    no_post = ""
+    if with_decay and not has_pre:
+        no_post = (f"only {np.count_nonzero(pre)} quiet samples before the contact (at least {MIN_PRE_SAMPLES} "
+                   "needed) to measure the undershoot against")
+    elif with_decay and not has_post:
+        no_post = (f"only {1e3 * np.count_nonzero(post) / fs:.2g} ms of quiet record after the contact (at least "
+                   f"{1e3 * min_post / fs:.2g} ms from {1e3 * min(post_guard / fs, SHORT_POST_GUARD_S):.2g} ms after "
+                   "its end needed) to measure the undershoot")
     if not with_decay or not has_pre:
         post = post & False if has_pre else post
     quiet = pre | post
@@ -390,7 +431,7 @@ def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_deca
     if not has_post and has_pre and with_decay:
         quiet = pre  # the post stretch alone cannot tell an offset from the undershoot
         post = np.zeros(n, dtype=bool)
-    return pre, post, quiet, has_post, use_post
+    return pre, post, quiet, has_post, use_post, no_post
 
 
 def _design(v, fs, t, t_mid, trig, qi, post_q, start_u, use_post):
@@ -881,6 +922,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
     problems: list[Problem] = []
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
+    windows = [(start_u, end_u)]
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
             fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
@@ -901,13 +943,18 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
         moved = max(abs(new_start - start_u), abs(new_end - end_u))
         same_mask = np.array_equal(new_mask, mask)
         start_u, end_u, mask = new_start, new_end, new_mask
+        windows.append((start_u, end_u))
         if moved < CONVERGED_SAMPLES and same_mask and not (len(candidates) > 1 and n_iter < 2):
             break
     else:
         if c.found and moved > UNSTABLE_SAMPLES:
+            (a0, b0), (a1, b1) = windows[-2], windows[-1]
             problems.append(Problem(ProblemKind.CONTACT_UNSTABLE,
                                     f"contact window not stable under the baseline fit: its ends still move by "
-                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations"))
+                                    f"{moved:.2g} samples after {MAX_ITERATIONS} iterations (last from "
+                                    f"{1e3 * a0 / fs:.4g}-{1e3 * b0 / fs:.4g} ms to {1e3 * a1 / fs:.4g}-"
+                                    f"{1e3 * b1 / fs:.4g} ms of the record: the decay, drift and hum fitted "
+                                    "around each window move it)"))
     return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
                       contact_integral)
 
@@ -969,8 +1016,23 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
                 out.append(Problem(ProblemKind.BASELINE_RESIDUAL,
                                    f"quiet baseline not explained by offset, drift, hum and decay: "
                                    f"{excess * scale * 1e3:.3g} mV rms above the white noise "
-                                   f"({100 * excess / peak:.2g} % of the peak; hum or drift not resolved?)"))
+                                   f"({100 * excess / peak:.2g} % of the peak; "
+                                   f"{_residual_where(y, fit.pre[qi], fit.post[qi], white, peak)})"))
     return out
+
+
+def _residual_where(y, pre, post, white, peak) -> str:
+    """Where a quiet residual that is more than white noise is: after the contact only, or not (for its reason)."""
+    def excess(sel):
+        r = y[sel] - np.median(y[sel])
+        r = np.clip(r, -ROBUST_SIGMA * white, ROBUST_SIGMA * white) if white > 0 else r
+        e = math.sqrt(max(float(np.mean(r ** 2)) - white ** 2, 0.0))
+        return e > FLAT_FRACTION * peak and e > white
+
+    if np.count_nonzero(pre) >= MIN_QUIET_SAMPLES and np.count_nonzero(post) >= MIN_QUIET_SAMPLES \
+            and excess(post) and not excess(pre):
+        return "after the contact only: plate ringing that outlasts the guard, or a decay not resolved?"
+    return "hum or drift not resolved?"
 
 
 def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
@@ -1375,8 +1437,7 @@ def _choose_tau(tau_s, fit: _BaselineFit, integral: float, duration_s: float, sc
     if tau_s is not None:
         return float(tau_s), "given", [], []
     if not fit.has_post:
-        msg = ("charge-amplifier decay not corrected: no quiet baseline both before and at least "
-               f"{MIN_POST_S * 1e3:g} ms after the contact to measure the undershoot")
+        msg = f"charge-amplifier decay not corrected: {fit.no_post or 'no quiet baseline to measure the undershoot'}"
         return math.inf, "none", [msg], [Problem(ProblemKind.DECAY_NOT_CORRECTED, msg + " (give plate.time_constant_s)")]
     kappa, se = fit.kappa, fit.kappa_se
     undershoot = kappa * integral
