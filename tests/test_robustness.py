@@ -27,6 +27,7 @@ from hypothesis import HealthCheck, Phase, assume, example, given, settings
 from hypothesis import strategies as st
 
 import zoo
+from ballimpact.problems import ProblemKind
 
 #: Rig overrides that leave only the factor of interest: no spikes, no other fault.
 CLEAN = dict(truncate="", clip_factor=0.0, spikes=(), second=None)
@@ -319,4 +320,17 @@ def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
     assert trace.truth.measurable, name
     assert trace.rig.tau_known is False, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
+    if name in PEAK_REFUSED:  # the decay is measured: no baseline or decay problem is left
+        assert_invariant(trace, result, judgement)
+        assert not {p.kind for p in result.problems} & BASELINE_KINDS, result.reason
+        assert result.problems, result.reason
+        assert all(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in result.problems), result.reason
+    else:
+        assert_invariant(trace, result, judgement, must_be_ok=True)
+
+
+#: Of those, excluded since commit a56273e for their peak: a lower sampled maximum after a steep rise (its top may
+#: be above the largest sample; 1:236's was not, peak +0.16 %), which the samples cannot tell from a spike's.
+PEAK_REFUSED = {"hum-0.7mV-3.7ms-pre"}
+BASELINE_KINDS = {ProblemKind.DECAY_NOT_CORRECTED, ProblemKind.UNDERSHOOT_NOT_MEASURABLE, ProblemKind.CONTACT_UNSTABLE,
+                  ProblemKind.BASELINE_OFF_ZERO, ProblemKind.BASELINE_RESIDUAL, ProblemKind.MAINS_UNRESOLVED}
