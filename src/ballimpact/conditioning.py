@@ -76,7 +76,7 @@ from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    undo_plate_resonance, undone_noise_gain)
+                    refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -137,6 +137,7 @@ NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
 NEGATIVE_SIGMA = 6.0  # ... and this many standard errors of the average [-]
 PLATE_ID_AFTER_S = 2.0e-3  # the plate's ringing is identified from the contact and this long after it [s]
 PLATE_ID_LAGS = (5, 8)  # two identifications, instruments this many samples back [samples]
+PLATE_REFINE_S = (0.2e-3, 1.0e-3)  # each refined on the undone force from this long before to after the contact [s]
 PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ... [-]
 PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
 PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most this fraction of TC [-]
@@ -712,25 +713,37 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
         return None  # the inverse's backward pass starts from rest at the record's end: the ringing must be over
     a = max(int(math.ceil(s_u)) + 2, 0)
     b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
+    ra = max(int(s_u - PLATE_REFINE_S[0] * fs), 0)
+    rb = min(int(e_u + PLATE_REFINE_S[1] * fs), x.size)
     found = []
     for lag in PLATE_ID_LAGS:
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
         if plate is None:
             return None
-        exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
-        for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
-            y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-            c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
-            if c is not None:
-                found.append((y, c, plate, cutoff))
-                break
-        else:
+        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+        if hit is None:  # the undone force still rings or fails a check: refine the resonance and try again
+            plate = refine_plate_resonance(x[ra:rb], fs, plate)
+            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+        if hit is None:
             return None
+        found.append(hit)
     (y, c, plate, cutoff), (_, c2, _, _) = found
     if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
             or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
         return None
     return y, c, plate, cutoff
+
+
+def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
+    """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
+    (force, its contact, the resonance, the cutoff [Hz]); None when none does."""
+    exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
+    for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
+        y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+        if c is not None:
+            return y, c, plate, cutoff
+    return None
 
 
 def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
