@@ -6,6 +6,7 @@ continuous second-order system, evaluated at the sample instants.
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -178,6 +179,12 @@ def test_conditioning_refuses_to_undo_when_the_undone_force_is_too_noisy():
     c = condition_voltage(volts, fs, mains_hz=None, tau_s=math.inf)
     assert c.plate is None
     assert {p.kind for p in c.problems} & {ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING}
+    # and the reason says what was tried and why it was refused: the plate's resonance, the undone force's
+    # noise (the sensed 2 mV through the inverse: several % of the 2.5 V peak) and what the low-pass left
+    why = [p.message for p in c.problems if "not undone" in p.message]
+    assert len(why) == 1 and re.match(r"plate resonance at 4\.0\d kHz \(damping ratio 0\.0[23]\d?\) not undone: "
+                                       r"the undone force is too noisy \(noise [1-9]\.?\d* % of the peak\); "
+                                       r"low-passed to \d+\.?\d* kHz, ", why[0]), why
 
 
 def test_conditioning_does_not_undo_a_contact_that_runs_to_the_record_end():
