@@ -164,8 +164,17 @@ ZOO_LOWPASSED = [
 ]
 
 
+#: Traces of the benchmark excluded on main at 042c839 although measurable: the instrumental-variable
+#: identification was a few per cent off in fn and the undone force still rang; refined to the resonance that
+#: leaves the least ringing in it, it is undone, ok and right (name, seed, index, what).
+ZOO_REFINED = [
+    ("plate-12.9kHz-at-199kHz-refined", 0, 350, "12.9 kHz plate, damping 0.027, identified at 12.3 kHz, 0.08"),
+    ("plate-9.3kHz-at-167kHz-refined", 0, 1552, "9.3 kHz plate, damping 0.019, identified at 9.05 kHz, 0.08"),
+]
+
+
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_UNDONE + ZOO_LOWPASSED])
+                         [pytest.param(*c, id=c[0]) for c in ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED])
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
