@@ -819,8 +819,8 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
         return f"the undone force is too noisy (noise {100 * noise / float(c.peak_V):.2g} % of the peak)"
     checked = replace(fit, noise=noise)
     cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-    seen = _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) + _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
-                                                                                  ce_u, cs_u, ce_u)
+    seen = (_end_problems(y, fs, checked, c, cs_u, ce_u, 1.0, deep_ends=False)
+            + _ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u))
     if seen:
         return "the undone force still shows " + seen[0].message.split(":")[0]
     bias = 0.0
@@ -1007,8 +1007,10 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
     return out
 
 
-def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
-    """Contact ends that hold no force, are located to half a sample only or move when fitted again."""
+def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, deep_ends: bool = True):
+    """Contact ends that hold no force, are located to half a sample only or move when fitted again
+    (``deep_ends``: by up to SPREAD_DEEP_FRACTION of TC where the refit's threshold is low; not on an undone
+    force, whose amplified noise and model residuals are no sensed force's)."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
@@ -1035,7 +1037,7 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
     # the refit's samples start at SPREAD_FACTOR times the foot's threshold: where that is a small part of the peak,
     # both fits end within it of zero and the one of the lower samples is extrapolated less (bench/robustness.py:
     # punctured balls at 50 kHz, 1 mV of noise on 4 V, the ends move by 0.5-0.77 % and TC is within 0.65 %)
-    deep = SPREAD_FACTOR * FOOT_SIGMA * fit.noise < SPREAD_DEEP_LEVEL * float(contact.peak_V)
+    deep = deep_ends and SPREAD_FACTOR * FOOT_SIGMA * fit.noise < SPREAD_DEEP_LEVEL * float(contact.peak_V)
     limit = SPREAD_DEEP_FRACTION if deep else SPREAD_MAX_FRACTION
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
         if abs(moved) > limit * contact.contact_time_s:
