@@ -839,7 +839,8 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
                    f"{100 * bias / (ce_u - cs_u):.2g} % of it the kernel's spread") + ")")
     inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
-        return "the undone force pulls on the plate during the contact"  # the force is not what this plate's inverse assumes
+        # the force is not what this plate's inverse assumes
+        return "the undone force pulls on the plate during the contact"
     if cs_u > s_u + PLATE_START_LATE:
         return "the undone force starts later than the sensed one (a foot lost in its noise)"
     return c
