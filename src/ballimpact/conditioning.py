@@ -74,7 +74,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
-from .contact import FOOT_SIGMA, SPREAD_FACTOR, ContactResult, detect_contact, robust_noise
+from .contact import ContactResult, detect_contact, robust_noise
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
                     refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
@@ -121,8 +121,6 @@ RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins 
 RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
-SPREAD_DEEP_FRACTION = 0.007  # ... or by more than this where that refit's threshold is below SPREAD_DEEP_LEVEL [-]
-SPREAD_DEEP_LEVEL = 0.005  # ... of the peak (its samples then lie so near zero that little is extrapolated) [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
@@ -819,7 +817,7 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
         return f"the undone force is too noisy (noise {100 * noise / float(c.peak_V):.2g} % of the peak)"
     checked = replace(fit, noise=noise)
     cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-    seen = (_end_problems(y, fs, checked, c, cs_u, ce_u, 1.0, deep_ends=False)
+    seen = (_end_problems(y, fs, checked, c, cs_u, ce_u, 1.0)
             + _ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u))
     if seen:
         return "the undone force still shows " + seen[0].message.split(":")[0]
@@ -1008,10 +1006,8 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
     return out
 
 
-def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, deep_ends: bool = True):
-    """Contact ends that hold no force, are located to half a sample only or move when fitted again
-    (``deep_ends``: by up to SPREAD_DEEP_FRACTION of TC where the refit's threshold is low; not on an undone
-    force, whose amplified noise and model residuals are no sensed force's)."""
+def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
+    """Contact ends that hold no force, are located to half a sample only or move when fitted again."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
@@ -1035,13 +1031,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                            f"contact {' and '.join(jumps)} between two samples: the force jumps from zero there, so "
                            f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
                            f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)"))
-    # the refit's samples start at SPREAD_FACTOR times the foot's threshold: where that is a small part of the peak,
-    # both fits end within it of zero and the one of the lower samples is extrapolated less (bench/robustness.py:
-    # punctured balls at 50 kHz, 1 mV of noise on 4 V, the ends move by 0.5-0.77 % and TC is within 0.65 %)
-    deep = deep_ends and SPREAD_FACTOR * FOOT_SIGMA * fit.noise < SPREAD_DEEP_LEVEL * float(contact.peak_V)
-    limit = SPREAD_DEEP_FRACTION if deep else SPREAD_MAX_FRACTION
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
-        if abs(moved) > limit * contact.contact_time_s:
+        if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
