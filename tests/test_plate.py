@@ -402,3 +402,18 @@ def test_refinement_keeps_a_plate_that_is_right_and_rejects_bad_input():
         refine_plate_resonance(sensed, fs, plate, band=1.0)
     with pytest.raises(ValueError, match="non-finite"):
         refine_plate_resonance(np.full(50, np.nan), fs, plate)
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs", [(500.0, 0.3, 200000.0), (3000.0, 0.0, 50000.0), (9000.0, 0.05, 20000.0),
+                                             (20000.0, 0.5, 100000.0), (8000.0, 0.9, 66964.3)])
+def test_closed_form_hold_is_scipys(fn_hz, zeta, fs):
+    # the first-order-hold discretisation in closed form equals scipy's matrix-exponential one
+    from scipy import signal
+
+    from ballimpact.plate import plate_discretisation
+
+    wn = 2 * math.pi * fn_hz
+    b0, a0, _ = signal.cont2discrete(([wn * wn], [1.0, 2 * zeta * wn, wn * wn]), 1.0 / fs, method="foh")
+    b, a = plate_discretisation(fn_hz, zeta, fs)
+    assert_allclose(b, np.ravel(b0)[-3:], rtol=1e-8, atol=1e-9 * np.max(np.abs(b0)))
+    assert_allclose(a, np.ravel(a0), rtol=1e-10, atol=1e-12)
