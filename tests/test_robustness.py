@@ -144,6 +144,11 @@ ZOO_REGRESSION = [
     # ok but wrong on the way to it (never on main), when the spread check split bent feet too: a 953 Hz plate's
     # lag is a bent tail, and only the one-line refit at twice the threshold sees that the end is not determined
     ("plate-953Hz-lag-bent-tail", 1, 318, "953 Hz plate, damping 0.28, at 189 kHz: a bent tail, TC +10 %", False),
+    # ok but wrong on the way to it (never on main), with a wider limit (0.7 % of TC) for the end refit where its
+    # threshold is below 0.5 % of the peak: an aliased plate's undone force passed with an end that moved 0.5-0.7 %
+    ("aliased-plate-undone-end-refit", 1, 698, "22.8 kHz plate at 34.6 kHz (alias 11.8 kHz) undone: TC +1.03 %", False),
+    ("aliased-plate-end-refit-seed-2", 2, 586, "22.6 kHz plate at 24.9 kHz (alias 2.3 kHz), its end refitted 0.56 % "
+     "later: kCAL +1.5 %, peak -12 % when allowed", False),
     # ok but wrong on main at commit a56273e, on seed 3 (held out until then): a force with two humps
     ("plate-848Hz-two-humps", 3, 1077, "848 Hz plate, damping 0.22, at 50 kHz: the spike's ringing makes a "
      "second hump, TC -12 %, peak +27 %", False),
@@ -170,8 +175,17 @@ ZOO_LOWPASSED = [
 ]
 
 
+#: Traces of the benchmark excluded on main at 042c839 although measurable: the instrumental-variable
+#: identification was a few per cent off in fn and the undone force still rang; refined to the resonance that
+#: leaves the least ringing in it, it is undone, ok and right (name, seed, index, what).
+ZOO_REFINED = [
+    ("plate-12.9kHz-at-199kHz-refined", 0, 350, "12.9 kHz plate, damping 0.027, identified at 12.3 kHz, 0.08"),
+    ("plate-9.3kHz-at-167kHz-refined", 0, 1552, "9.3 kHz plate, damping 0.019, identified at 9.05 kHz, 0.08"),
+]
+
+
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_UNDONE + ZOO_LOWPASSED])
+                         [pytest.param(*c, id=c[0]) for c in ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED])
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name

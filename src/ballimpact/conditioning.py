@@ -78,7 +78,7 @@ from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    undo_plate_resonance, undone_noise_gain)
+                    refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -146,6 +146,7 @@ NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
 NEGATIVE_SIGMA = 6.0  # ... and this many standard errors of the average [-]
 PLATE_ID_AFTER_S = 2.0e-3  # the plate's ringing is identified from the contact and this long after it [s]
 PLATE_ID_LAGS = (5, 8)  # two identifications, instruments this many samples back [samples]
+PLATE_REFINE_S = (0.2e-3, 1.0e-3)  # each refined on the undone force from this long before to after the contact [s]
 PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ... [-]
 PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
 PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most this fraction of TC [-]
@@ -684,7 +685,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
-        if undone is not None:
+        if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
+            problems.append(Problem(ProblemKind.PLATE_RINGING, undone))
+        elif undone is not None:
             y, contact, plate, cutoff = undone
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
@@ -717,7 +720,8 @@ def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
 
 
 def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
-    """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; or None.
+    """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; None
+    when it is not tried; why it was refused, in words (str), when it was.
 
     Tried only when every problem is one plate ringing causes and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
@@ -736,6 +740,13 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     is left where the force departs from the first-order hold the inverse
     assumes (a jump between samples leaves an alternating tail decaying by the
     zeros of the sampled plate).
+
+    When every undone force of an identification is refused, the resonance
+    is refined (:func:`ballimpact.plate.refine_plate_resonance`: the fn and
+    zeta near it that leave the least ringing in the undone force; the
+    instrumental-variable fit is off by a few per cent in fn on noisy traces,
+    and the force undone with it still rings) and tried again, with the same
+    checks.
 
     An undone force refused by these checks is tried again through a
     zero-phase low-pass on a compact kernel (``ballimpact.plate.lowpass_zero_phase``,
@@ -758,25 +769,44 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
         return None  # the inverse's backward pass starts from rest at the record's end: the ringing must be over
     a = max(int(math.ceil(s_u)) + 2, 0)
     b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
+    ra = max(int(s_u - PLATE_REFINE_S[0] * fs), 0)
+    rb = min(int(e_u + PLATE_REFINE_S[1] * fs), x.size)
     found = []
     for lag in PLATE_ID_LAGS:
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
         if plate is None:
-            return None
-        exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
-        for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
-            y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-            c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
-            if c is not None:
-                found.append((y, c, plate, cutoff))
-                break
-        else:
-            return None
+            return ("plate resonance not undone: no decaying oscillation identified out of the noise in the "
+                    "contact and the 2 ms after it")
+        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+        if isinstance(hit, str):  # the undone force still rings or fails a check: refine the resonance, try again
+            plate = refine_plate_resonance(x[ra:rb], fs, plate)
+            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+        if isinstance(hit, str):
+            return (f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}) "
+                    f"not undone: {hit}")
+        found.append(hit)
     (y, c, plate, cutoff), (_, c2, _, _) = found
     if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
             or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
-        return None
+        return (f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: two identifications of it "
+                f"disagree by {100 * abs(c.contact_time_s / c2.contact_time_s - 1):.2g} % on TC and "
+                f"{100 * abs(c.peak_V / c2.peak_V - 1):.2g} % on the peak")
     return y, c, plate, cutoff
+
+
+def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
+    """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
+    (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
+    low-passed one failed, in words (str)."""
+    exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
+    why = []
+    for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
+        y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+        if not isinstance(c, str):
+            return y, c, plate, cutoff
+        why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
+    return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
 
 
 def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
@@ -821,34 +851,42 @@ def _smoothed_peak_loss(y, fs, sigma):
 
 
 def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
-    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`, else None."""
+    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`; else what it
+    failed, in words (str)."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
-    if not c.found or not c.peak_V > 0 or c.n_impacts > 1 \
-            or (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
-        return None
+    if not c.found or not c.peak_V > 0 or c.n_impacts > 1:
+        return "the undone force holds no single contact"
+    if (c.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs > x.size - 1:
+        return "the undone contact ends too close to the record's end"
     noise = float(c.noise_rms_V)
-    if noise > PLATE_NOISE_FRACTION * float(c.peak_V):
-        return None  # the largest sample of so noisy a force is a biased peak
+    if noise > PLATE_NOISE_FRACTION * float(c.peak_V):  # the largest sample of so noisy a force is a biased peak
+        return f"the undone force is too noisy (noise {100 * noise / float(c.peak_V):.2g} % of the peak)"
     checked = replace(fit, noise=noise)
     cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-    if _end_problems(y, fs, checked, c, cs_u, ce_u, 1.0) or _ringing_problems(y, fs, noise, float(c.peak_V), cs_u,
-                                                                              ce_u, cs_u, ce_u):
-        return None
+    seen = (_end_problems(y, fs, checked, c, cs_u, ce_u, 1.0)
+            + _ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u))
+    if seen:
+        return "the undone force still shows " + seen[0].message.split(":")[0]
     bias = 0.0
     if not math.isinf(cutoff):
         # the low-pass spreads the force by its kernel's half-width at each end (its support): the contact
         # found on it may be longer by up to twice that
         half_width, sigma = lowpass_spread_samples(fs, cutoff)
         bias = PLATE_LOWPASS_BIAS * half_width
-        if _smoothed_peak_loss(y, fs, sigma) > PLATE_LOWPASS_PEAK:
-            return None  # the low-pass flattens a peak sharper than its kernel
-    if 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias > PLATE_TC_FRACTION * (ce_u - cs_u):
-        return None
+        loss = _smoothed_peak_loss(y, fs, sigma)
+        if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
+            return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
+    uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias
+    if uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u):
+        return (f"the undone TC is known to {100 * uncertainty / (ce_u - cs_u):.2g} % only ("
+                + ("noise over slope at its ends" if math.isinf(cutoff) else
+                   f"{100 * bias / (ce_u - cs_u):.2g} % of it the kernel's spread") + ")")
     inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
-        return None  # a pull in the contact: the force is not what this plate's inverse assumes
+        # the force is not what this plate's inverse assumes
+        return "the undone force pulls on the plate during the contact"
     if cs_u > s_u + PLATE_START_LATE:
-        return None  # the undone force starts later than the sensed one: a foot lost in its noise
+        return "the undone force starts later than the sensed one (a foot lost in its noise)"
     return c
 
 

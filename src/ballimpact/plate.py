@@ -46,7 +46,7 @@ import numpy as np
 
 __all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
            "undone_noise_gain", "lowpass_kernel",
-           "lowpass_spread_samples"]
+           "lowpass_spread_samples", "refine_plate_resonance"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -57,6 +57,10 @@ MIN_DAMPING_RATIO = 0.005  # ... and one damped less (rings for > 30 periods per
 RING_NOISE_FACTOR = 3.0  # the ringing's second difference stands out of the noise's by this in rms [-]
 REFINEMENTS = 2  # fits repeated with the smoothing chosen from the last estimate [-]
 START_SMOOTHING = (1, 2, 4, 8, 16)  # moving averages tried in turn for a first estimate [samples]
+REFINE_BAND = 1.5  # the refinement minimises the undone force's ringing within this factor of the first fn [-]
+REFINE_STEP = (0.05, 0.5)  # its first steps in log(fn) and log(zeta) [-]
+REFINE_TOLERANCE = 2.0e-3  # ... and the step in log(fn) at which it stops [-]
+REFINE_MAX_EVALUATIONS = 80  # ... or after this many undone forces [-]
 
 
 @dataclass(frozen=True)
@@ -209,6 +213,114 @@ def identify_plate_resonance(force, sample_rate_hz: float, *, lag: int = IV_LAG,
     return res
 
 
+def _poles_resonance(frequency_hz: float, damping_ratio: float, fs: float) -> PlateResonance:
+    """The PlateResonance of a continuous fn [Hz] and zeta [-], with the recursion of its sampled poles."""
+    wn = 2.0 * math.pi * frequency_hz
+    r = math.exp(-damping_ratio * wn / fs)
+    theta = wn * math.sqrt(max(1.0 - damping_ratio * damping_ratio, 0.0)) / fs
+    return PlateResonance(float(frequency_hz), float(damping_ratio), 2.0 * r * math.cos(theta), -r * r)
+
+
+def _ringing_in_band(undone: np.ndarray, fs: float, f_lo: float, f_hi: float) -> float:
+    """Rms spectral amplitude of a stretch of force, less a quartic, within f_lo-f_hi [unit of the force].
+
+    The stretch is detrended by a least-squares quartic (the force's smooth
+    shape), Hann-windowed and zero-padded 4x (as ``conditioning`` looks for a
+    ringing line); the amplitude is the rms of the bins in the band.
+    """
+    n = undone.size
+    u = np.linspace(-1.0, 1.0, n)
+    r = undone - np.polynomial.polynomial.polyval(u, np.polynomial.polynomial.polyfit(u, undone, 4))
+    w = np.hanning(n)
+    amp = 2.0 * np.abs(np.fft.rfft(r * w, 4 * n)) / w.sum()
+    f = np.fft.rfftfreq(4 * n, 1.0 / fs)
+    sel = (f > f_lo) & (f < f_hi)
+    return float(np.sqrt(np.mean(amp[sel] ** 2))) if np.any(sel) else math.inf
+
+
+def refine_plate_resonance(force, sample_rate_hz: float, plate: PlateResonance, *,
+                           band: float = REFINE_BAND) -> PlateResonance:
+    """The resonance near ``plate`` that leaves the least ringing in the undone force.
+
+    The instrumental-variable fit of :func:`identify_plate_resonance` is
+    disturbed by the smooth force's own second difference and by the noise:
+    its fn can be off by a few per cent and zeta by a factor of 2-3 (zoo
+    traces at 20-200 kHz). Undone with such a resonance, the force still rings
+    near fn (the true plate's response over the assumed one has a resonance
+    and an anti-resonance there, excited by every sharp feature of the force,
+    its jump from zero first); undone with the true one, it does not ring.
+    So fn and zeta are refined (Nelder-Mead in log fn and log zeta, from
+    ``plate``) to minimise the rms spectral amplitude of the undone stretch,
+    less a quartic, between fn / band and fn * band (fn of ``plate``). The
+    force's own spectrum in that band is seen too: a damped plate, whose
+    ringing is small against it, gets its zeta only roughly (and fn to about
+    a per cent at 10 samples per period; tests/test_plate.py). Not in the
+    paper; see the README, "Plate resonance".
+
+    Parameters
+    ----------
+    force : array_like
+        A stretch of the baseline-corrected trace around the contact, with a
+        little quiet trace before it and the ringing after it (proportional
+        to force; any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    plate : PlateResonance
+        The first estimate (e.g. from :func:`identify_plate_resonance`).
+    band : float
+        Half-width of the band as a factor of the first fn [-], above 1.
+
+    Returns
+    -------
+    PlateResonance
+        The refined resonance (the first estimate when the refinement leaves
+        more ringing, or leaves MIN_DAMPING_RATIO-MAX_DAMPING_RATIO or
+        MIN_FREQUENCY_FRACTION-MAX_FREQUENCY_FRACTION of fs).
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate, a band not above 1 or non-finite samples.
+    """
+    from scipy.optimize import minimize
+
+    fs = float(sample_rate_hz)
+    if not (math.isfinite(fs) and fs > 0):
+        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    if not band > 1.0:
+        raise ValueError(f"band must be above 1, got {band!r}")
+    x = np.asarray(force, dtype=float).ravel()
+    if not np.all(np.isfinite(x)):
+        raise ValueError("force holds non-finite samples")
+    f0, z0 = float(plate.frequency_hz), float(plate.damping_ratio)
+    f_lo, f_hi = f0 / band, min(f0 * band, 0.5 * fs)
+    if x.size < MIN_RING_SAMPLES or not f_hi > f_lo:
+        return plate
+
+    def valid(fn, zeta):
+        return (MIN_FREQUENCY_FRACTION * fs <= fn <= MAX_FREQUENCY_FRACTION * fs
+                and MIN_DAMPING_RATIO <= zeta <= MAX_DAMPING_RATIO)
+
+    def cost(v):
+        fn, zeta = f0 * math.exp(v[0]), z0 * math.exp(v[1])
+        if not valid(fn, zeta):
+            return math.inf
+        try:
+            value = _ringing_in_band(undo_plate_resonance(x, fs, fn, zeta), fs, f_lo, f_hi)
+        except ValueError:  # complex zeros: not a plate this sampling can undo
+            return math.inf
+        return value if math.isfinite(value) else math.inf
+
+    first = cost([0.0, 0.0])
+    res = minimize(cost, [0.0, 0.0], method="Nelder-Mead",
+                   options={"xatol": REFINE_TOLERANCE, "fatol": 0.0, "maxfev": REFINE_MAX_EVALUATIONS,
+                            "initial_simplex": [[0.0, 0.0], [REFINE_STEP[0], 0.0], [0.0, REFINE_STEP[1]]]})
+    fn, zeta = f0 * math.exp(float(res.x[0])), z0 * math.exp(float(res.x[1]))
+    if not (float(res.fun) < first and valid(fn, zeta)):
+        return plate
+    return _poles_resonance(fn, zeta, fs)
+
+
 def plate_discretisation(frequency_hz: float, damping_ratio: float, sample_rate_hz: float):
     """First-order-hold discretisation of the plate: numerator b (3 taps) and denominator a [-].
 
@@ -221,10 +333,32 @@ def plate_discretisation(frequency_hz: float, damping_ratio: float, sample_rate_
         raise ValueError(f"need frequency_hz > 0, damping_ratio >= 0 and sample_rate_hz > 0, got "
                          f"{frequency_hz!r}, {damping_ratio!r}, {sample_rate_hz!r}")
     wn = 2.0 * math.pi * float(frequency_hz)
+    if damping_ratio < 1.0:
+        return _foh_underdamped(wn, float(damping_ratio), 1.0 / float(sample_rate_hz))
     b, a, _ = signal.cont2discrete(([wn * wn], [1.0, 2.0 * damping_ratio * wn, wn * wn]), 1.0 / sample_rate_hz,
                                    method="foh")
     b = np.ravel(b)[-3:]
     return b, np.ravel(a)
+
+
+def _foh_underdamped(wn: float, zeta: float, h: float):
+    """:func:`plate_discretisation` in closed form for zeta < 1 (b, a) [-]: no matrix exponential.
+
+    The first-order hold of H(s) is ``(z - 1)^2 / (h z)`` times the z-transform
+    of the sampled ramp response ``r(t) = t - c + exp(-zeta wn t) (c cos wd t
+    + d sin wd t)``, c = 2 zeta / wn, d = (2 zeta^2 - 1) / wd. With the poles
+    p exp(+-i theta) (p = exp(-zeta wn h), theta = wd h) and
+    ``A(z) = z^2 - 2 p cos(theta) z + p^2`` this is B(z) / A(z) with
+    ``B = A - (c / h) (z - 1) A + (z - 1)^2 (c z - c p cos theta + d p sin theta) / h``
+    (its z^3 terms cancel).
+    """
+    wd = wn * math.sqrt(1.0 - zeta * zeta)
+    c, d = 2.0 * zeta / wn, (2.0 * zeta * zeta - 1.0) / wd
+    p, theta = math.exp(-zeta * wn * h), wd * h
+    a = np.array([1.0, -2.0 * p * math.cos(theta), p * p])
+    num = (np.concatenate([[0.0], a]) - (c / h) * np.convolve([1.0, -1.0], a)
+           + np.convolve([1.0, -2.0, 1.0], [c, -c * p * math.cos(theta) + d * p * math.sin(theta)]) / h)
+    return num[-3:], a
 
 
 def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
