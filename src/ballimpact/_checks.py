@@ -36,3 +36,11 @@ def nonnegative_array(name: str, value) -> np.ndarray:
         bad = arr[~(np.isfinite(arr) & (arr >= 0))].ravel()[0] if arr.ndim else arr
         raise ValueError(f"{name} must be non-negative and finite, got {float(bad)!r}")
     return arr
+
+
+def finite_samples(name: str, value) -> np.ndarray:
+    """``value`` as a flat float array, or ValueError naming ``name`` when a sample is not finite."""
+    arr = np.asarray(value, dtype=float).ravel()
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} holds non-finite samples")
+    return arr

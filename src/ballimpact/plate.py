@@ -44,6 +44,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import finite_samples, positive_scalar
+
 __all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
            "undone_noise_gain", "lowpass_kernel",
            "lowpass_spread_samples", "refine_plate_resonance"]
@@ -164,16 +166,12 @@ def identify_plate_resonance(force, sample_rate_hz: float, *, lag: int = IV_LAG,
         For a non-positive sample rate, lag below 3, a negative noise_rms or
         non-finite samples.
     """
-    fs = float(sample_rate_hz)
-    if not (math.isfinite(fs) and fs > 0):
-        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
     if noise_rms is not None and not (noise_rms >= 0):
         raise ValueError(f"noise_rms must be non-negative, got {noise_rms!r}")
     if int(lag) < 3:
         raise ValueError(f"lag must be at least 3 samples (the second difference's noise spans 2), got {lag!r}")
-    x = np.asarray(force, dtype=float).ravel()
-    if not np.all(np.isfinite(x)):
-        raise ValueError("force holds non-finite samples")
+    x = finite_samples("force", force)
     lag = int(lag)
 
     def fit(k):
@@ -284,14 +282,10 @@ def refine_plate_resonance(force, sample_rate_hz: float, plate: PlateResonance, 
     """
     from scipy.optimize import minimize
 
-    fs = float(sample_rate_hz)
-    if not (math.isfinite(fs) and fs > 0):
-        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
     if not band > 1.0:
         raise ValueError(f"band must be above 1, got {band!r}")
-    x = np.asarray(force, dtype=float).ravel()
-    if not np.all(np.isfinite(x)):
-        raise ValueError("force holds non-finite samples")
+    x = finite_samples("force", force)
     f0, z0 = float(plate.frequency_hz), float(plate.damping_ratio)
     f_lo, f_hi = f0 / band, min(f0 * band, 0.5 * fs)
     if x.size < MIN_RING_SAMPLES or not f_hi > f_lo:
@@ -383,9 +377,7 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
     """
     from scipy import signal
 
-    x = np.asarray(sensed, dtype=float).ravel()
-    if not np.all(np.isfinite(x)):
-        raise ValueError("sensed holds non-finite samples")
+    x = finite_samples("sensed", sensed)
     b, a = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
     w = signal.lfilter(a, [1.0], x) / b[0]
     zeros = np.roots(b)
@@ -459,14 +451,10 @@ def lowpass_zero_phase(force, sample_rate_hz: float, cutoff_hz: float) -> np.nda
     """
     from scipy.ndimage import convolve1d
 
-    fs = float(sample_rate_hz)
-    if not (math.isfinite(fs) and fs > 0):
-        raise ValueError(f"sample_rate_hz must be positive and finite, got {sample_rate_hz!r}")
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
     if not cutoff_hz > 0:
         raise ValueError(f"cutoff_hz must be positive, got {cutoff_hz!r}")
-    x = np.asarray(force, dtype=float).ravel()
-    if not np.all(np.isfinite(x)):
-        raise ValueError("force holds non-finite samples")
+    x = finite_samples("force", force)
     if math.isinf(cutoff_hz):
         return x.copy()
     return convolve1d(x, lowpass_kernel(fs, cutoff_hz), mode="reflect")
