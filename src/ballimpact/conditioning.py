@@ -1299,17 +1299,18 @@ def _peak_between_samples(xc, fs, noise):
     overshoot of the jump, or a spike whose top fell within the first sample
     interval.
 
-    The same holds at every lower local maximum of the samples, judged by its
-    expected top (half a rise above it) against the largest sample: a spike
-    whose top fell between the samples so wholly that the largest sample is on
-    the smooth part of the contact is a lower sampled maximum after a steep
-    rise, and its top may exceed the largest sample (zoo seed 4000,
+    The same holds at every lower local maximum of the samples that follows
+    two rises from samples above PEAK_JUMP_FRACTION of the peak (a spike's
+    ramp), judged by its expected top (half the larger rise above it) against
+    the largest sample: a spike whose top fell between the samples so wholly
+    that the largest sample is on the smooth part of the contact is such a
+    maximum, and its top may exceed the largest sample (zoo seed 4000,
     "sample_rate": 23.3 kHz, spike 5.9 % above the largest sample, once ok).
     At the largest sample the rule is the one above (half a rise against half
-    of PEAK_SAMPLING_FRACTION).
-    A sample half-way up the force's jump from zero, where the jump straddles
-    it, is judged as a ramp too (the jump's rises from below PEAK_RAMP_FLOOR
-    do not count).
+    of PEAK_SAMPLING_FRACTION). A jump from zero (one rise from a sample near
+    zero) or a swing of ringing (a fall before the rise) hides no top above
+    it; a jump smoothed over two or three samples cannot be told from a
+    spike's ramp and is judged as one.
     """
     if xc.size < 3:
         return []
