@@ -259,6 +259,25 @@ def calibration_check(refits=1000, seed=0):
     return rows
 
 
+def _truth_setup(p, vin):
+    """What the truth-world modes need of one design at the true parameters ``p``: (mass [kg] per impact,
+    the noise-free simulation, theta, the COR scatter relative to its mean [-], the calibrated critical
+    values at TC 0.4 % and that COR scatter, the Jacobian of the unit-weight residuals at theta)."""
+    from ballimpact import fitting as F
+
+    mass = np.full(vin.size, p.mass_kg)
+    st = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+    theta = F._to_theta(p.ak, p.a, p.ac)
+    s_cor = 0.003 / float(np.mean(st.cor))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, theta, 0.004,
+                                             s_cor, 0.95)
+        jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, st.contact_time_s, st.cor, mass, p.kb0_N_m,
+                                                       1.0, 1.0), theta)
+    return mass, st, theta, s_cor, crit, jac_raw
+
+
 def truth_world(designs=12, sessions=400, first=0):
     """Coverage of the calibrated intervals in their Wald form, precisely: for each ball type
     and each of the bench's designs (the inbound speeds of seeds first .. first+designs-1), the
@@ -272,17 +291,10 @@ def truth_world(designs=12, sessions=400, first=0):
 
     hits = {key: {"absolute": {}, "relative": {}} for key in PARAMETER_SETS}
     for seed, key, p, vin, _, _ in bench_sessions(designs, first):
-        mass = np.full(vin.size, p.mass_kg)
-        s = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
-        theta = F._to_theta(p.ak, p.a, p.ac)
-        s_cor = 0.003 / float(np.mean(s.cor))
+        mass, s, theta, s_cor, crit, jac_raw = _truth_setup(p, vin)
         z = np.random.default_rng(seed).standard_normal((2, sessions, vin.size))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            crit = F._calibrated_critical_values(vin, s.contact_time_s, s.cor, mass, p.kb0_N_m, theta, 0.004,
-                                                 s_cor, 0.95)
-            jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, s.contact_time_s, s.cor, mass, p.kb0_N_m,
-                                                           1.0, 1.0), theta)
             for kind, cor_b in (("absolute", s.cor + 0.003 * z[1]), ("relative", s.cor * (1 + s_cor * z[1]))):
                 th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, theta,
                                                       s.contact_time_s * (1 + 0.004 * z[0]), cor_b, 0.004, s_cor,
@@ -307,17 +319,10 @@ def truth_stat(seeds=100, first=0, jsonl=None):
 
     records = []
     for seed, key, p, vin, tc, e in bench_sessions(seeds, first):
-        mass = np.full(vin.size, p.mass_kg)
-        st = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
-        th0 = F._to_theta(p.ak, p.a, p.ac)
-        s_cor = 0.003 / float(np.mean(st.cor))
+        mass, st, th0, s_cor, crit, jac_raw = _truth_setup(p, vin)
         rec = {"seed": seed, "ball": key, "kb0": "truth-stat", "outlier": False}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, th0, 0.004,
-                                                 s_cor, 0.95)
-            jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, st.contact_time_s, st.cor, mass,
-                                                           p.kb0_N_m, 1.0, 1.0), th0)
             th_b, conv, cov_b = F._refit_sessions(vin, mass, p.kb0_N_m, th0, tc[None], e[None], 0.004, s_cor,
                                                   jac_raw)
         if not conv[0]:
@@ -375,18 +380,11 @@ def lr_check(designs=4, sessions=500, first=0):
     acc = {}
     for seed, key, p, vin, _, _ in bench_sessions(designs, first):
         n = vin.size
-        mass = np.full(n, p.mass_kg)
-        st = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
-        th0 = F._to_theta(p.ak, p.a, p.ac)
-        s_cor = 0.003 / float(np.mean(st.cor))
+        mass, st, th0, s_cor, crit, jac_raw = _truth_setup(p, vin)
         z = np.random.default_rng(5000 + seed).standard_normal((2, sessions, n))
         tc_b, cor_b = st.contact_time_s * (1 + 0.004 * z[0]), st.cor + 0.003 * z[1]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            crit = F._calibrated_critical_values(vin, st.contact_time_s, st.cor, mass, p.kb0_N_m, th0, 0.004,
-                                                 s_cor, 0.95)
-            jac_raw = F._jacobian(lambda pts: F._residuals(pts, vin, st.contact_time_s, st.cor, mass,
-                                                           p.kb0_N_m, 1.0, 1.0), th0)
             th_b, conv, _ = F._refit_sessions(vin, mass, p.kb0_N_m, th0, tc_b, cor_b, 0.004, s_cor, jac_raw)
             # each session's scatter at its estimate, as the data's profile uses it
             tcm, corm = F._simulate(th_b, vin, mass, p.kb0_N_m)
