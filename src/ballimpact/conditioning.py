@@ -1121,8 +1121,9 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u):
                                f"{RING_WINDOW_S * 1e3:g} ms after it): force and ringing not separable"))
     out.extend(_negative_force(x, fs, noise, peak, e_u))
     out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, noise, peak))
-    out.extend(_peak_between_samples(x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1], fs, noise))
-    out.extend(_second_hump(x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1], fs, noise, peak))
+    xc = x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1]
+    out.extend(_peak_between_samples(xc, fs, noise))
+    out.extend(_second_hump(xc, fs, noise, peak))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
     if line is not None:
