@@ -835,3 +835,67 @@ def test_quiet_residual_after_the_contact_only_is_named_so():
                             "resolved?)"), msgs[0]
     # without it, no such problem
     assert not any(p.kind is ProblemKind.BASELINE_RESIDUAL for p in condition_voltage(v, fs, tau_s=0.5).problems)
+
+
+def _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball="pressureless", vin=22.0):
+    """Samples at fs of the model's ball force (tests/zoo.py: its jump at 2 mm, spike and buckling drop)
+    through a second-order plate (scipy's exact response to the piecewise-linear force; None = ideal plate),
+    from the sample before the force's jump (at ``phase`` of a sample interval after it) [N]."""
+    from scipy import signal
+
+    import zoo
+
+    knots_t, knots_f, sim, _, _ = zoo.model_force(ball, (1.0, 1.0, 1.0, 1.0, 1.0), vin)
+    n, m = int(knots_t[-1] * fs) + 40, int(math.ceil(2e6 / fs))  # a grid of m points a sample interval
+    grid = (np.arange(n * m) / m - 1 + phase) / fs  # the first sample just before the jump
+    force = np.interp(grid, knots_t, knots_f, left=0.0, right=0.0)
+    if plate_hz is not None:
+        wn = 2 * np.pi * plate_hz
+        _, force, _ = signal.lsim(([wn * wn], [1.0, 2 * zeta * wn, wn * wn]), force, grid - grid[0])
+    return force[::m], float(sim.peak_force_N)
+
+
+@pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin, phase", [
+    (146e3, 9.7e3, 0.17, "pressureless", 22.0, 0.1),  # zoo 3:700: the jump's overshoot is the peak, +7.9 %
+    (146e3, 9.7e3, 0.17, "pressureless", 22.0, 0.5),
+    (146e3, 9.7e3, 0.17, "pressureless", 22.0, 0.9),
+    (21e3, 6.5e3, 0.24, "oversize", 32.0, 0.1),  # zoo 3:212: three samples a period, +10 %
+    (21e3, 6.5e3, 0.24, "oversize", 32.0, 0.5),
+    (21e3, 6.5e3, 0.24, "oversize", 32.0, 0.9),
+    (23.6e3, 8.5e3, 0.26, "oversize", 27.0, 0.9),  # zoo 3:672: +5.6 % (+3.6 to +4.2 % at phases 0.1 and 0.5)
+    (60e3, 8.0e3, 0.2, "pressurised", 30.0, 0.3),
+])
+def test_peak_on_the_plates_step_response_is_a_problem(fs, plate_hz, zeta, ball, vin, phase):
+    from ballimpact.conditioning import _peak_on_step_response
+
+    # a damped plate answers the force's jump (and the spike's drop) with one overshoot and a damped swing: a fall,
+    # a bump and a fall again after a peak in the spike's phase; the ball's own force after its spike rises once
+    # to its maximum (Eq. (14)). The overshoot makes the peak too high, with too little ringing for the other checks
+    noise = 1.0
+    rng = np.random.default_rng(int(fs) + int(10 * phase))
+    sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
+    assert sensed.max() > 1.05 * true_peak  # the overshoot is what is at stake
+    sensed = sensed + rng.normal(0.0, noise, sensed.size)
+    problems = _peak_on_step_response(sensed[1:], fs, noise, sensed.max(), 1.0 - phase)
+    assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], (fs, plate_hz, phase)
+    assert problems[0].message.startswith("peak force on the plate's step response"), problems
+    f_seen = float(re.search(r"ringing at about (\S+) kHz", problems[0].message).group(1)) * 1e3
+    assert_allclose(f_seen, plate_hz * math.sqrt(1 - zeta * zeta), rtol=0.25)  # a period read to a sample or two
+    # the same force on an ideal plate: its jump, spike, drop and one hump pass
+    ideal, _ = _plate_sensed_ball_force(fs, None, 0.0, phase, ball, vin)
+    ideal = ideal + rng.normal(0.0, noise, ideal.size)
+    assert _peak_on_step_response(ideal[1:], fs, noise, ideal.max(), 1.0 - phase) == []
+
+
+@pytest.mark.parametrize("fs", [20e3, 23.6e3, 50e3, 100e3, 200e3])
+@pytest.mark.parametrize("ball, vin", [("pressurised", 35.0), ("punctured", 35.0), ("pressureless", 12.5),
+                                       ("oversize", 25.0), ("pressurised", 10.0)])
+def test_ball_force_on_an_ideal_plate_has_no_step_response(fs, ball, vin):
+    from ballimpact.conditioning import _peak_on_step_response
+
+    # every ball of Table 2, slow and fast, at 20-200 kHz with noise of 0.1 % of the peak: the spike and its drop
+    # (or none) and one hump are no plate's step response, wherever the jump falls between the samples
+    for phase in (0.05, 0.35, 0.65, 0.95):
+        f, peak = _plate_sensed_ball_force(fs, None, 0.0, phase, ball, vin)
+        f = f + np.random.default_rng(int(fs + 100 * phase)).normal(0.0, 1e-3 * peak, f.size)
+        assert _peak_on_step_response(f[1:], fs, 1e-3 * peak, f.max(), 1.0 - phase) == [], (phase, fs)

@@ -140,6 +140,13 @@ HUMP_SMOOTH_S = 0.1e-3  # ... in the force averaged over this long ... [s]
 HUMP_DIP_FRACTION = 0.05  # ... a fall by more than this fraction of the peak after a maximum ... [-]
 HUMP_RISE_FRACTION = 0.02  # ... then a rise by more than this fraction of it ... [-]
 HUMP_SIGMA = 6.0  # ... each also this many noise deviations of the average: not the ball's force [-]
+STEP_PHASE_S = 0.2e-3  # a peak this soon after the contact start (the spike's phase) is checked for ... [s]
+STEP_WINDOW_S = 0.5e-3  # ... a fall, a second bump and a fall again within this long after it ... [s]
+STEP_SMOOTH_S = 0.02e-3  # ... in the force averaged over this long (an odd number of samples) ... [s]
+STEP_FRACTION = 5.0e-3  # ... each turn left by more than this fraction of the peak ... [-]
+STEP_SIGMA = 6.0  # ... and this many noise deviations of the average ... [-]
+STEP_FIRST_PERIOD = 1.0  # ... after a peak within this many of its periods from the start (the first overshoot) [-]
+STEP_STEEPEST = 1.5  # a fall after the peak steeper than this times a swing's steepest is the force's own drop [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -1124,6 +1131,7 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u):
     xc = x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1]
     out.extend(_peak_between_samples(xc, fs, noise))
     out.extend(_second_hump(xc, fs, noise, peak))
+    out.extend(_peak_on_step_response(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
     if line is not None:
@@ -1391,6 +1399,57 @@ def _second_hump(xc, fs, noise, peak):
         elif v < low:
             low = v
     return []
+
+
+def _peak_on_step_response(xc, fs, noise, peak, lead=0.0):
+    """The peak force on the plate's step response: an overshoot of the force's front or spike, not the ball's.
+
+    The ball's force jumps from zero (at 2 mm of compression in the model), rises
+    to the pre-buckling spike, drops at buckling, and then rises once to its
+    maximum and falls once (Eq. (14) in Goodwill & Haake 2004: kB x + (cB + cM) x'
+    with x rising then falling once): after a peak in the spike's phase it has
+    one minimum and no bump before the maximum that follows. A plate of a few kHz
+    answers the jump with its step response: an overshoot, then a damped
+    oscillation. Heavily damped (zeta about 0.2), one overshoot raises the peak
+    by 5-20 % and the swings after it are too few and too unequal for
+    :func:`_peak_on_ringing` (zoo traces 3:212, 3:672, 3:700, 3:824: plates of
+    6.5-13.7 kHz, damping 0.17-0.26, ok with the peak 5-10 % high).
+
+    So a peak within STEP_PHASE_S of the contact start, in the force averaged
+    over STEP_SMOOTH_S, that is followed within STEP_WINDOW_S by a fall, a rise
+    (a second bump) and a fall again, each turn left by more than STEP_FRACTION
+    of the peak and STEP_SIGMA noise deviations of the average (and the rise
+    after that last fall too, so that the fall after the ball's own maximum is
+    not one), is the plate's. The frequency reported is one over the spacing
+    of the two minima.
+    """
+    w = 2 * int(round(0.5 * STEP_SMOOTH_S * fs)) + 1
+    if not peak > 0 or xc.size < 4 * w:
+        return []
+    y = np.convolve(xc, np.full(w, 1.0 / w), mode="same") if w > 1 else xc
+    i = int(np.argmax(y))
+    if i > STEP_PHASE_S * fs:
+        return []
+    h = max(STEP_FRACTION * peak, STEP_SIGMA * noise / math.sqrt(w))
+    seg = y[i:min(xc.size, i + int(round(STEP_WINDOW_S * fs)) + 1)]
+    turns = _turning_points(seg, h)  # from the peak: a minimum, a maximum, a minimum (each confirmed)
+    if len(turns) < 3:
+        return []
+    low1, bump, low2 = turns[:3]
+    period = float(low2 - low1)  # [samples]
+    if period < 3.0 or i + lead > STEP_FIRST_PERIOD * period or _turning_points(y[:i + 1], h):
+        return []  # no plate's swing of a few samples; or a peak later than the first overshoot, or not the first
+    fall = float(seg[0] - seg[low1])
+    steepest = float(np.max(xc[i:i + low1] - xc[i + 1:i + low1 + 1])) - 2.0 * math.sqrt(2.0) * noise
+    if steepest > STEP_STEEPEST * math.pi * fall / period:
+        return []  # a swing of that period falls by at most pi fall / period a sample: the ball's force drops
+    return [Problem(ProblemKind.PEAK_ON_RINGING,
+                    f"peak force on the plate's step response: {1e3 * i / fs:.2g} ms into the contact the force "
+                    f"peaks, falls by {100 * (seg[0] - seg[low1]) / peak:.2g} % of the peak, rises again by "
+                    f"{100 * (seg[bump] - seg[low1]) / peak:.2g} % and falls by {100 * (seg[bump] - seg[low2]) / peak:.2g}"
+                    f" % within {1e3 * low2 / fs:.2g} ms (a ball's force has no such bump): the plate's overshoot "
+                    f"of the force's front or spike, ringing at about {fs / (low2 - low1) / 1e3:.3g} kHz; the peak "
+                    "is not the ball's")]
 
 
 def _negative_force(x, fs, noise, peak, end_u):
