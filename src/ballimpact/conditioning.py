@@ -145,7 +145,7 @@ STEP_WINDOW_S = 0.5e-3  # ... a fall, a second bump and a fall again within this
 STEP_SMOOTH_S = 0.02e-3  # ... in the force averaged over this long (an odd number of samples) ... [s]
 STEP_FRACTION = 5.0e-3  # ... each turn left by more than this fraction of the peak ... [-]
 STEP_SIGMA = 6.0  # ... and this many noise deviations of the average ... [-]
-STEP_FIRST_PERIOD = 1.0  # ... after a peak within this many of its periods from the start (the first overshoot) [-]
+STEP_FIRST_PERIOD = 1.0  # ... after a peak within this many of its periods of the start (the first overshoot) [-]
 STEP_STEEPEST = 1.5  # a fall after the peak steeper than this times a swing's steepest is the force's own drop [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
@@ -1402,26 +1402,34 @@ def _second_hump(xc, fs, noise, peak):
 
 
 def _peak_on_step_response(xc, fs, noise, peak, lead=0.0):
-    """The peak force on the plate's step response: an overshoot of the force's front or spike, not the ball's.
+    """The peak force on the plate's step response: its first overshoot of the force's jump, not the ball's.
 
     The ball's force jumps from zero (at 2 mm of compression in the model), rises
     to the pre-buckling spike, drops at buckling, and then rises once to its
     maximum and falls once (Eq. (14) in Goodwill & Haake 2004: kB x + (cB + cM) x'
     with x rising then falling once): after a peak in the spike's phase it has
     one minimum and no bump before the maximum that follows. A plate of a few kHz
-    answers the jump with its step response: an overshoot, then a damped
-    oscillation. Heavily damped (zeta about 0.2), one overshoot raises the peak
-    by 5-20 % and the swings after it are too few and too unequal for
-    :func:`_peak_on_ringing` (zoo traces 3:212, 3:672, 3:700, 3:824: plates of
-    6.5-13.7 kHz, damping 0.17-0.26, ok with the peak 5-10 % high).
+    answers the jump with its step response: a rise over part of its period, an
+    overshoot, then a damped oscillation. Heavily damped (zeta about 0.2), that one
+    overshoot raises the peak by 5-20 % and the swings after it are too few and
+    too unequal for :func:`_peak_on_ringing` (zoo traces 3:212, 3:672, 3:700:
+    plates of 6.5-9.7 kHz, damping 0.17-0.26, at 21-146 kHz, ok with the peak
+    5.6-10.4 % high).
 
-    So a peak within STEP_PHASE_S of the contact start, in the force averaged
-    over STEP_SMOOTH_S, that is followed within STEP_WINDOW_S by a fall, a rise
-    (a second bump) and a fall again, each turn left by more than STEP_FRACTION
-    of the peak and STEP_SIGMA noise deviations of the average (and the rise
-    after that last fall too, so that the fall after the ball's own maximum is
-    not one), is the plate's. The frequency reported is one over the spacing
-    of the two minima.
+    So, in the force averaged over STEP_SMOOTH_S, a peak within STEP_PHASE_S of
+    the contact start that is followed within STEP_WINDOW_S by a fall, a rise (a
+    second bump) and a fall again, each turn left by more than STEP_FRACTION of
+    the peak and STEP_SIGMA noise deviations of the average (the rise after the
+    last fall too, so that the fall after the ball's own maximum is none), is the
+    plate's when it is its first overshoot: no turn before it, and within
+    STEP_FIRST_PERIOD periods of the swing (the spacing of the two minima) of the
+    contact start (``lead`` [samples]: from the start to the first sample of
+    ``xc``). A fall after the peak steeper than STEP_STEEPEST times a swing's
+    steepest (pi times the fall over the period, per sample; less two noise
+    deviations of a difference) is the ball's own drop at buckling (sensed
+    through a fast plate, or an undone one), whose ringing came after the peak.
+    A peak on a later swing (a spike's top overshot by a plate that has rung
+    since the jump, zoo 3:824) is not judged here.
     """
     w = 2 * int(round(0.5 * STEP_SMOOTH_S * fs)) + 1
     if not peak > 0 or xc.size < 4 * w:
@@ -1437,8 +1445,8 @@ def _peak_on_step_response(xc, fs, noise, peak, lead=0.0):
         return []
     low1, bump, low2 = turns[:3]
     period = float(low2 - low1)  # [samples]
-    if period < 3.0 or i + lead > STEP_FIRST_PERIOD * period or _turning_points(y[:i + 1], h):
-        return []  # no plate's swing of a few samples; or a peak later than the first overshoot, or not the first
+    if i + lead > STEP_FIRST_PERIOD * period or _turning_points(y[:i + 1], h):
+        return []  # a peak later than the first overshoot, or not the first maximum
     fall = float(seg[0] - seg[low1])
     steepest = float(np.max(xc[i:i + low1] - xc[i + 1:i + low1 + 1])) - 2.0 * math.sqrt(2.0) * noise
     if steepest > STEP_STEEPEST * math.pi * fall / period:
@@ -1447,8 +1455,8 @@ def _peak_on_step_response(xc, fs, noise, peak, lead=0.0):
                     f"peak force on the plate's step response: {1e3 * i / fs:.2g} ms into the contact the force "
                     f"peaks, falls by {100 * (seg[0] - seg[low1]) / peak:.2g} % of the peak, rises again by "
                     f"{100 * (seg[bump] - seg[low1]) / peak:.2g} % and falls by {100 * (seg[bump] - seg[low2]) / peak:.2g}"
-                    f" % within {1e3 * low2 / fs:.2g} ms (a ball's force has no such bump): the plate's overshoot "
-                    f"of the force's front or spike, ringing at about {fs / (low2 - low1) / 1e3:.3g} kHz; the peak "
+                    f" % within {1e3 * low2 / fs:.2g} ms (a ball's force has no such bump): the plate's first "
+                    f"overshoot of the force's jump, ringing at about {fs / (low2 - low1) / 1e3:.3g} kHz; the peak "
                     "is not the ball's")]
 
 
