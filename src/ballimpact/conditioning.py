@@ -125,6 +125,7 @@ RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins 
 RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
+CURVE_MIN_RATE_HZ = 33.0e3  # ... unless the force's curve pins it, at this sample rate or above (see _curve_end_contact) [Hz]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
@@ -678,7 +679,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
     problems = it.problems + it.tau_problems
-    contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
+    contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True), fs, t0_s)
     if contact.found:
         problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u,
                                    post_guard_s))
@@ -717,6 +718,35 @@ def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
         slope = abs(float(y[i1] - y[i0])) / m
         out.append(max(noise / slope, 0.5) if slope > 0 else math.inf)
     return math.hypot(*out)
+
+
+def _curve_end_contact(contact: ContactResult, fs, t0_s) -> ContactResult:
+    """The contact with its end from the force's curve where the hinge's end is not determined but the curve's is.
+
+    The hinge's end moves by more than SPREAD_MAX_FRACTION of TC when fitted
+    again from the samples above twice the noise threshold where the force
+    fades into the noise with a bend (a line through the last samples of a
+    curved fade meets zero late or early, by an amount that depends on the
+    noise). The force's curve before the end (``contact.curve_end_s``, see
+    :func:`ballimpact.contact.end_from_curve`) is then the end when twice its
+    standard uncertainty is within the same SPREAD_MAX_FRACTION of TC; the
+    contact is flagged ``end_curve`` and its end is not refitted again.
+
+    Only at CURVE_MIN_RATE_HZ or faster: below it, a plate of up to 30 kHz
+    (raw-format v1.1) can alias below RING_LINE_MIN_HZ, where no check sees
+    its ringing, and the spread check is then what stands between such a
+    plate's sensed force and a wrong ok (zoo trace 2:586: 22.6 kHz at
+    24.9 kHz, its end known but its peak 12 % low).
+    """
+    if not contact.found or not abs(contact.end_spread_s) > SPREAD_MAX_FRACTION * contact.contact_time_s \
+            or fs < CURVE_MIN_RATE_HZ:
+        return contact
+    end_s = contact.curve_end_s
+    if not (2.0 * contact.curve_end_se_s <= SPREAD_MAX_FRACTION * (end_s - contact.start_s)):  # NaN: not known
+        return contact
+    u_end = (end_s - t0_s) * fs
+    return replace(contact, end_s=end_s, end_index=int(math.floor(u_end)), edge_end_s=min(contact.edge_end_s, end_s),
+                   flags=contact.flags + ("end_curve",))
 
 
 def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
@@ -1099,6 +1129,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                            f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
                            f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)"))
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
+        if where == "end" and "end_curve" in contact.flags:
+            continue  # the end from the force's curve, known to SPREAD_MAX_FRACTION of TC: see _curve_end_contact
         if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
