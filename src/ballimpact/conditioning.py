@@ -732,13 +732,20 @@ def _curve_end_contact(contact: ContactResult, fs, t0_s) -> ContactResult:
     standard uncertainty is within the same SPREAD_MAX_FRACTION of TC; the
     contact is flagged ``end_curve`` and its end is not refitted again.
 
+    Only where the refit moves the end later: the force then steepens into
+    its end (concave, a punctured ball's), and the lower samples are nearer
+    the truth. Where it moves earlier the force flattens into its end
+    (convex), its last part is below the noise, and every fit through the
+    samples above it, the curve's too, ends early (TC -1.1 % on zoo trace
+    2:1489, whose spread passed; tests/test_contact.py).
+
     Only at CURVE_MIN_RATE_HZ or faster: below it, a plate of up to 30 kHz
     (raw-format v1.1) can alias below RING_LINE_MIN_HZ, where no check sees
     its ringing, and the spread check is then what stands between such a
     plate's sensed force and a wrong ok (zoo trace 2:586: 22.6 kHz at
     24.9 kHz, its end known but its peak 12 % low).
     """
-    if not contact.found or not abs(contact.end_spread_s) > SPREAD_MAX_FRACTION * contact.contact_time_s \
+    if not contact.found or not contact.end_spread_s > SPREAD_MAX_FRACTION * contact.contact_time_s \
             or fs < CURVE_MIN_RATE_HZ:
         return contact
     end_s = contact.curve_end_s

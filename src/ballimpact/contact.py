@@ -73,6 +73,8 @@ CURVE_FITS = ((2, 0.03), (3, 0.05))  # the end's curve: a polynomial of this deg
 CURVE_MIN_SAMPLES = 4  # ... but over at least this many samples inside the contact [samples]
 CURVE_SEARCH = 3.0  # its zero is looked for within this many samples of the hinge's end ... [samples]
 CURVE_STEP = 0.01  # ... on a grid this fine [samples]
+CURVE_MIN_SLOPE = 3.0  # the end is pinned only where the force's slope there is at least this many noise deviations per sample [-]
+CURVE_CHI2 = 4.0  # its standard uncertainty: half the ends whose residual is within this many noise variances of the least, over its square root [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
@@ -834,20 +836,23 @@ def _curve_end(xs, sigma: float, u_start: float, u_end: float, peak_index: int, 
         hi = min(int(math.ceil(u_end)) + n_pre, xs.size - 1)
         ends.append(_profile_end(xs[lo:hi + 1], np.arange(lo, hi + 1, dtype=float), sigma, u_end, floor_u,
                                  degree, xs.size - 1))
-    (u2, se2), (u3, _) = ends
+    (u2, se2, slope), (u3, _, _) = ends
     if not (math.isfinite(u2) and math.isfinite(u3)):
         return u2, math.inf if math.isfinite(u2) else math.nan
+    if not slope >= CURVE_MIN_SLOPE * sigma:
+        return u2, math.inf  # a force that flattens into its end: where it meets zero is not in the samples
     return u2, math.hypot(se2, u2 - u3)
 
 
 def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, last: float):
     """Least-squares end of ``sum_k c_k s^k`` (k = 1..degree, s = max(end - u, 0), c_1 >= 0) on a grid near
-    u_end, and the half-width of the ends within one noise variance of the least residual (inf when that
-    reaches the grid's edge) [samples]; (NaN, NaN) when the samples cannot tell."""
+    u_end [samples], its standard uncertainty (half the width of the ends within CURVE_CHI2 noise variances of
+    the least residual, over its square root; inf when that reaches the grid's edge) [samples] and the slope
+    c_1 there [force per sample]; NaNs when the samples cannot tell."""
     grid = u_end + np.arange(-CURVE_SEARCH, CURVE_SEARCH + 0.5 * CURVE_STEP, CURVE_STEP)
     grid = grid[(grid >= floor_u) & (grid <= last)]
     if grid.size < 3 or y.size < degree + 2:
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     s = np.maximum(grid[:, None] - u[None, :], 0.0)
     sse = None
     for powers in (range(1, degree + 1), range(2, degree + 1)):  # without the linear term where its slope is < 0
@@ -858,11 +863,11 @@ def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, 
         coef = np.linalg.solve(ata + ridge, aty[..., None])[..., 0]
         r = np.sum((y[None, :] - np.einsum("gnk,gk->gn", a, coef)) ** 2, axis=1)
         if sse is None:
-            sse, slope_ok = r, coef[:, 0] >= 0
+            sse, slope_ok, slope = r, coef[:, 0] >= 0, np.maximum(coef[:, 0], 0.0)
         else:
             sse = np.where(slope_ok, sse, r)
     k = int(np.argmin(sse))
-    inside = np.flatnonzero(sse <= sse[k] + sigma * sigma)
+    inside = np.flatnonzero(sse <= sse[k] + CURVE_CHI2 * sigma * sigma)
     if inside[0] == 0 or inside[-1] == grid.size - 1:
-        return float(grid[k]), math.inf
-    return float(grid[k]), 0.5 * float(grid[inside[-1]] - grid[inside[0]])
+        return float(grid[k]), math.inf, float(slope[k])
+    return float(grid[k]), 0.5 * float(grid[inside[-1]] - grid[inside[0]]) / math.sqrt(CURVE_CHI2), float(slope[k])
