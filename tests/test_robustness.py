@@ -213,7 +213,6 @@ def test_zoo_force_spectrum_bump_is_no_ringing(name, seed, index, what, tmp_path
 #: Traces of the benchmark still ok but wrong on main (strict xfail: this test turns red when one is fixed,
 #: so that it moves to ZOO_REGRESSION): the kinds the README lists under "What remains".
 ZOO_STILL_WRONG = [
-    ("plate-26kHz-above-nyquist", 0, 1974, "26 kHz plate sampled at 33.5 kHz, no anti-aliasing: TC -1.5 %"),
     ("plate-15.5kHz-above-nyquist", 1, 1220, "15.5 kHz plate sampled at 20 kHz, no anti-aliasing: peak +11.7 %"),
 ]
 

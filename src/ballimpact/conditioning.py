@@ -126,6 +126,7 @@ RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is t
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 CURVE_MIN_RATE_HZ = 33.0e3  # ... unless the force's curve pins it, at this sample rate or above (see _curve_end_contact) [Hz]
+CURVE_LATE_FRACTION = 2.5e-3  # the force's curve meets zero later than the end by more of TC: a convex fade, the end early [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
@@ -1041,7 +1042,8 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     if not peak > 0:
         return []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
+    return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s)
+            + _end_problems(x, fs, fit, contact, s_u, e_u, scale, curve=True)
             + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
             + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
 
@@ -1110,8 +1112,12 @@ def _residual_where(y, pre, post, white, peak) -> str:
     return "hum or drift not resolved?"
 
 
-def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
-    """Contact ends that hold no force, are located to half a sample only or move when fitted again."""
+def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, curve=False):
+    """Contact ends that hold no force, are located to half a sample only or move when fitted again; with
+    ``curve``, also an end that the force's curve before it (``contact.curve_end_s``) puts more than
+    CURVE_LATE_FRACTION of TC later: the force flattens into its end (a convex fade), its last part is below
+    the noise, and the line through the samples above it meets zero early (zoo trace 2:1489: TC -1.1 %, its
+    refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC)."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
@@ -1144,6 +1150,13 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
                                f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
                                "there"))
+    late = contact.curve_end_s - contact.end_s
+    if curve and late > CURVE_LATE_FRACTION * contact.contact_time_s:  # NaN: no curve, no problem
+        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                           f"contact end not determined to 1 %: the force's curve before it meets zero "
+                           f"{late * 1e6:.3g} us later than the line through its last samples "
+                           f"({100 * late / contact.contact_time_s:.2g} % of TC); the force flattens into the noise "
+                           "there"))
     return out
 
 
