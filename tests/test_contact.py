@@ -573,12 +573,12 @@ def test_end_from_curve_where_the_line_is_early():
     assert abs(got - end_s) * fs < 0.1
 
 
-def test_detect_contact_reports_the_curve_end_with_spread_only():
+def test_detect_contact_reports_the_curve_end_when_asked():
     fs = 50e3
     end_s = 1000.3 / fs
     v, _ = _model_end(fs, end_s, *CURVES["concave"], CURVE_NOISE_V, 3)
-    assert math.isnan(detect_contact(v, fs).curve_end_s)
-    c = detect_contact(v, fs, spread=True)
+    assert math.isnan(detect_contact(v, fs, spread=True).curve_end_s)
+    c = detect_contact(v, fs, curve=True)
     assert abs(c.curve_end_s - end_s) < 3.0 * c.curve_end_se_s
 
 

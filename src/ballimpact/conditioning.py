@@ -680,7 +680,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
     problems = it.problems + it.tau_problems
-    contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True), fs, t0_s)
+    contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
+                                                curve=True), fs, t0_s)
     if contact.found:
         problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u,
                                    post_guard_s))

@@ -72,7 +72,7 @@ SPREAD_FACTOR = 2.0  # the ends are fitted again from samples above this many ti
 CURVE_FITS = ((2, 0.03), (3, 0.05))  # the end's curve: a polynomial of this degree in the time before it, over this fraction of TC [-]
 CURVE_MIN_SAMPLES = 4  # ... but over at least this many samples inside the contact [samples]
 CURVE_SEARCH = 3.0  # its zero is looked for within this many samples of the hinge's end ... [samples]
-CURVE_STEP = 0.01  # ... on a grid this fine [samples]
+CURVE_STEP = 0.05  # ... on a grid this fine, the least's neighbours refined by a parabola [samples]
 CURVE_MIN_SLOPE = 3.0  # the end is pinned only where the force's slope there is at least this many noise deviations per sample [-]
 CURVE_CHI2 = 4.0  # its standard uncertainty: half the ends whose residual is within this many noise variances of the least, over its square root [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
@@ -140,7 +140,7 @@ class ContactResult:
         NaN otherwise) [s]: a straight end hardly moves, a tail that fades
         into the noise does.
     curve_end_s, curve_end_se_s : float
-        The end from the force's curve before it (only with ``spread=True``,
+        The end from the force's curve before it (only with ``curve=True``,
         not at a jump nor with ringing after the contact; NaN otherwise) and
         its standard uncertainty [s]: see :func:`end_from_curve`.
     """
@@ -509,7 +509,8 @@ def _main_run(above: np.ndarray, peak_index: int, merge_gap: int):
 
 
 def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise_rms_V: float | None = None,
-                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False) -> ContactResult:
+                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False,
+                   curve: bool = False) -> ContactResult:
     """Find the contact in a conditioned plate voltage.
 
     The voltage must have its offset, hum and decay removed and the polarity
@@ -541,6 +542,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         Also fit each end again from the samples above SPREAD_FACTOR times the
         noise threshold and report how far it moves (``start_spread_s``,
         ``end_spread_s``).
+    curve : bool
+        Also find the end from the force's curve before it
+        (:func:`end_from_curve`; ``curve_end_s``, ``curve_end_se_s``).
 
     Returns
     -------
@@ -595,9 +599,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
-    curve = (math.nan, math.nan)
-    if spread and not {"end_jump", "ringing_after_contact", "contact_at_trace_end"} & set(flags):
-        curve = _curve_end(xs, sigma, u_start, u_end, peak_index, max(run_b, peak_index), fs)
+    by_curve = (math.nan, math.nan)
+    if curve and not {"end_jump", "ringing_after_contact", "contact_at_trace_end"} & set(flags):
+        by_curve = _curve_end(xs, sigma, u_start, u_end, peak_index, max(run_b, peak_index), fs)
 
     return ContactResult(
         found=True,
@@ -617,8 +621,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
         start_spread_s=spreads[0],
         end_spread_s=spreads[1],
-        curve_end_s=t0_s + curve[0] / fs,
-        curve_end_se_s=curve[1] / fs,
+        curve_end_s=t0_s + by_curve[0] / fs,
+        curve_end_se_s=by_curve[1] / fs,
     )
 
 
@@ -867,7 +871,15 @@ def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, 
         else:
             sse = np.where(slope_ok, sse, r)
     k = int(np.argmin(sse))
-    inside = np.flatnonzero(sse <= sse[k] + CURVE_CHI2 * sigma * sigma)
+    level = sse[k] + CURVE_CHI2 * sigma * sigma
+    inside = np.flatnonzero(sse <= level)
     if inside[0] == 0 or inside[-1] == grid.size - 1:
         return float(grid[k]), math.inf, float(slope[k])
-    return float(grid[k]), 0.5 * float(grid[inside[-1]] - grid[inside[0]]) / math.sqrt(CURVE_CHI2), float(slope[k])
+    best = float(grid[k])
+    curvature = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
+    if 0 < k < grid.size - 1 and curvature > 0:  # the least between the grid's points, from a parabola
+        best += 0.5 * CURVE_STEP * float(sse[k - 1] - sse[k + 1]) / float(curvature)
+    i, j = int(inside[0]), int(inside[-1])  # the interval's edges between the grid's points, linearly
+    lo = grid[i] - CURVE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
+    hi = grid[j] + CURVE_STEP * float(level - sse[j]) / float(sse[j + 1] - sse[j])
+    return best, 0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2), float(slope[k])
