@@ -213,7 +213,6 @@ def test_zoo_force_spectrum_bump_is_no_ringing(name, seed, index, what, tmp_path
 #: Traces of the benchmark still ok but wrong on main (strict xfail: this test turns red when one is fixed,
 #: so that it moves to ZOO_REGRESSION): the kinds the README lists under "What remains".
 ZOO_STILL_WRONG = [
-    ("plate-26kHz-above-nyquist", 0, 1974, "26 kHz plate sampled at 33.5 kHz, no anti-aliasing: TC -1.5 %"),
     ("plate-15.5kHz-above-nyquist", 1, 1220, "15.5 kHz plate sampled at 20 kHz, no anti-aliasing: peak +11.7 %"),
 ]
 
@@ -385,3 +384,39 @@ def test_zoo_step_response_plate_undone(name, seed, index, what, tmp_path):
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, must_be_ok=True)
     assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.1)
+
+
+#: Traces of the benchmark excluded on main at commit 10b1d50 for "contact end not determined to 1 %: fitted again
+#: from the samples above twice the noise threshold it moves by ..." although measurable: the force steepens into
+#: its end (a punctured ball's), the refit moves the end later, and the force's curve before the end pins it
+#: (``ballimpact.contact.end_from_curve``); ok and right now (name, seed, index, what).
+ZOO_END_CURVE = [
+    ("punctured-end-curve-50kHz", 0, 1463, "punctured ball at 50 kHz, 3.5 V peak: the end refitted 0.56 % later"),
+    ("punctured-end-curve-86kHz", 0, 726, "punctured ball at 86 kHz, 0.9 V peak, 0.27 mV noise: refitted 0.76 % later"),
+    ("punctured-end-curve-77kHz", 1, 1457, "punctured ball at 77 kHz (one factor: the sample rate)"),
+]
+
+#: Traces of the benchmark ok but wrong on main at commit 10b1d50 with a force that flattens into its end (convex):
+#: the line through its last samples meets zero early and the refit from higher samples moved it by less than
+#: 0.5 % of TC; the force's curve puts the end later, and the end is not determined (name, seed, index, what).
+ZOO_CONVEX_END = [
+    ("convex-end-punctured-50kHz", 2, 1489, "punctured ball, benign rig at 50 kHz: TC -1.09 %"),
+    ("convex-end-26kHz-plate", 0, 1974, "26 kHz plate sampled at 33.5 kHz, no anti-aliasing: TC -1.5 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_END_CURVE])
+def test_zoo_end_from_the_force_curve(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable and trace.rig.plate_hz is None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_CONVEX_END])
+def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert result.status != "ok" and "the force's curve before it meets zero" in result.reason, result.reason

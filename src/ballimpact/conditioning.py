@@ -125,6 +125,8 @@ RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins 
 RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
+CURVE_MIN_RATE_HZ = 33.0e3  # ... unless the force's curve pins it, at this sample rate or above [Hz]
+CURVE_LATE_FRACTION = 2.5e-3  # the force's curve meets zero later than the end by more of TC: a convex fade [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
@@ -685,7 +687,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         warnings.warn(msg, ConditioningWarning, stacklevel=2)
         messages.append(msg)
     problems = it.problems + it.tau_problems
-    contact = detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True)
+    contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
+                                                curve=True), fs, t0_s)
     if contact.found:
         problems.extend(_integrity(it.x, fs, it.fit, contact, t0_s, scale, it.ambiguous, it.start_u, it.end_u,
                                    post_guard_s))
@@ -724,6 +727,42 @@ def _end_uncertainty(y, fs, noise, contact: ContactResult, s_u, e_u) -> float:
         slope = abs(float(y[i1] - y[i0])) / m
         out.append(max(noise / slope, 0.5) if slope > 0 else math.inf)
     return math.hypot(*out)
+
+
+def _curve_end_contact(contact: ContactResult, fs, t0_s) -> ContactResult:
+    """The contact with its end from the force's curve where the hinge's end is not determined but the curve's is.
+
+    The hinge's end moves by more than SPREAD_MAX_FRACTION of TC when fitted
+    again from the samples above twice the noise threshold where the force
+    fades into the noise with a bend (a line through the last samples of a
+    curved fade meets zero late or early, by an amount that depends on the
+    noise). The force's curve before the end (``contact.curve_end_s``, see
+    :func:`ballimpact.contact.end_from_curve`) is then the end when twice its
+    standard uncertainty is within the same SPREAD_MAX_FRACTION of TC; the
+    contact is flagged ``end_curve`` and its end is not refitted again.
+
+    Only where the refit moves the end later: the force then steepens into
+    its end (concave, a punctured ball's), and the lower samples are nearer
+    the truth. Where it moves earlier the force flattens into its end
+    (convex), its last part is below the noise, and every fit through the
+    samples above it, the curve's too, ends early (TC -1.1 % on zoo trace
+    2:1489, whose spread passed; tests/test_contact.py).
+
+    Only at CURVE_MIN_RATE_HZ or faster: below it, a plate of up to 30 kHz
+    (raw-format v1.1) can alias below RING_LINE_MIN_HZ, where no check sees
+    its ringing, and the spread check is then what stands between such a
+    plate's sensed force and a wrong ok (zoo trace 2:586: 22.6 kHz at
+    24.9 kHz, its end known but its peak 12 % low).
+    """
+    if not contact.found or not contact.end_spread_s > SPREAD_MAX_FRACTION * contact.contact_time_s \
+            or fs < CURVE_MIN_RATE_HZ:
+        return contact
+    end_s = contact.curve_end_s
+    if not (2.0 * contact.curve_end_se_s <= SPREAD_MAX_FRACTION * (end_s - contact.start_s)):  # NaN: not known
+        return contact
+    u_end = (end_s - t0_s) * fs
+    return replace(contact, end_s=end_s, end_index=int(math.floor(u_end)), edge_end_s=min(contact.edge_end_s, end_s),
+                   flags=contact.flags + ("end_curve",))
 
 
 def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0_s):
@@ -1011,7 +1050,8 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     if not peak > 0:
         return []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s) + _end_problems(x, fs, fit, contact, s_u, e_u, scale)
+    return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s)
+            + _end_problems(x, fs, fit, contact, s_u, e_u, scale, curve=True)
             + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
             + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
 
@@ -1080,8 +1120,12 @@ def _residual_where(y, pre, post, white, peak) -> str:
     return "hum or drift not resolved?"
 
 
-def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale):
-    """Contact ends that hold no force, are located to half a sample only or move when fitted again."""
+def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, curve=False):
+    """Contact ends that hold no force, are located to half a sample only or move when fitted again; with
+    ``curve``, also an end that the force's curve before it (``contact.curve_end_s``) puts more than
+    CURVE_LATE_FRACTION of TC later: the force flattens into its end (a convex fade), its last part is below
+    the noise, and the line through the samples above it meets zero early (zoo trace 2:1489: TC -1.1 %, its
+    refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC)."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
@@ -1106,12 +1150,21 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                            f"TC is known to +-{len(jumps) * 0.5e6 / fs:.3g} us only, more than "
                            f"{100 * JUMP_MAX_FRACTION:.2g} % of {contact.contact_time_s * 1e3:.3g} ms (sample faster)"))
     for where, moved in (("start", contact.start_spread_s), ("end", contact.end_spread_s)):
+        if where == "end" and "end_curve" in contact.flags:
+            continue  # the end from the force's curve, known to SPREAD_MAX_FRACTION of TC: see _curve_end_contact
         if abs(moved) > SPREAD_MAX_FRACTION * contact.contact_time_s:
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
                                f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
                                "there"))
+    late = contact.curve_end_s - contact.end_s
+    if curve and late > CURVE_LATE_FRACTION * contact.contact_time_s:  # NaN: no curve, no problem
+        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                           f"contact end not determined to 1 %: the force's curve before it meets zero "
+                           f"{late * 1e6:.3g} us later than the line through its last samples "
+                           f"({100 * late / contact.contact_time_s:.2g} % of TC); the force flattens into the noise "
+                           "there"))
     return out
 
 

@@ -51,6 +51,7 @@ __all__ = [
     "detect_clipping",
     "robust_noise",
     "contact_samples",
+    "end_from_curve",
     "MAD_TO_SIGMA",
 ]
 
@@ -68,6 +69,12 @@ FOOT_MAX_WIDENINGS = 8  # a slow foot's pre window may grow to this many more FO
 KINK_SIGMA = 4.0  # a bend of the rise lowering the residual sum of squares by this many noise deviations squared [-]
 FOOT_RESIDUAL_SIGMA = 3.0  # a rising sample predicted worse than this (standard errors) ends the foot [-]
 SPREAD_FACTOR = 2.0  # the ends are fitted again from samples above this many times the noise thresholds [-]
+CURVE_FITS = ((2, 0.03), (3, 0.05))  # the end's curve: polynomials of this degree over this fraction of TC [-]
+CURVE_MIN_SAMPLES = 4  # ... but over at least this many samples inside the contact [samples]
+CURVE_SEARCH = 3.0  # its zero is looked for within this many samples of the hinge's end ... [samples]
+CURVE_STEP = 0.05  # ... on a grid this fine, the least's neighbours refined by a parabola [samples]
+CURVE_MIN_SLOPE = 3.0  # ... pinned only where the force's slope there is this many noise deviations per sample [-]
+CURVE_CHI2 = 4.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
@@ -132,6 +139,10 @@ class ContactResult:
         SPREAD_FACTOR times the noise threshold (only with ``spread=True``;
         NaN otherwise) [s]: a straight end hardly moves, a tail that fades
         into the noise does.
+    curve_end_s, curve_end_se_s : float
+        The end from the force's curve before it (only with ``curve=True``,
+        not at a jump nor with ringing after the contact; NaN otherwise) and
+        its standard uncertainty [s]: see :func:`end_from_curve`.
     """
 
     found: bool
@@ -151,6 +162,8 @@ class ContactResult:
     other_impacts: tuple[tuple[float, float], ...] = ()
     start_spread_s: float = math.nan
     end_spread_s: float = math.nan
+    curve_end_s: float = math.nan
+    curve_end_se_s: float = math.nan
 
     @property
     def contact_time_s(self) -> float:
@@ -496,7 +509,8 @@ def _main_run(above: np.ndarray, peak_index: int, merge_gap: int):
 
 
 def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise_rms_V: float | None = None,
-                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False) -> ContactResult:
+                   raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False,
+                   curve: bool = False) -> ContactResult:
     """Find the contact in a conditioned plate voltage.
 
     The voltage must have its offset, hum and decay removed and the polarity
@@ -528,6 +542,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         Also fit each end again from the samples above SPREAD_FACTOR times the
         noise threshold and report how far it moves (``start_spread_s``,
         ``end_spread_s``).
+    curve : bool
+        Also find the end from the force's curve before it
+        (:func:`end_from_curve`; ``curve_end_s``, ``curve_end_se_s``).
 
     Returns
     -------
@@ -582,6 +599,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
+    by_curve = (math.nan, math.nan)
+    if curve and not {"end_jump", "ringing_after_contact", "contact_at_trace_end"} & set(flags):
+        by_curve = _curve_end(xs, sigma, u_start, u_end, peak_index, max(run_b, peak_index), fs)
 
     return ContactResult(
         found=True,
@@ -601,6 +621,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
         start_spread_s=spreads[0],
         end_spread_s=spreads[1],
+        curve_end_s=t0_s + by_curve[0] / fs,
+        curve_end_se_s=by_curve[1] / fs,
     )
 
 
@@ -739,3 +761,125 @@ def _spreads(xs, peak_index, sigma, fs, u_start, u_end) -> tuple[float, float]:
     if e2 is not None:
         spreads[1] = (n - 1 - e2 - u_end) / fs
     return spreads[0], spreads[1]
+
+
+def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, noise_rms: float, *,
+                   t0_s: float = 0.0) -> tuple[float, float]:
+    """The contact end from the force's curve before it, with its standard uncertainty.
+
+    In restitution the model's force ``F = kB x + cB x'`` (Eq. (14) in
+    Goodwill & Haake 2004, no momentum flux after the peak) reaches zero
+    smoothly, with a finite slope and a curvature of either sign: the last
+    samples of a punctured ball fall steeper and steeper (concave), others
+    flatten into the end (convex). A straight line through them (the hinge
+    of :func:`detect_contact`) then meets zero late or early, by an amount that
+    depends on how many samples stand out of the noise. Here the force is
+    fitted, by least squares, with ``a s + b s^2`` (s = end - t, zero after
+    the end, a >= 0) over the last CURVE_FITS[0][1] of TC and the quiet
+    samples after it, the end profiled on a grid of CURVE_STEP samples within
+    CURVE_SEARCH samples of ``end_s``; its standard uncertainty is the
+    half-width of the ends whose residual sum of squares is within one noise
+    variance of the least (chi-square with one degree of freedom). The same
+    fit with a cubic over CURVE_FITS[1][1] of TC tells how much the end
+    depends on the curve's model; that difference is added in quadrature.
+
+    Parameters
+    ----------
+    force : array_like
+        Force (or a conditioned voltage proportional to it), zero baseline,
+        one sample per 1/sample_rate_hz [N] (or [V]).
+    sample_rate_hz : float
+        Sample rate [Hz].
+    start_s, end_s : float
+        Contact start and end from another estimate (e.g. the hinge's) [s].
+    noise_rms : float
+        Noise standard deviation of the force, same unit as ``force``.
+    t0_s : float
+        Time of the first sample [s].
+
+    Returns
+    -------
+    end_s : float
+        End of the contact from the curve [s] (NaN when the samples do not
+        allow the fit).
+    se_s : float
+        Its standard uncertainty [s]; inf when the end is not bounded within
+        CURVE_SEARCH samples, NaN with a NaN end.
+
+    Raises
+    ------
+    ValueError
+        For non-finite samples, a non-positive sample rate, a contact not
+        inside the trace or a noise that is not positive and finite.
+    """
+    fs, x = _checked_arguments(force, sample_rate_hz, t0_s)
+    if not (math.isfinite(start_s) and math.isfinite(end_s) and end_s > start_s):
+        raise ValueError(f"need finite start_s < end_s, got start_s={start_s!r}, end_s={end_s!r}")
+    u_start, u_end = (start_s - t0_s) * fs, (end_s - t0_s) * fs
+    if u_start < 0 or u_end > x.size - 1:
+        raise ValueError(f"contact [{start_s:.6g}, {end_s:.6g}] s lies outside the trace of {x.size} samples")
+    if not (math.isfinite(noise_rms) and noise_rms > 0):
+        raise ValueError(f"noise_rms must be positive and finite, got {noise_rms!r}")
+    inside = x[int(math.ceil(u_start)):int(math.floor(u_end)) + 1]
+    if inside.size < CURVE_MIN_SAMPLES:
+        return math.nan, math.nan
+    k = int(math.ceil(u_start)) + int(np.argmax(inside))
+    u, se = _curve_end(x, float(noise_rms), u_start, u_end, k, k, fs)
+    return t0_s + u / fs, se / fs
+
+
+def _curve_end(xs, sigma: float, u_start: float, u_end: float, peak_index: int, floor_u: int,
+               fs: float) -> tuple[float, float]:
+    """The end from the force's curve and its standard uncertainty [samples] (see :func:`end_from_curve`); the
+    fits start after the peak, and the end is not before floor_u (the last sample above the contact threshold)."""
+    n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
+    tc = u_end - u_start
+    ends = []
+    for degree, fraction in CURVE_FITS:
+        lo = max(int(math.floor(u_end - max(fraction * tc, CURVE_MIN_SAMPLES))), peak_index, 0)
+        hi = min(int(math.ceil(u_end)) + n_pre, xs.size - 1)
+        ends.append(_profile_end(xs[lo:hi + 1], np.arange(lo, hi + 1, dtype=float), sigma, u_end, floor_u,
+                                 degree, xs.size - 1))
+    (u2, se2, slope), (u3, _, _) = ends
+    if not (math.isfinite(u2) and math.isfinite(u3)):
+        return u2, math.inf if math.isfinite(u2) else math.nan
+    if not slope >= CURVE_MIN_SLOPE * sigma:
+        return u2, math.inf  # a force that flattens into its end: where it meets zero is not in the samples
+    return u2, math.hypot(se2, u2 - u3)
+
+
+def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, last: float):
+    """Least-squares end of ``sum_k c_k s^k`` (k = 1..degree, s = max(end - u, 0), c_1 >= 0) on a grid near
+    u_end [samples], its standard uncertainty (half the width of the ends within CURVE_CHI2 noise variances of
+    the least residual, over its square root; inf when that reaches the grid's edge) [samples] and the slope
+    c_1 there [force per sample]; NaNs when the samples cannot tell."""
+    grid = u_end + np.arange(-CURVE_SEARCH, CURVE_SEARCH + 0.5 * CURVE_STEP, CURVE_STEP)
+    grid = grid[(grid >= floor_u) & (grid <= last)]
+    if grid.size < 3 or y.size < degree + 2:
+        return math.nan, math.nan, math.nan
+    s = np.maximum(grid[:, None] - u[None, :], 0.0)
+    sse = None
+    for powers in (range(1, degree + 1), range(2, degree + 1)):  # without the linear term where its slope is < 0
+        a = np.stack([s ** p for p in powers], axis=-1)
+        ata = np.einsum("gnk,gnl->gkl", a, a)
+        aty = np.einsum("gnk,n->gk", a, y)
+        ridge = 1e-12 * (1.0 + np.trace(ata, axis1=1, axis2=2))[:, None, None] * np.eye(len(powers))
+        coef = np.linalg.solve(ata + ridge, aty[..., None])[..., 0]
+        r = np.sum((y[None, :] - np.einsum("gnk,gk->gn", a, coef)) ** 2, axis=1)
+        if sse is None:
+            sse, slope_ok, slope = r, coef[:, 0] >= 0, np.maximum(coef[:, 0], 0.0)
+        else:
+            sse = np.where(slope_ok, sse, r)
+    k = int(np.argmin(sse))
+    level = sse[k] + CURVE_CHI2 * sigma * sigma
+    inside = np.flatnonzero(sse <= level)
+    if inside[0] == 0 or inside[-1] == grid.size - 1:
+        return float(grid[k]), math.inf, float(slope[k])
+    best = float(grid[k])
+    curvature = sse[k - 1] - 2.0 * sse[k] + sse[k + 1]
+    if 0 < k < grid.size - 1 and curvature > 0:  # the least between the grid's points, from a parabola
+        best += 0.5 * CURVE_STEP * float(sse[k - 1] - sse[k + 1]) / float(curvature)
+    i, j = int(inside[0]), int(inside[-1])  # the interval's edges between the grid's points, linearly
+    lo = grid[i] - CURVE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
+    hi = grid[j] + CURVE_STEP * float(level - sse[j]) / float(sse[j + 1] - sse[j])
+    return best, 0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2), float(slope[k])
