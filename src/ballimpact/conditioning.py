@@ -78,7 +78,7 @@ from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
+                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -155,6 +155,9 @@ PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long ins
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
 PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
+PLATE_FN_UNCERTAINTY = 0.01  # the identified resonance is known to about this fraction: TC's change charged [-]
+PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many noise deviations locates it to half a sample [-]
+PLATE_LOWPASS_END_INSIDE = (6, 12)  # the low-passed ends fitted through the kernel over this many samples of line [samples]
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
@@ -802,7 +805,7 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
         if not isinstance(c, str):
             return y, c, plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
@@ -850,7 +853,7 @@ def _smoothed_peak_loss(y, fs, sigma):
     return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
 
 
-def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
+def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None):
     """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`; else what it
     failed, in words (str)."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
@@ -869,18 +872,54 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
         return "the undone force still shows " + seen[0].message.split(":")[0]
     bias = 0.0
     if not math.isinf(cutoff):
-        # the low-pass spreads the force by its kernel's half-width at each end (its support): the contact
-        # found on it may be longer by up to twice that
         half_width, sigma = lowpass_spread_samples(fs, cutoff)
-        bias = PLATE_LOWPASS_BIAS * half_width
         loss = _smoothed_peak_loss(y, fs, sigma)
         if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
             return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
-    uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias
+        # the low-pass spreads the force by its kernel's half-width at each end: the ends are fitted through
+        # the plate's undoing and the kernel (a line, or a jump from zero), twice, and the fits' difference
+        # is charged to TC
+        fn, zeta = plate.frequency_hz, plate.damping_ratio
+        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m),
+                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m)) for m in PLATE_LOWPASS_END_INSIDE]
+        if any(e is None for pair in ends for e in pair):
+            return ("the low-passed force's ends fit no line or jump from zero through the plate and the kernel "
+                    f"(its {100 * 2 * half_width / (ce_u - cs_u):.2g} % spread of TC stays unknown)")
+        (f_start, f_end) = ends[0]
+        fs_u, fe_u = f_start[0], f_end[0]
+        bias = max(abs((e[1][0] - e[0][0]) - (fe_u - fs_u)) for e in ends[1:]) if len(ends) > 1 else 0.0
+        # the plate is known to about PLATE_FN_UNCERTAINTY in fn: what it leaves ringing moves the ends
+        for scale in (1.0 - PLATE_FN_UNCERTAINTY, 1.0 + PLATE_FN_UNCERTAINTY):
+            y2 = lowpass_zero_phase(undo_plate_resonance(x, fs, fn * scale, zeta), fs, cutoff)
+            pair = (undone_end(y2, fs, fn * scale, zeta, cutoff, cs_u, "start", inside_samples=PLATE_LOWPASS_END_INSIDE[0]),
+                    undone_end(y2, fs, fn * scale, zeta, cutoff, ce_u, "end", inside_samples=PLATE_LOWPASS_END_INSIDE[0]))
+            if pair[0] is None or pair[1] is None:
+                return (f"the low-passed force's ends fit no line or jump from zero through the kernel with the plate "
+                        f"{100 * PLATE_FN_UNCERTAINTY:g} % off in fn")
+            bias = max(bias, abs((pair[1][0] - pair[0][0]) - (fe_u - fs_u)))
+        shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
+        if not -1.0 <= shorter <= 2.0 * half_width + 2.0:
+            return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
+                    f"low-passed contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
+        c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs,
+                    start_index=int(math.ceil(fs_u)), end_index=int(math.floor(fe_u)))
+        cs_u, ce_u = fs_u, fe_u
+        # each end to its noise over its slope (a jump well out of the noise: to half a sample), the noise
+        # there the fit's residual when that is larger (what the undoing left, or a force no line fits), and
+        # at least as far as the fit's residual lets the end move (its profile)
+        spread = []
+        for _, slope, jump, resid, moved in (f_start, f_end):
+            level = max(noise, resid)
+            spread.append(max(0.5 if jump > PLATE_END_JUMP_SIGMA * level else
+                              (max(level / slope, 0.5) if slope > 0 else math.inf), moved))
+        uncertainty = 2.0 * math.hypot(*spread) + bias
+    else:
+        uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)
     if uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u):
         return (f"the undone TC is known to {100 * uncertainty / (ce_u - cs_u):.2g} % only ("
                 + ("noise over slope at its ends" if math.isinf(cutoff) else
-                   f"{100 * bias / (ce_u - cs_u):.2g} % of it the kernel's spread") + ")")
+                   f"{100 * bias / (ce_u - cs_u):.2g} % of it how far the ends move with the fit's window and with the "
+                   f"plate {100 * PLATE_FN_UNCERTAINTY:g} % off in fn") + ")")
     inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
         # the force is not what this plate's inverse assumes
