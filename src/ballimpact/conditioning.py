@@ -807,7 +807,7 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
         c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
         if not isinstance(c, str):
-            return y, c, plate, cutoff
+            return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
 
@@ -854,8 +854,8 @@ def _smoothed_peak_loss(y, fs, sigma):
 
 
 def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None):
-    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`; else what it
-    failed, in words (str)."""
+    """The contact of an undone force ``y`` and the force (a low-passed one with its ends restored from their
+    fits) when it passes every check of :func:`_plate_undone`; else what it failed, in words (str)."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
     if not c.found or not c.peak_V > 0 or c.n_impacts > 1:
         return "the undone force holds no single contact"
@@ -886,8 +886,8 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
             return ("the low-passed force's ends fit no line or jump from zero through the plate and the kernel "
                     f"(its {100 * 2 * half_width / (ce_u - cs_u):.2g} % spread of TC stays unknown)")
         (f_start, f_end) = ends[0]
-        fs_u, fe_u = f_start[0], f_end[0]
-        bias = max(abs((e[1][0] - e[0][0]) - (fe_u - fs_u)) for e in ends[1:]) if len(ends) > 1 else 0.0
+        fs_u, fe_u = f_start.index, f_end.index
+        bias = max(abs((e[1].index - e[0].index) - (fe_u - fs_u)) for e in ends[1:]) if len(ends) > 1 else 0.0
         # the plate is known to about PLATE_FN_UNCERTAINTY in fn: what it leaves ringing moves the ends
         for scale in (1.0 - PLATE_FN_UNCERTAINTY, 1.0 + PLATE_FN_UNCERTAINTY):
             y2 = lowpass_zero_phase(undo_plate_resonance(x, fs, fn * scale, zeta), fs, cutoff)
@@ -896,22 +896,28 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
             if pair[0] is None or pair[1] is None:
                 return (f"the low-passed force's ends fit no line or jump from zero through the kernel with the plate "
                         f"{100 * PLATE_FN_UNCERTAINTY:g} % off in fn")
-            bias = max(bias, abs((pair[1][0] - pair[0][0]) - (fe_u - fs_u)))
+            bias = max(bias, abs((pair[1].index - pair[0].index) - (fe_u - fs_u)))
         shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
         if not -1.0 <= shorter <= 2.0 * half_width + 2.0:
             return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
                     f"low-passed contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
-        c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs,
-                    start_index=int(math.ceil(fs_u)), end_index=int(math.floor(fe_u)))
+        # the ends' jump and the impulse the kernel spread outside them restored from their fits
+        y = y.copy()
+        for f in (f_start, f_end):
+            y[f.first:f.first + f.correction.size] += f.correction
         cs_u, ce_u = fs_u, fe_u
+        inside = y[int(math.ceil(cs_u)):int(math.floor(ce_u)) + 1]
+        c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs, start_index=int(math.ceil(fs_u)),
+                    end_index=int(math.floor(fe_u)), peak_index=int(math.ceil(cs_u)) + int(np.argmax(inside)),
+                    peak_V=float(np.max(inside)))
         # each end to its noise over its slope (a jump well out of the noise: to half a sample), the noise
         # there the fit's residual when that is larger (what the undoing left, or a force no line fits), and
         # at least as far as the fit's residual lets the end move (its profile)
         spread = []
-        for _, slope, jump, resid, moved in (f_start, f_end):
-            level = max(noise, resid)
-            spread.append(max(0.5 if jump > PLATE_END_JUMP_SIGMA * level else
-                              (max(level / slope, 0.5) if slope > 0 else math.inf), moved))
+        for f in (f_start, f_end):
+            level = max(noise, f.residual)
+            spread.append(max(0.5 if f.jump > PLATE_END_JUMP_SIGMA * level else
+                              (max(level / f.slope, 0.5) if f.slope > 0 else math.inf), f.uncertainty))
         uncertainty = 2.0 * math.hypot(*spread) + bias
     else:
         uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)
@@ -926,7 +932,7 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         return "the undone force pulls on the plate during the contact"
     if cs_u > s_u + PLATE_START_LATE:
         return "the undone force starts later than the sensed one (a foot lost in its noise)"
-    return c
+    return c, y
 
 
 def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):

@@ -42,6 +42,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -417,6 +418,18 @@ def lowpass_spread_samples(sample_rate_hz: float, cutoff_hz: float) -> tuple[flo
     return float(taps.size // 2), float(math.sqrt(np.sum(taps * n * n)))
 
 
+class UndoneEnd(NamedTuple):
+    """An end of a contact fitted by :func:`undone_end`."""
+
+    index: float  #: the end [samples, fractional index]
+    slope: float  #: the force's slope b there [unit of the force per sample], positive into the contact
+    jump: float  #: its jump a there [unit of the force] (0 at an end)
+    residual: float  #: rms residual of the fit [unit of the force]
+    uncertainty: float  #: standard uncertainty of the end from the fit's profile [samples]
+    first: int  #: first sample of the fit's window [-]
+    correction: np.ndarray  #: the fitted force less what the chain made of it, over the window [unit of the force]
+
+
 def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.ndarray, step: float, span: int):
     """The low-passed undone plate responses to a unit step, ramp and parabola starting at ``frac`` samples.
 
@@ -496,13 +509,16 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
 
     Returns
     -------
-    tuple of (float, float, float, float, float) or None
+    UndoneEnd or None
         The end [samples, fractional index], the line's slope b at it, its
         jump a at it, the rms residual of the fit [unit of the force per
-        sample, unit of the force, unit of the force] and the end's standard
-        uncertainty [samples]: the farthest end whose fit leaves at most one
+        sample, unit of the force, unit of the force], the end's standard
+        uncertainty [samples] (the farthest end whose fit leaves at most one
         residual variance more per independent sample of the low-passed
-        noise (correlated over about ``1 / sum(K^2)`` samples); None
+        noise, correlated over about ``1 / sum(K^2)`` samples) and, from the
+        window's first sample on, the fitted force less what the undoing and
+        the kernel made of it (added to the force, it restores the end's
+        jump and the impulse the kernel spread outside it); None
         when the window leaves the record or the best end is at the edge of
         the candidates (no end inside them).
 
@@ -570,7 +586,13 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     # low-passed noise (correlated over about 1 / sum(taps^2) samples): a standard uncertainty
     rise = resid2 / float(np.sum(taps ** 2))
     spread = float(np.max(np.abs(ts_all[sse_all <= sse + rise] - end)))
-    return float(end), float(b), float(a), math.sqrt(resid2), float(spread)
+    # the force the fit says is there, less what the chain made of it: the kernel's spread and the undoing's
+    # transient at the end, to be added back to the low-passed force over the window
+    q = float(best[2]) if best.size > 2 else 0.0
+    u = (n - end) * sign
+    model = np.where(u >= 0, a + b * u + q * u * u, 0.0)
+    correction = model - design[i_best] @ coef[i_best]
+    return UndoneEnd(float(end), float(b), float(a), math.sqrt(resid2), float(spread), int(lo), correction)
 
 
 @functools.lru_cache(maxsize=16)
