@@ -348,3 +348,25 @@ def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
 PEAK_REFUSED = {"hum-0.7mV-3.7ms-pre"}
 BASELINE_KINDS = {ProblemKind.DECAY_NOT_CORRECTED, ProblemKind.UNDERSHOOT_NOT_MEASURABLE, ProblemKind.CONTACT_UNSTABLE,
                   ProblemKind.BASELINE_OFF_ZERO, ProblemKind.BASELINE_RESIDUAL, ProblemKind.MAINS_UNRESOLVED}
+
+
+#: Traces of the benchmark excluded on main at 10b1d50 although measurable: their plate (3-13 kHz) undone, the
+#: force too noisy, and low-passed, "the undone TC is known to 2-3 % only" (two kernel half-widths charged to
+#: TC) or its ends not determined. The low-passed force's ends are now fitted through the plate's undoing and the
+#: kernel (``plate.undone_end``): ok and right (name, seed, index, what).
+ZOO_LOWPASS_ENDS = [
+    ("lowpass-ends-6.9kHz-punctured", 2, 853, "6.9 kHz plate, damping 0.046, punctured ball at 50 kHz (one factor)"),
+    ("lowpass-ends-3.8kHz-pressurised", 1, 1749, "3.8 kHz plate, damping 0.11, pressurised ball at 50 kHz (one "
+     "factor)"),
+    ("lowpass-ends-12.8kHz-pressurised", 2, 1077, "12.8 kHz plate, damping 0.03, pressurised ball at 50 kHz (one "
+     "factor)"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_LOWPASS_ENDS])
+def test_zoo_lowpassed_plate_ends_fitted(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable and trace.rig.plate_hz is not None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)
+    assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)
