@@ -157,6 +157,8 @@ PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its n
 PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the identified resonance is known to about this fraction: TC's change charged [-]
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many noise deviations locates it to half a sample [-]
+PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample above the low-passed peak by more noise deviations: lost [-]
+PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 kernel half-widths) around it [samples]
 PLATE_LOWPASS_END_INSIDE = (6, 12)  # the low-passed ends fitted through the kernel over this many samples of line [samples]
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
@@ -806,6 +808,18 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
         c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
+        if not isinstance(c, str) and not math.isinf(cutoff):
+            # the low-pass must not hide a peak the exact undone force shows (a spike sharper than its kernel,
+            # whose top the checks of the exact force found between samples): its largest sample inside the
+            # contact (a sample off each end, where the undoing leaves a transient at a jump) at most
+            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak
+            i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
+            top = float(np.max(exact[i0:i1])) if i1 > i0 else math.inf
+            lost = top - float(c[0].peak_V)
+            if lost > PLATE_LOWPASS_PEAK * float(c[0].peak_V) + PLATE_PEAK_SIGMA * fit.noise * undone_noise_gain(
+                    fs, plate.frequency_hz, plate.damping_ratio):
+                c = (f"the low-pass lowers the exact undone force's largest sample by {100 * lost / top:.2g} % (a "
+                     "peak sharper than its kernel)")
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
@@ -889,10 +903,15 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         fs_u, fe_u = f_start.index, f_end.index
         bias = max(abs((e[1].index - e[0].index) - (fe_u - fs_u)) for e in ends[1:]) if len(ends) > 1 else 0.0
         # the plate is known to about PLATE_FN_UNCERTAINTY in fn: what it leaves ringing moves the ends
+        # (undone over the contact and a margin only: the undoing's passes forget their start within a few samples)
+        a = max(int(cs_u) - PLATE_END_MARGIN - 4 * int(half_width), 0)
+        b = min(int(ce_u) + PLATE_END_MARGIN + 4 * int(half_width), x.size)
         for scale in (1.0 - PLATE_FN_UNCERTAINTY, 1.0 + PLATE_FN_UNCERTAINTY):
-            y2 = lowpass_zero_phase(undo_plate_resonance(x, fs, fn * scale, zeta), fs, cutoff)
-            pair = (undone_end(y2, fs, fn * scale, zeta, cutoff, cs_u, "start", inside_samples=PLATE_LOWPASS_END_INSIDE[0]),
-                    undone_end(y2, fs, fn * scale, zeta, cutoff, ce_u, "end", inside_samples=PLATE_LOWPASS_END_INSIDE[0]))
+            y2 = lowpass_zero_phase(undo_plate_resonance(x[a:b], fs, fn * scale, zeta), fs, cutoff)
+            pair = (undone_end(y2, fs, fn * scale, zeta, cutoff, cs_u - a, "start",
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]),
+                    undone_end(y2, fs, fn * scale, zeta, cutoff, ce_u - a, "end",
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]))
             if pair[0] is None or pair[1] is None:
                 return (f"the low-passed force's ends fit no line or jump from zero through the kernel with the plate "
                         f"{100 * PLATE_FN_UNCERTAINTY:g} % off in fn")

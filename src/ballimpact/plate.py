@@ -379,11 +379,16 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
         static gain, so its integral (the impulse) is that of ``sensed`` up to
         the ends of the record.
     """
+    x = finite_samples("sensed", sensed)
+    return _undo_rows(x, sample_rate_hz, frequency_hz, damping_ratio)
+
+
+def _undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
+    """:func:`undo_plate_resonance` along the last axis of x (one trace or many at once) [unit of x]."""
     from scipy import signal
 
-    x = finite_samples("sensed", sensed)
-    b, a = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
-    w = signal.lfilter(a, [1.0], x) / b[0]
+    b, a = plate_discretisation(frequency_hz, damping_ratio, fs)
+    w = signal.lfilter(a, [1.0], x, axis=-1) / b[0]
     zeros = np.roots(b)
     if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)):
         raise ValueError(f"the plate's sampled response has complex zeros {zeros}: not a second-order plate "
@@ -391,9 +396,9 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
     for zero in zeros:
         z = float(np.real(zero))
         if abs(z) < 1.0:  # causal pass: u[n] = w[n] + z u[n-1]
-            w = signal.lfilter([1.0], [1.0, -z], w)
+            w = signal.lfilter([1.0], [1.0, -z], w, axis=-1)
         else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1
-            w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[::-1])[::-1]
+            w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[..., ::-1], axis=-1)[..., ::-1]
     return w
 
 
@@ -448,24 +453,22 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
     p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn  # the parabola's steady response
     qa = -p0
     qb = (sigma * qa - p1) / wd
-    out = []
-    for frac in np.arange(0.0, 1.0 - 1e-9, step):
-        t = n - frac
-        on = t >= 0
-        tt = np.where(on, t, 0.0)
-        decay = np.exp(-sigma * tt)
-        cos, sin = np.cos(wd * tt), np.sin(wd * tt)
-        steady_q = t * t + p1 * t + p0
-        responses = (np.where(on, 1.0 - decay * (cos + sigma / wd * sin), 0.0),
-                     np.where(on, tt - c + decay * (c * cos + d * sin), 0.0),
-                     np.where(on, steady_q + decay * (qa * cos + qb * sin), 0.0),
-                     steady_q)
-        cols = []
-        for resp in responses:
-            u = undo_plate_resonance(resp, fs, frequency_hz, damping_ratio)
-            cols.append(np.convolve(u, taps, mode="same")[pad:-pad])
-        out.append(cols)
-    return np.array(out)
+    t = n[None, :] - np.arange(0.0, 1.0 - 1e-9, step)[:, None]  # [frac, n]
+    on = t >= 0
+    tt = np.where(on, t, 0.0)
+    decay = np.exp(-sigma * tt)
+    cos, sin = np.cos(wd * tt), np.sin(wd * tt)
+    steady_q = t * t + p1 * t + p0
+    responses = np.stack([np.where(on, 1.0 - decay * (cos + sigma / wd * sin), 0.0),
+                          np.where(on, tt - c + decay * (c * cos + d * sin), 0.0),
+                          np.where(on, steady_q + decay * (qa * cos + qb * sin), 0.0),
+                          steady_q], axis=1)  # [frac, response, n]
+    u = _undo_rows(responses, fs, frequency_hz, damping_ratio)
+    if taps.size > 1:
+        from scipy.ndimage import convolve1d
+
+        u = convolve1d(u, taps, axis=-1, mode="constant")
+    return u[..., pad:-pad]
 
 
 def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, cutoff_hz: float,
@@ -552,7 +555,7 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         lo, hi = k_lo - w - int(inside_samples), k_hi + w + 3
     if lo < 0 or hi >= y.size:
         return None
-    span = hi - lo + 2
+    span = 32 * ((hi - lo + 2) // 32 + 1)  # the columns' half-length, shared by windows of similar length
     cols = _end_columns_cached(float(frequency_hz), float(damping_ratio), fs, float(cutoff_hz), END_GRID_SAMPLES, span)
     data = y[lo:hi + 1]
     n = np.arange(lo, hi + 1, dtype=float)
@@ -571,11 +574,11 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         design = design[..., 1:END_TERMS]
     else:
         design = design[..., :END_TERMS]
-    gram = np.einsum("tni,tnj->tij", design, design)
-    rhs = np.einsum("tni,n->ti", design, data)
+    gram = np.swapaxes(design, 1, 2) @ design
+    rhs = np.swapaxes(design, 1, 2) @ data
     ridge = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] * np.eye(gram.shape[-1])  # never singular
     coef = np.linalg.solve(gram + ridge + 1e-300, rhs[..., None])[..., 0]
-    sse_all = np.sum((data[None, :] - np.einsum("tni,ti->tn", design, coef)) ** 2, axis=1)
+    sse_all = np.sum((data[None, :] - (design @ coef[..., None])[..., 0]) ** 2, axis=1)
     i_best = int(np.argmin(sse_all))
     best = np.concatenate([[0.0], coef[i_best]]) if sign < 0 else coef[i_best]
     sse, end, a, b = float(sse_all[i_best]), float(ts_all[i_best]), float(best[0]), float(best[1])
