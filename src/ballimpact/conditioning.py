@@ -157,6 +157,7 @@ PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its n
 PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the identified resonance is known to about this fraction: TC's change charged [-]
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many noise deviations locates it to half a sample [-]
+PLATE_LOWPASS_SPIKE = 0.04  # ... and that check must be able to see a loss of this fraction of the peak [-]
 PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample above the low-passed peak by more noise deviations: lost [-]
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 kernel half-widths) around it [samples]
 PLATE_LOWPASS_END_INSIDE = (6, 12)  # the low-passed ends fitted through the kernel over this many samples of line [samples]
@@ -813,13 +814,19 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
             # whose top the checks of the exact force found between samples): its largest sample inside the
             # contact (a sample off each end, where the undoing leaves a transient at a jump) at most
             # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak
+            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak; and that noise
+            # low enough to show a loss of PLATE_LOWPASS_SPIKE
             i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
             top = float(np.max(exact[i0:i1])) if i1 > i0 else math.inf
-            lost = top - float(c[0].peak_V)
-            if lost > PLATE_LOWPASS_PEAK * float(c[0].peak_V) + PLATE_PEAK_SIGMA * fit.noise * undone_noise_gain(
-                    fs, plate.frequency_hz, plate.damping_ratio):
-                c = (f"the low-pass lowers the exact undone force's largest sample by {100 * lost / top:.2g} % (a "
-                     "peak sharper than its kernel)")
+            peak = float(c[0].peak_V)
+            blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * fit.noise * undone_noise_gain(
+                fs, plate.frequency_hz, plate.damping_ratio)
+            if top - peak > blind:
+                c = (f"the low-pass lowers the exact undone force's largest sample by {100 * (top - peak) / top:.2g} % "
+                     "(a peak sharper than its kernel)")
+            elif blind > PLATE_LOWPASS_SPIKE * peak:
+                c = (f"the exact undone force is too noisy to show that the low-pass keeps its peak (a loss of up to "
+                     f"{100 * blind / peak:.2g} % would not be seen; a spike sharper than the kernel may be lost)")
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
