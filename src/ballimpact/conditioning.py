@@ -154,17 +154,16 @@ PLATE_START_LATE = 1.0  # the undone contact may start this much later than the 
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
-PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
-PLATE_FN_UNCERTAINTY = 0.01  # the identified resonance is known to about this fraction: TC's change charged [-]
-PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many noise deviations locates it to half a sample [-]
-PLATE_LOWPASS_SPIKE = 0.04  # ... and that check must be able to see a loss of this fraction of the peak [-]
-PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample above the low-passed peak by more noise deviations: lost [-]
-PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 kernel half-widths) around it [samples]
-PLATE_LOWPASS_END_INSIDE = (6, 12)  # the low-passed ends fitted through the kernel over this many samples of line [samples]
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
 PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
+PLATE_LOWPASS_END_INSIDE = (6, 12)  # a low-passed force's ends fitted with this many samples inside [samples]
+PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
+PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
+PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
+PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample this many of its noise deviations ... [-]
+PLATE_LOWPASS_SPIKE = 0.04  # ... above the low-passed peak: lost; the check must see a loss of this fraction [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -757,13 +756,23 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     An undone force refused by these checks is tried again through a
     zero-phase low-pass on a compact kernel (``ballimpact.plate.lowpass_zero_phase``,
     cutoffs from :func:`_plate_cutoffs`), which trades the noise amplified
-    above the resonance against the force's sharp features: the same checks,
-    with PLATE_LOWPASS_BIAS kernel half-widths added to TC's uncertainty (the
-    kernel is compact: the smoothed force starts at most a half-width before
-    the force and ends at most one after it; on half-sines with and without
-    jumps the contact found on it, where its ends pass the spread check, is
-    less than two half-widths longer, see tests/test_plate.py) and the
-    peak's loss to the kernel (from its curvature) at most PLATE_LOWPASS_PEAK.
+    above the resonance against the force's sharp features: the same checks
+    and the peak's loss to the kernel (from its curvature) at most
+    PLATE_LOWPASS_PEAK. The kernel spreads each end by up to its half-width
+    W, so the ends are fitted through the plate's undoing and the kernel
+    (:func:`ballimpact.plate.undone_end`: a jump, a line and a parabola at
+    the start, a line and a parabola at the end), with windows of
+    PLATE_LOWPASS_END_INSIDE samples inside; TC's uncertainty is twice each
+    end's (noise, or the fit's residual, over its slope; half a sample at a
+    jump of PLATE_END_JUMP_SIGMA residuals; at least what the fit's profile
+    allows) in quadrature, plus how far TC moves with the window and with
+    the plate PLATE_FN_UNCERTAINTY off in fn; the fitted TC must be 0 to 2 W
+    (+-1 sample) shorter than the contact found on the low-passed force.
+    The force's ends are then restored from their fits (the impulse the
+    kernel spread outside them is back). Nor may the low-pass hide a peak:
+    the exact undone force's largest sample inside the contact at most
+    PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed
+    peak, with that noise low enough to show a loss of PLATE_LOWPASS_SPIKE.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:

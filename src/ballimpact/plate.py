@@ -601,7 +601,7 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
 @functools.lru_cache(maxsize=16)
 def _end_columns_cached(frequency_hz: float, damping_ratio: float, fs: float, cutoff_hz: float, step: float,
                         span: int):
-    """:func:`_end_columns` for one plate [Hz, -], sample rate and cutoff [Hz], grid and span, kept for the other end."""
+    """:func:`_end_columns` for one plate [Hz, -], sample rate and cutoff [Hz], grid and span, kept for reuse."""
     taps = np.ones(1) if math.isinf(cutoff_hz) else lowpass_kernel(fs, cutoff_hz)
     return _end_columns(frequency_hz, damping_ratio, fs, taps, step, span)
 
