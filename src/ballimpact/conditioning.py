@@ -78,7 +78,7 @@ from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
+                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -163,11 +163,16 @@ PLATE_START_LATE = 1.0  # the undone contact may start this much later than the 
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
-PLATE_LOWPASS_BIAS = 2.0  # the low-pass may lengthen the contact by this many kernel half-widths [-]
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
 PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
+PLATE_LOWPASS_END_INSIDE = (6, 12)  # a low-passed force's ends fitted with this many samples inside [samples]
+PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
+PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
+PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
+PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample this many of its noise deviations ... [-]
+PLATE_LOWPASS_SPIKE = 0.04  # ... above the low-passed peak: lost; the check must see a loss of this fraction [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -797,13 +802,23 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     An undone force refused by these checks is tried again through a
     zero-phase low-pass on a compact kernel (``ballimpact.plate.lowpass_zero_phase``,
     cutoffs from :func:`_plate_cutoffs`), which trades the noise amplified
-    above the resonance against the force's sharp features: the same checks,
-    with PLATE_LOWPASS_BIAS kernel half-widths added to TC's uncertainty (the
-    kernel is compact: the smoothed force starts at most a half-width before
-    the force and ends at most one after it; on half-sines with and without
-    jumps the contact found on it, where its ends pass the spread check, is
-    less than two half-widths longer, see tests/test_plate.py) and the
-    peak's loss to the kernel (from its curvature) at most PLATE_LOWPASS_PEAK.
+    above the resonance against the force's sharp features: the same checks
+    and the peak's loss to the kernel (from its curvature) at most
+    PLATE_LOWPASS_PEAK. The kernel spreads each end by up to its half-width
+    W, so the ends are fitted through the plate's undoing and the kernel
+    (:func:`ballimpact.plate.undone_end`: a jump, a line and a parabola at
+    the start, a line and a parabola at the end), with windows of
+    PLATE_LOWPASS_END_INSIDE samples inside; TC's uncertainty is twice each
+    end's (noise, or the fit's residual, over its slope; half a sample at a
+    jump of PLATE_END_JUMP_SIGMA residuals; at least what the fit's profile
+    allows) in quadrature, plus how far TC moves with the window and with
+    the plate PLATE_FN_UNCERTAINTY off in fn; the fitted TC must be 0 to 2 W
+    (+-1 sample) shorter than the contact found on the low-passed force.
+    The force's ends are then restored from their fits (the impulse the
+    kernel spread outside them is back). Nor may the low-pass hide a peak:
+    the exact undone force's largest sample inside the contact at most
+    PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed
+    peak, with that noise low enough to show a loss of PLATE_LOWPASS_SPIKE.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -848,9 +863,27 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff)
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
+        if not isinstance(c, str) and not math.isinf(cutoff):
+            # the low-pass must not hide a peak the exact undone force shows (a spike sharper than its kernel,
+            # whose top the checks of the exact force found between samples): its largest sample inside the
+            # contact (a sample off each end, where the undoing leaves a transient at a jump) at most
+            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak
+            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak; and that noise
+            # low enough to show a loss of PLATE_LOWPASS_SPIKE
+            i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
+            top = float(np.max(exact[i0:i1])) if i1 > i0 else math.inf
+            peak = float(c[0].peak_V)
+            blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * fit.noise * undone_noise_gain(
+                fs, plate.frequency_hz, plate.damping_ratio)
+            if top - peak > blind:
+                c = (f"the low-pass lowers the exact undone force's largest sample by {100 * (top - peak) / top:.2g} % "
+                     "(a peak sharper than its kernel)")
+            elif blind > PLATE_LOWPASS_SPIKE * peak:
+                c = (f"the exact undone force is too noisy to show that the low-pass keeps its peak (a loss of up to "
+                     f"{100 * blind / peak:.2g} % would not be seen; a spike sharper than the kernel may be lost)")
         if not isinstance(c, str):
-            return y, c, plate, cutoff
+            return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
 
@@ -896,9 +929,9 @@ def _smoothed_peak_loss(y, fs, sigma):
     return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
 
 
-def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
-    """The contact of an undone force ``y`` when it passes every check of :func:`_plate_undone`; else what it
-    failed, in words (str)."""
+def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None):
+    """The contact of an undone force ``y`` and the force (a low-passed one with its ends restored from their
+    fits) when it passes every check of :func:`_plate_undone`; else what it failed, in words (str)."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
     if not c.found or not c.peak_V > 0 or c.n_impacts > 1:
         return "the undone force holds no single contact"
@@ -915,25 +948,72 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf):
         return "the undone force still shows " + seen[0].message.split(":")[0]
     bias = 0.0
     if not math.isinf(cutoff):
-        # the low-pass spreads the force by its kernel's half-width at each end (its support): the contact
-        # found on it may be longer by up to twice that
         half_width, sigma = lowpass_spread_samples(fs, cutoff)
-        bias = PLATE_LOWPASS_BIAS * half_width
         loss = _smoothed_peak_loss(y, fs, sigma)
         if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
             return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
-    uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u) + bias
+        # the low-pass spreads the force by its kernel's half-width at each end: the ends are fitted through
+        # the plate's undoing and the kernel (a line, or a jump from zero), twice, and the fits' difference
+        # is charged to TC
+        fn, zeta = plate.frequency_hz, plate.damping_ratio
+        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m),
+                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m)) for m in PLATE_LOWPASS_END_INSIDE]
+        if any(e is None for pair in ends for e in pair):
+            return ("the low-passed force's ends fit no line or jump from zero through the plate and the kernel "
+                    f"(its {100 * 2 * half_width / (ce_u - cs_u):.2g} % spread of TC stays unknown)")
+        (f_start, f_end) = ends[0]
+        fs_u, fe_u = f_start.index, f_end.index
+        bias = max(abs((e[1].index - e[0].index) - (fe_u - fs_u)) for e in ends[1:]) if len(ends) > 1 else 0.0
+        # the plate is known to about PLATE_FN_UNCERTAINTY in fn: what it leaves ringing moves the ends
+        # (undone over the contact and a margin only: the undoing's passes forget their start within a few samples)
+        a = max(int(cs_u) - PLATE_END_MARGIN - 4 * int(half_width), 0)
+        b = min(int(ce_u) + PLATE_END_MARGIN + 4 * int(half_width), x.size)
+        for scale in (1.0 - PLATE_FN_UNCERTAINTY, 1.0 + PLATE_FN_UNCERTAINTY):
+            y2 = lowpass_zero_phase(undo_plate_resonance(x[a:b], fs, fn * scale, zeta), fs, cutoff)
+            pair = (undone_end(y2, fs, fn * scale, zeta, cutoff, cs_u - a, "start",
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]),
+                    undone_end(y2, fs, fn * scale, zeta, cutoff, ce_u - a, "end",
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]))
+            if pair[0] is None or pair[1] is None:
+                return (f"the low-passed force's ends fit no line or jump from zero through the kernel with the plate "
+                        f"{100 * PLATE_FN_UNCERTAINTY:g} % off in fn")
+            bias = max(bias, abs((pair[1].index - pair[0].index) - (fe_u - fs_u)))
+        shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
+        if not -1.0 <= shorter <= 2.0 * half_width + 2.0:
+            return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
+                    f"low-passed contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
+        # the ends' jump and the impulse the kernel spread outside them restored from their fits
+        y = y.copy()
+        for f in (f_start, f_end):
+            y[f.first:f.first + f.correction.size] += f.correction
+        cs_u, ce_u = fs_u, fe_u
+        inside = y[int(math.ceil(cs_u)):int(math.floor(ce_u)) + 1]
+        c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs, start_index=int(math.ceil(fs_u)),
+                    end_index=int(math.floor(fe_u)), peak_index=int(math.ceil(cs_u)) + int(np.argmax(inside)),
+                    peak_V=float(np.max(inside)))
+        # each end to its noise over its slope (a jump well out of the noise: to half a sample), the noise
+        # there the fit's residual when that is larger (what the undoing left, or a force no line fits), and
+        # at least as far as the fit's residual lets the end move (its profile)
+        spread = []
+        for f in (f_start, f_end):
+            level = max(noise, f.residual)
+            spread.append(max(0.5 if f.jump > PLATE_END_JUMP_SIGMA * level else
+                              (max(level / f.slope, 0.5) if f.slope > 0 else math.inf), f.uncertainty))
+        uncertainty = 2.0 * math.hypot(*spread) + bias
+    else:
+        uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)
     if uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u):
         return (f"the undone TC is known to {100 * uncertainty / (ce_u - cs_u):.2g} % only ("
                 + ("noise over slope at its ends" if math.isinf(cutoff) else
-                   f"{100 * bias / (ce_u - cs_u):.2g} % of it the kernel's spread") + ")")
+                   f"{100 * bias / (ce_u - cs_u):.2g} % of it how far the ends move with the fit's window and with the "
+                   f"plate {100 * PLATE_FN_UNCERTAINTY:g} % off in fn") + ")")
     inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
         # the force is not what this plate's inverse assumes
         return "the undone force pulls on the plate during the contact"
     if cs_u > s_u + PLATE_START_LATE:
         return "the undone force starts later than the sensed one (a foot lost in its noise)"
-    return c
+    return c, y
 
 
 def _checked_voltage(voltage_V, sample_rate_hz, polarity, mains_hz, n_harmonics, tau_s, pre_guard_s, post_guard_s):

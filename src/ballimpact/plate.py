@@ -39,8 +39,10 @@ them. Nothing here can tell; the caller must check the undone force (see
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -48,7 +50,7 @@ from ._checks import finite_samples, positive_scalar
 
 __all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
            "undone_noise_gain", "lowpass_kernel",
-           "lowpass_spread_samples", "refine_plate_resonance"]
+           "lowpass_spread_samples", "refine_plate_resonance", "undone_end"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -63,6 +65,8 @@ REFINE_BAND = 1.5  # the refinement minimises the undone force's ringing within 
 REFINE_STEP = (0.05, 0.5)  # its first steps in log(fn) and log(zeta) [-]
 REFINE_TOLERANCE = 2.0e-3  # ... and the step in log(fn) at which it stops [-]
 REFINE_MAX_EVALUATIONS = 80  # ... or after this many undone forces [-]
+END_TERMS = 3  # an end fitted as a jump, a line and (3) a parabola from it [-]
+END_GRID_SAMPLES = 0.05  # an end fitted through the plate's undoing and the low-pass is found on this grid [samples]
 
 
 @dataclass(frozen=True)
@@ -375,11 +379,16 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
         static gain, so its integral (the impulse) is that of ``sensed`` up to
         the ends of the record.
     """
+    x = finite_samples("sensed", sensed)
+    return _undo_rows(x, sample_rate_hz, frequency_hz, damping_ratio)
+
+
+def _undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
+    """:func:`undo_plate_resonance` along the last axis of x (one trace or many at once) [unit of x]."""
     from scipy import signal
 
-    x = finite_samples("sensed", sensed)
-    b, a = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
-    w = signal.lfilter(a, [1.0], x) / b[0]
+    b, a = plate_discretisation(frequency_hz, damping_ratio, fs)
+    w = signal.lfilter(a, [1.0], x, axis=-1) / b[0]
     zeros = np.roots(b)
     if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)):
         raise ValueError(f"the plate's sampled response has complex zeros {zeros}: not a second-order plate "
@@ -387,9 +396,9 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
     for zero in zeros:
         z = float(np.real(zero))
         if abs(z) < 1.0:  # causal pass: u[n] = w[n] + z u[n-1]
-            w = signal.lfilter([1.0], [1.0, -z], w)
+            w = signal.lfilter([1.0], [1.0, -z], w, axis=-1)
         else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1
-            w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[::-1])[::-1]
+            w = signal.lfilter([0.0, -1.0 / z], [1.0, -1.0 / z], w[..., ::-1], axis=-1)[..., ::-1]
     return w
 
 
@@ -412,6 +421,189 @@ def lowpass_spread_samples(sample_rate_hz: float, cutoff_hz: float) -> tuple[flo
     taps = lowpass_kernel(sample_rate_hz, cutoff_hz)
     n = np.arange(taps.size) - taps.size // 2
     return float(taps.size // 2), float(math.sqrt(np.sum(taps * n * n)))
+
+
+class UndoneEnd(NamedTuple):
+    """An end of a contact fitted by :func:`undone_end`."""
+
+    index: float  #: the end [samples, fractional index]
+    slope: float  #: the force's slope b there [unit of the force per sample], positive into the contact
+    jump: float  #: its jump a there [unit of the force] (0 at an end)
+    residual: float  #: rms residual of the fit [unit of the force]
+    uncertainty: float  #: standard uncertainty of the end from the fit's profile [samples]
+    first: int  #: first sample of the fit's window [-]
+    correction: np.ndarray  #: the fitted force less what the chain made of it, over the window [unit of the force]
+
+
+def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.ndarray, step: float, span: int):
+    """The low-passed undone plate responses to a unit step, ramp and parabola starting at ``frac`` samples.
+
+    For each fraction ``frac`` of a sample on a grid of ``step``: the arrays
+    ``K * undo(P f(n - frac))`` for f = H(t), t H(t), t^2 H(t) and, last, the
+    parabola t^2 for all t (P the plate's continuous response, analytic;
+    undo :func:`undo_plate_resonance`; K the low-pass taps) over
+    ``n = -span .. span``; an array of shape (fractions, 4, 2 span + 1) [-].
+    """
+    pad = 40 + taps.size  # the undo's backward pass starts from rest this far beyond the window: 0.27^40
+    n = np.arange(-span - pad, span + pad + 1, dtype=float)
+    wn = 2.0 * math.pi * frequency_hz / fs  # [rad / sample]
+    zeta = damping_ratio
+    sigma, wd = zeta * wn, wn * math.sqrt(max(1.0 - zeta * zeta, 1e-12))
+    c, d = 2.0 * zeta / wn, (2.0 * zeta * zeta - 1.0) / wd
+    p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn  # the parabola's steady response
+    qa = -p0
+    qb = (sigma * qa - p1) / wd
+    t = n[None, :] - np.arange(0.0, 1.0 - 1e-9, step)[:, None]  # [frac, n]
+    on = t >= 0
+    tt = np.where(on, t, 0.0)
+    decay = np.exp(-sigma * tt)
+    cos, sin = np.cos(wd * tt), np.sin(wd * tt)
+    steady_q = t * t + p1 * t + p0
+    responses = np.stack([np.where(on, 1.0 - decay * (cos + sigma / wd * sin), 0.0),
+                          np.where(on, tt - c + decay * (c * cos + d * sin), 0.0),
+                          np.where(on, steady_q + decay * (qa * cos + qb * sin), 0.0),
+                          steady_q], axis=1)  # [frac, response, n]
+    u = _undo_rows(responses, fs, frequency_hz, damping_ratio)
+    if taps.size > 1:
+        from scipy.ndimage import convolve1d
+
+        u = convolve1d(u, taps, axis=-1, mode="constant")
+    return u[..., pad:-pad]
+
+
+def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, cutoff_hz: float,
+               index: float, side: str, *, inside_samples: int = 4):
+    """Where a force that starts (or ends) as a line, seen through the plate, its undoing and a low-pass, starts (ends).
+
+    Near a contact's start the force is zero before ts and about
+    ``a + b (t - ts) + q (t - ts)^2`` after it (a > 0: a jump from zero, as
+    the model's force at its start); near its end it falls to zero at ts
+    as ``b (ts - t) + q (ts - t)^2``, with no jump (a ball leaves the plate
+    when its force has fallen to zero). Undone (:func:`undo_plate_resonance`), the force
+    is returned exactly where it is linear between samples, and the interval
+    that holds the end leaves a transient (the undo assumes a line between
+    samples); :func:`lowpass_zero_phase` then spreads it by up to the
+    kernel's half-width W. So the end is fitted through that chain: for ts on
+    a grid of END_GRID_SAMPLES, the plate's continuous step and ramp
+    responses from ts, undone and low-passed, are fitted (a and b) to the
+    force by least squares over a window from W + 3 samples outside the
+    earliest candidate to W + ``inside_samples`` inside the latest; the ts
+    of the least residual wins. An end is a start of the force ``L - a H(t -
+    ts) + b (t - ts)+`` with L the line ``a + b (ts - t)``, so both sides use the
+    same responses. Not in the paper; see the README, "Plate resonance".
+
+    Parameters
+    ----------
+    force : array_like
+        The undone (and low-passed) force (any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    frequency_hz, damping_ratio : float
+        The resonance undone [Hz] and its damping ratio [-].
+    cutoff_hz : float
+        The low-pass's half-amplitude frequency [Hz]; ``inf`` for none.
+    index : float
+        The end found on the force (e.g. by ``detect_contact``) [samples]:
+        candidates from W + 2 samples before it (start) to 2 W + 2 after it.
+    side : str
+        ``"start"`` or ``"end"``.
+    inside_samples : int
+        Samples of the line fitted beyond the kernel's reach [samples], at least 2.
+
+    Returns
+    -------
+    UndoneEnd or None
+        The end [samples, fractional index], the line's slope b at it, its
+        jump a at it, the rms residual of the fit [unit of the force per
+        sample, unit of the force, unit of the force], the end's standard
+        uncertainty [samples] (the farthest end whose fit leaves at most one
+        residual variance more per independent sample of the low-passed
+        noise, correlated over about ``1 / sum(K^2)`` samples) and, from the
+        window's first sample on, the fitted force less what the undoing and
+        the kernel made of it (added to the force, it restores the end's
+        jump and the impulse the kernel spread outside it); None
+        when the window leaves the record or the best end is at the edge of
+        the candidates (no end inside them).
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate or cutoff, a side other than "start"
+        or "end", inside_samples below 2 or non-finite samples.
+    """
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
+    if not cutoff_hz > 0:
+        raise ValueError(f"cutoff_hz must be positive, got {cutoff_hz!r}")
+    if not (frequency_hz > 0 and 0 <= damping_ratio < 1):
+        raise ValueError(f"need frequency_hz > 0 and 0 <= damping_ratio < 1, got {frequency_hz!r}, {damping_ratio!r}")
+    if side not in ("start", "end"):
+        raise ValueError(f"side must be 'start' or 'end', got {side!r}")
+    if int(inside_samples) < 2:
+        raise ValueError(f"inside_samples must be at least 2, got {inside_samples!r}")
+    y = finite_samples("force", force)
+    if not math.isfinite(index):
+        return None
+    taps = np.ones(1) if math.isinf(cutoff_hz) else lowpass_kernel(fs, cutoff_hz)
+    w = taps.size // 2
+    sign = 1 if side == "start" else -1
+    # candidates ts from k_lo to k_hi (the start's side), the window from lo to hi
+    if side == "start":
+        k_lo, k_hi = int(math.floor(index)) - w - 2, int(math.ceil(index)) + 2 * w + 2
+        lo, hi = k_lo - w - 3, k_hi + w + int(inside_samples)
+    else:
+        k_lo, k_hi = int(math.floor(index)) - 2 * w - 2, int(math.ceil(index)) + w + 2
+        lo, hi = k_lo - w - int(inside_samples), k_hi + w + 3
+    if lo < 0 or hi >= y.size:
+        return None
+    span = 32 * ((hi - lo + 2) // 32 + 1)  # the columns' half-length, shared by windows of similar length
+    cols = _end_columns_cached(float(frequency_hz), float(damping_ratio), fs, float(cutoff_hz), END_GRID_SAMPLES, span)
+    data = y[lo:hi + 1]
+    n = np.arange(lo, hi + 1, dtype=float)
+    fracs = np.arange(0.0, 1.0 - 1e-9, END_GRID_SAMPLES)
+    # every candidate ts = k + frac at once: its design (jump, line, parabola through the chain) [ts, n, term]
+    ks = np.arange(k_lo, k_hi + 1)
+    idx = (lo - ks + span)[:, None] + np.arange(data.size)[None, :]  # column index of sample n for each k
+    design = np.stack([cols[:, i, :][:, idx] for i in range(3)], axis=-1)  # [frac, k, n, term]
+    design = np.swapaxes(design, 0, 1).reshape(-1, data.size, 3)  # ts = k + frac, k-major
+    ts_all = (ks[:, None] + fracs[None, :]).ravel()
+    if sign < 0:  # an end: Q(t) (1 - H(t - ts)), Q = a - b (t - ts) + q (t - ts)^2 for all t
+        parabola = np.swapaxes(cols[:, 3, :][:, idx], 0, 1).reshape(-1, data.size)
+        design = np.stack([1.0 - design[..., 0], (ts_all[:, None] - n[None, :]) + design[..., 1],
+                           parabola - design[..., 2]], axis=-1)
+    if sign < 0:  # a ball's force falls to zero continuously as it leaves: no jump at the end
+        design = design[..., 1:END_TERMS]
+    else:
+        design = design[..., :END_TERMS]
+    gram = np.swapaxes(design, 1, 2) @ design
+    rhs = np.swapaxes(design, 1, 2) @ data
+    ridge = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] * np.eye(gram.shape[-1])  # never singular
+    coef = np.linalg.solve(gram + ridge + 1e-300, rhs[..., None])[..., 0]
+    sse_all = np.sum((data[None, :] - (design @ coef[..., None])[..., 0]) ** 2, axis=1)
+    i_best = int(np.argmin(sse_all))
+    best = np.concatenate([[0.0], coef[i_best]]) if sign < 0 else coef[i_best]
+    sse, end, a, b = float(sse_all[i_best]), float(ts_all[i_best]), float(best[0]), float(best[1])
+    if not (k_lo < end < k_hi):  # at the edge of the candidates: no end inside them
+        return None
+    resid2 = sse / max(data.size - design.shape[-1] - 1, 1)
+    # the ends whose fit is worse by less than one residual variance per independent sample of the
+    # low-passed noise (correlated over about 1 / sum(taps^2) samples): a standard uncertainty
+    rise = resid2 / float(np.sum(taps ** 2))
+    spread = float(np.max(np.abs(ts_all[sse_all <= sse + rise] - end)))
+    # the force the fit says is there, less what the chain made of it: the kernel's spread and the undoing's
+    # transient at the end, to be added back to the low-passed force over the window
+    q = float(best[2]) if best.size > 2 else 0.0
+    u = (n - end) * sign
+    model = np.where(u >= 0, a + b * u + q * u * u, 0.0)
+    correction = model - design[i_best] @ coef[i_best]
+    return UndoneEnd(float(end), float(b), float(a), math.sqrt(resid2), float(spread), int(lo), correction)
+
+
+@functools.lru_cache(maxsize=16)
+def _end_columns_cached(frequency_hz: float, damping_ratio: float, fs: float, cutoff_hz: float, step: float,
+                        span: int):
+    """:func:`_end_columns` for one plate [Hz, -], sample rate and cutoff [Hz], grid and span, kept for reuse."""
+    taps = np.ones(1) if math.isinf(cutoff_hz) else lowpass_kernel(fs, cutoff_hz)
+    return _end_columns(frequency_hz, damping_ratio, fs, taps, step, span)
 
 
 def lowpass_zero_phase(force, sample_rate_hz: float, cutoff_hz: float) -> np.ndarray:
