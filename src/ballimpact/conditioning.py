@@ -868,7 +868,6 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
             # the low-pass must not hide a peak the exact undone force shows (a spike sharper than its kernel,
             # whose top the checks of the exact force found between samples): its largest sample inside the
             # contact (a sample off each end, where the undoing leaves a transient at a jump) at most
-            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak
             # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak; and that noise
             # low enough to show a loss of PLATE_LOWPASS_SPIKE
             i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
