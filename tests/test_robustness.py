@@ -184,13 +184,41 @@ ZOO_REFINED = [
 ]
 
 
+#: Traces of the benchmark excluded on main at 10b1d50 although measurable, for a peak between samples only (a damped
+#: plate's overshoot rises steeply to it): the step response is evidence of the plate, whose resonance is then
+#: identified and undone, ok and right (name, seed, index, what).
+ZOO_STEP_UNDONE = [
+    ("plate-9.4kHz-damped-undone-50kHz", 2, 1973, "9.4 kHz plate, damping 0.18, at 50 kHz: peak between samples"),
+]
+# 1:1858 (14.1 kHz plate, damping 0.23, at 43 kHz) came back ok and right this way on its own branch; with the
+# low-passed ends fitted (plate.undone_end) its two identifications disagree by 0.44 % on TC, and it is excluded.
+
+#: Traces of the benchmark excluded on main at 10b1d50 although measurable: their plate (3-13 kHz) undone, the
+#: force too noisy, and low-passed, "the undone TC is known to 2-3 % only" (two kernel half-widths charged to
+#: TC) or its ends not determined. The low-passed force's ends are now fitted through the plate's undoing and the
+#: kernel (``plate.undone_end``): ok and right (name, seed, index, what).
+ZOO_LOWPASS_ENDS = [
+    ("lowpass-ends-6.9kHz-punctured", 2, 853, "6.9 kHz plate, damping 0.046, punctured ball at 50 kHz (one factor)"),
+    ("lowpass-ends-3.8kHz-pressurised", 1, 1749, "3.8 kHz plate, damping 0.11, pressurised ball at 50 kHz (one "
+     "factor)"),
+    ("lowpass-ends-12.8kHz-pressurised", 2, 1077, "12.8 kHz plate, damping 0.03, pressurised ball at 50 kHz (one "
+     "factor)"),
+]
+
+#: How close the undone resonance must be to the plate's for the cases above that check it [-].
+UNDONE_FN_TOLERANCE = {**{c[0]: 0.1 for c in ZOO_STEP_UNDONE}, **{c[0]: 0.03 for c in ZOO_LOWPASS_ENDS}}
+
+
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED])
+                         [pytest.param(*c, id=c[0]) for c in
+                          ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED + ZOO_STEP_UNDONE + ZOO_LOWPASS_ENDS])
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, must_be_ok=True)
+    if name in UNDONE_FN_TOLERANCE:
+        assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=UNDONE_FN_TOLERANCE[name])
 
 
 #: Ideal-plate traces of the benchmark excluded on main at 58169d8 for "plate ringing at 3.0-3.4 kHz during the
@@ -368,25 +396,6 @@ def test_zoo_peak_on_the_plates_step_response(name, seed, index, what, tmp_path)
     assert result.status == "excluded" and "the plate's step response" in result.reason, result.reason
 
 
-#: Traces of the benchmark excluded on main at 10b1d50 although measurable, for a peak between samples only (a damped
-#: plate's overshoot rises steeply to it): the step response is evidence of the plate, whose resonance is then
-#: identified and undone, ok and right (name, seed, index, what).
-ZOO_STEP_UNDONE = [
-    ("plate-9.4kHz-damped-undone-50kHz", 2, 1973, "9.4 kHz plate, damping 0.18, at 50 kHz: peak between samples"),
-]
-# 1:1858 (14.1 kHz plate, damping 0.23, at 43 kHz) came back ok and right this way on its own branch; with the
-# low-passed ends fitted (plate.undone_end) its two identifications disagree by 0.44 % on TC, and it is excluded.
-
-
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_STEP_UNDONE])
-def test_zoo_step_response_plate_undone(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable and trace.rig.plate_hz is not None, name
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
-    assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.1)
-
-
 #: Traces of the benchmark excluded on main at commit 10b1d50 for "contact end not determined to 1 %: fitted again
 #: from the samples above twice the noise threshold it moves by ..." although measurable: the force steepens into
 #: its end (a punctured ball's), the refit moves the end later, and the force's curve before the end pins it
@@ -421,25 +430,3 @@ def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
     assert result.status != "ok" and "the force's curve before it meets zero" in result.reason, result.reason
-
-
-#: Traces of the benchmark excluded on main at 10b1d50 although measurable: their plate (3-13 kHz) undone, the
-#: force too noisy, and low-passed, "the undone TC is known to 2-3 % only" (two kernel half-widths charged to
-#: TC) or its ends not determined. The low-passed force's ends are now fitted through the plate's undoing and the
-#: kernel (``plate.undone_end``): ok and right (name, seed, index, what).
-ZOO_LOWPASS_ENDS = [
-    ("lowpass-ends-6.9kHz-punctured", 2, 853, "6.9 kHz plate, damping 0.046, punctured ball at 50 kHz (one factor)"),
-    ("lowpass-ends-3.8kHz-pressurised", 1, 1749, "3.8 kHz plate, damping 0.11, pressurised ball at 50 kHz (one "
-     "factor)"),
-    ("lowpass-ends-12.8kHz-pressurised", 2, 1077, "12.8 kHz plate, damping 0.03, pressurised ball at 50 kHz (one "
-     "factor)"),
-]
-
-
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_LOWPASS_ENDS])
-def test_zoo_lowpassed_plate_ends_fitted(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable and trace.rig.plate_hz is not None, name
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
-    assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)
