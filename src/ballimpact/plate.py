@@ -570,8 +570,7 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         parabola = np.swapaxes(cols[:, 3, :][:, idx], 0, 1).reshape(-1, data.size)
         design = np.stack([1.0 - design[..., 0], (ts_all[:, None] - n[None, :]) + design[..., 1],
                            parabola - design[..., 2]], axis=-1)
-    if sign < 0:  # a ball's force falls to zero continuously as it leaves: no jump at the end
-        design = design[..., 1:END_TERMS]
+        design = design[..., 1:END_TERMS]  # a ball's force falls to zero continuously as it leaves: no jump
     else:
         design = design[..., :END_TERMS]
     gram = np.swapaxes(design, 1, 2) @ design
