@@ -160,6 +160,7 @@ PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ..
 PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
 PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most this fraction of TC [-]
 PLATE_START_LATE = 1.0  # the undone contact may start this much later than the sensed one at most [samples]
+PLATE_FOOT_SIGMA = 5.0  # ... unless the sensed force before its fitted start stays within this many standard errors [-]
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
@@ -168,6 +169,7 @@ PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the reson
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
 PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
 PLATE_LOWPASS_END_INSIDE = (6, 12)  # a low-passed force's ends fitted with this many samples inside [samples]
+PLATE_EXACT_END_REACH = 6  # an exact undone force's ends fitted this many samples either side of those found [samples]
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
@@ -928,9 +930,11 @@ def _smoothed_peak_loss(y, fs, sigma):
     return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
 
 
-def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None):
-    """The contact of an undone force ``y`` and the force (a low-passed one with its ends restored from their
-    fits) when it passes every check of :func:`_plate_undone`; else what it failed, in words (str)."""
+def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None, fit_ends=False):
+    """The contact of an undone force ``y`` and the force (a low-passed one, or with ``fit_ends`` the exact one,
+    with its ends restored from their fits) when it passes every check of :func:`_plate_undone`; else what it
+    failed, in words (str). The exact force whose ends read off it fail on their uncertainty or start late is
+    tried again with its ends fitted through the plate."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
     if not c.found or not c.peak_V > 0 or c.n_impacts > 1:
         return "the undone force holds no single contact"
@@ -946,7 +950,9 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
     if seen:
         return "the undone force still shows " + seen[0].message.split(":")[0]
     bias = 0.0
-    if not math.isinf(cutoff):
+    fitted = not math.isinf(cutoff) or (fit_ends and plate is not None)
+    what = "low-passed force" if not math.isinf(cutoff) else "undone force"
+    if fitted:  # for the exact force no kernel (W = 0): its ends fitted through the plate alone
         half_width, sigma = lowpass_spread_samples(fs, cutoff)
         loss = _smoothed_peak_loss(y, fs, sigma)
         if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
@@ -955,10 +961,12 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         # the plate's undoing and the kernel (a line, or a jump from zero), twice, and the fits' difference
         # is charged to TC
         fn, zeta = plate.frequency_hz, plate.damping_ratio
-        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m),
-                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m)) for m in PLATE_LOWPASS_END_INSIDE]
+        reach = 2 if not math.isinf(cutoff) else PLATE_EXACT_END_REACH
+        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m, reach_samples=reach),
+                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m, reach_samples=reach))
+                for m in PLATE_LOWPASS_END_INSIDE]
         if any(e is None for pair in ends for e in pair):
-            return ("the low-passed force's ends fit no line or jump from zero through the plate and the kernel "
+            return (f"the {what}'s ends fit no line or jump from zero through the plate and the kernel "
                     f"(its {100 * 2 * half_width / (ce_u - cs_u):.2g} % spread of TC stays unknown)")
         (f_start, f_end) = ends[0]
         fs_u, fe_u = f_start.index, f_end.index
@@ -970,17 +978,17 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         for scale in (1.0 - PLATE_FN_UNCERTAINTY, 1.0 + PLATE_FN_UNCERTAINTY):
             y2 = lowpass_zero_phase(undo_plate_resonance(x[a:b], fs, fn * scale, zeta), fs, cutoff)
             pair = (undone_end(y2, fs, fn * scale, zeta, cutoff, cs_u - a, "start",
-                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]),
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0], reach_samples=reach),
                     undone_end(y2, fs, fn * scale, zeta, cutoff, ce_u - a, "end",
-                               inside_samples=PLATE_LOWPASS_END_INSIDE[0]))
+                               inside_samples=PLATE_LOWPASS_END_INSIDE[0], reach_samples=reach))
             if pair[0] is None or pair[1] is None:
-                return (f"the low-passed force's ends fit no line or jump from zero through the kernel with the plate "
+                return (f"the {what}'s ends fit no line or jump from zero through the kernel with the plate "
                         f"{100 * PLATE_FN_UNCERTAINTY:g} % off in fn")
             bias = max(bias, abs((pair[1].index - pair[0].index) - (fe_u - fs_u)))
         shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
         if not -1.0 <= shorter <= 2.0 * half_width + 2.0:
             return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
-                    f"low-passed contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
+                    f"{what}'s contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
         # the ends' jump and the impulse the kernel spread outside them restored from their fits
         y = y.copy()
         for f in (f_start, f_end):
@@ -1001,17 +1009,33 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         uncertainty = 2.0 * math.hypot(*spread) + bias
     else:
         uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)
+    late, tail = cs_u > s_u + PLATE_START_LATE, ""
+    if not fitted and plate is not None and (late or uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u)):
+        # read off the exact force, its ends are its amplified noise over its slope and may lose a foot in it:
+        # fitted through the plate instead (its step, ramp and parabola responses, undone)
+        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True)
+        if not isinstance(again, str):
+            return again
+        tail = f"; its ends fitted through the plate: {again.removeprefix('the ')}"
     if uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u):
         return (f"the undone TC is known to {100 * uncertainty / (ce_u - cs_u):.2g} % only ("
-                + ("noise over slope at its ends" if math.isinf(cutoff) else
+                + ("noise over slope at its ends" if not fitted else
                    f"{100 * bias / (ce_u - cs_u):.2g} % of it how far the ends move with the fit's window and with the "
-                   f"plate {100 * PLATE_FN_UNCERTAINTY:g} % off in fn") + ")")
+                   f"plate {100 * PLATE_FN_UNCERTAINTY:g} % off in fn") + ")" + tail)
     inside = y[max(int(math.ceil(cs_u)), 0):max(int(math.floor(ce_u)) + 1, 0)]
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
         # the force is not what this plate's inverse assumes
         return "the undone force pulls on the plate during the contact"
-    if cs_u > s_u + PLATE_START_LATE:
-        return "the undone force starts later than the sensed one (a foot lost in its noise)"
+    if late:
+        # the plate is causal: the sensed force is zero before the force starts, so a foot the undone force lost
+        # stands out of the sensed noise before the undone start (from the sensed start on, averaged backwards
+        # from the sample before it); a sensed start early for no force there (its foot or edge fallback read
+        # into the plate's first overshoot) is no lost foot when the ends are fitted through the plate
+        seg = x[max(int(math.floor(s_u)) - 1, 0):max(int(math.floor(cs_u)), 0)][::-1]
+        foot = (float(np.max(np.cumsum(seg) / (fit.noise * np.sqrt(np.arange(1, seg.size + 1)))))
+                if seg.size and fit.noise > 0 else math.inf)
+        if not fitted or not foot <= PLATE_FOOT_SIGMA:
+            return "the undone force starts later than the sensed one (a foot lost in its noise)" + tail
     return c, y
 
 

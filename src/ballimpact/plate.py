@@ -472,7 +472,7 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
 
 
 def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, cutoff_hz: float,
-               index: float, side: str, *, inside_samples: int = 4):
+               index: float, side: str, *, inside_samples: int = 4, reach_samples: int = 2):
     """Where a force that starts (or ends) as a line, seen through the plate, its undoing and a low-pass, starts (ends).
 
     Near a contact's start the force is zero before ts and about
@@ -504,11 +504,17 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         The low-pass's half-amplitude frequency [Hz]; ``inf`` for none.
     index : float
         The end found on the force (e.g. by ``detect_contact``) [samples]:
-        candidates from W + 2 samples before it (start) to 2 W + 2 after it.
+        candidates from W + ``reach_samples`` samples before it (start) to
+        2 W + ``reach_samples`` after it (mirrored at an end).
     side : str
         ``"start"`` or ``"end"``.
     inside_samples : int
         Samples of the line fitted beyond the kernel's reach [samples], at least 2.
+    reach_samples : int
+        Candidates reach this many samples (and the kernel's W, 2 W inside)
+        beyond ``index`` on each side [samples], at least 1: more where the
+        end found on the force may be several samples off (a foot in the
+        amplified noise of an exact undone force).
 
     Returns
     -------
@@ -529,7 +535,7 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     ------
     ValueError
         For a non-positive sample rate or cutoff, a side other than "start"
-        or "end", inside_samples below 2 or non-finite samples.
+        or "end", inside_samples below 2, reach_samples below 1 or non-finite samples.
     """
     fs = positive_scalar("sample_rate_hz", sample_rate_hz)
     if not cutoff_hz > 0:
@@ -540,6 +546,8 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         raise ValueError(f"side must be 'start' or 'end', got {side!r}")
     if int(inside_samples) < 2:
         raise ValueError(f"inside_samples must be at least 2, got {inside_samples!r}")
+    if int(reach_samples) < 1:
+        raise ValueError(f"reach_samples must be at least 1, got {reach_samples!r}")
     y = finite_samples("force", force)
     if not math.isfinite(index):
         return None
@@ -547,11 +555,12 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     w = taps.size // 2
     sign = 1 if side == "start" else -1
     # candidates ts from k_lo to k_hi (the start's side), the window from lo to hi
+    r = int(reach_samples)
     if side == "start":
-        k_lo, k_hi = int(math.floor(index)) - w - 2, int(math.ceil(index)) + 2 * w + 2
+        k_lo, k_hi = int(math.floor(index)) - w - r, int(math.ceil(index)) + 2 * w + r
         lo, hi = k_lo - w - 3, k_hi + w + int(inside_samples)
     else:
-        k_lo, k_hi = int(math.floor(index)) - 2 * w - 2, int(math.ceil(index)) + w + 2
+        k_lo, k_hi = int(math.floor(index)) - 2 * w - r, int(math.ceil(index)) + w + r
         lo, hi = k_lo - w - int(inside_samples), k_hi + w + 3
     if lo < 0 or hi >= y.size:
         return None
