@@ -488,3 +488,31 @@ def test_conditioning_keeps_a_spike_the_lowpass_would_flatten(noise_V, fn_hz):
         why = [p.message for p in c.problems if "not undone" in p.message]
         assert why and re.search(r"low-pass(ed)? .*(lowers the exact undone force's largest sample|too noisy to show)",
                                  why[0]), why
+
+
+@pytest.mark.parametrize("fn_hz, zeta", [(6e3, 0.03), (12e3, 0.01)])
+@pytest.mark.parametrize("off", [-5.0, 4.0])
+def test_undone_end_reaches_an_end_found_samples_off(fn_hz, zeta, off):
+    """The exact undone force (no low-pass) of a force that jumps from zero at ts, sensed through the continuous
+    plate (the analytic truth above) with noise: an end found several samples off (a foot lost in its amplified
+    noise, or a sensed start read early) is out of the default candidates' reach (None), and within reach of
+    wider ones, which fit it to the truth."""
+    from ballimpact.plate import undone_end
+
+    fs = 50e3
+    ts, te = 400.37 / fs, 600.81 / fs
+    u = np.linspace(0.0, 1.0, 41)[1:]
+    knots_t = np.concatenate([[ts, ts + 1e-12], ts + u * (te - ts)])
+    knots_f = np.concatenate([[0.0, 0.3], np.sin(np.pi * u) + 0.3 * (1.0 - u) ** 2])
+    knots_f[-1] = 0.0
+    t = np.arange(1200) / fs
+    sensed = sensed_force(knots_t, knots_f, t, fn_hz, zeta) + np.random.default_rng(7).normal(0.0, 2e-4, t.size)
+    y = undo_plate_resonance(sensed, fs, fn_hz, zeta)
+    assert undone_end(y, fs, fn_hz, zeta, math.inf, ts * fs + off, "start", inside_samples=6) is None
+    start = undone_end(y, fs, fn_hz, zeta, math.inf, ts * fs + off, "start", inside_samples=6, reach_samples=6)
+    end = undone_end(y, fs, fn_hz, zeta, math.inf, te * fs - off, "end", inside_samples=6, reach_samples=6)
+    assert_allclose(start.index, ts * fs, atol=0.1)
+    assert_allclose(end.index, te * fs, atol=0.1)
+    assert_allclose(start.jump, 0.3, atol=0.02)
+    with pytest.raises(ValueError, match="reach_samples"):
+        undone_end(y, fs, fn_hz, zeta, math.inf, ts * fs, "start", reach_samples=0)

@@ -430,3 +430,26 @@ def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
     assert result.status != "ok" and "the force's curve before it meets zero" in result.reason, result.reason
+
+
+#: Traces of the benchmark excluded on main at 03757a8 although measurable: their plate identified, the exact undone
+#: force "starts later than the sensed one (a foot lost in its noise)" (the sensed start read 2-7 samples early, on
+#: the plate's first overshoot) or "the undone TC is known to 1 % only (noise over slope at its ends)". Its ends
+#: are now fitted through the plate (``plate.undone_end`` with no low-pass), and the sensed samples before the fitted
+#: start hold no foot: ok and right (name, seed, index, what).
+ZOO_EXACT_ENDS = [
+    ("exact-ends-12.9kHz-punctured", 2, 1469, "12.9 kHz plate, damping 0.010, punctured ball at 50 kHz (one factor): "
+     "sensed start 6.7 samples early"),
+    ("exact-ends-15.3kHz-pressurised", 1, 713, "15.3 kHz plate, damping 0.092, pressurised ball at 50 kHz (one "
+     "factor): sensed start 2.7 samples early"),
+    ("exact-ends-13.3kHz-56kHz", 1, 472, "13.3 kHz plate, damping 0.012, at 56 kHz: the undone TC known to 1.0 % only"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_EXACT_ENDS])
+def test_zoo_exact_undone_ends_fitted_through_the_plate(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable and trace.rig.plate_hz is not None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)
+    assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)

@@ -160,7 +160,7 @@ PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ..
 PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
 PLATE_TC_FRACTION = 0.01  # twice the undone contact's end uncertainty at most this fraction of TC [-]
 PLATE_START_LATE = 1.0  # the undone contact may start this much later than the sensed one at most [samples]
-PLATE_FOOT_SIGMA = 5.0  # ... unless the sensed force before its fitted start stays within this many standard errors [-]
+PLATE_FOOT_SIGMA = 3.5  # ... unless the sensed force before its fitted start stays within this many standard errors [-]
 PLATE_SLOPE_S = 0.1e-3  # the force's slope at an end is read over this long inside it [s]
 PLATE_NOISE_FRACTION = 5.0e-3  # the undone force's noise (amplified above the resonance) at most this of the peak [-]
 PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its noise is at most this of the peak [-]
@@ -1028,12 +1028,15 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         return "the undone force pulls on the plate during the contact"
     if late:
         # the plate is causal: the sensed force is zero before the force starts, so a foot the undone force lost
-        # stands out of the sensed noise before the undone start (from the sensed start on, averaged backwards
-        # from the sample before it); a sensed start early for no force there (its foot or edge fallback read
-        # into the plate's first overshoot) is no lost foot when the ends are fitted through the plate
+        # stands out of the sensed noise before the undone start (from the sensed start on, back from the
+        # sample before it: a level or a ramp up to it, over every length, in standard errors); a sensed start
+        # early for no force there (its foot or edge fallback read into the plate's first overshoot) is no
+        # lost foot when the ends are fitted through the plate
         seg = x[max(int(math.floor(s_u)) - 1, 0):max(int(math.floor(cs_u)), 0)][::-1]
-        foot = (float(np.max(np.cumsum(seg) / (fit.noise * np.sqrt(np.arange(1, seg.size + 1)))))
-                if seg.size and fit.noise > 0 else math.inf)
+        n = np.arange(1, seg.size + 1)
+        level, ramp = np.cumsum(seg), n * np.cumsum(seg) - np.cumsum(np.arange(seg.size) * seg)  # weights 1; n - i
+        foot = (float(max(np.max(level / np.sqrt(n)), np.max(ramp / np.sqrt(n * (n + 1) * (2 * n + 1) / 6.0))))
+                / fit.noise if seg.size and fit.noise > 0 else math.inf)
         if not fitted or not foot <= PLATE_FOOT_SIGMA:
             return "the undone force starts later than the sensed one (a foot lost in its noise)" + tail
     return c, y
