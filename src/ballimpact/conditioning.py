@@ -789,7 +789,17 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     plate (below -NEGATIVE_SIGMA noise deviations) in the contact, nor start
     more than PLATE_START_LATE samples after the sensed force (the plate
     delays the sensed force; an undone force that starts later has lost a
-    low foot in its amplified noise), and the two must agree. A pull is what
+    low foot in its amplified noise), and the two must agree. When its ends,
+    read off it, fail on their uncertainty or start late, they are fitted
+    through the plate instead (:func:`ballimpact.plate.undone_end` with no
+    low-pass, candidates PLATE_EXACT_END_REACH samples either side of those
+    found; their uncertainty as for the low-passed force below), and a fitted
+    start (this one's or a low-passed force's) later than the sensed one is a
+    lost foot only when the sensed
+    samples before it (the plate is causal: zero before the force) stand out
+    of their noise by PLATE_FOOT_SIGMA standard errors as a level or a ramp
+    up to it (the sensed start is read early where the plate's first
+    overshoot passes for a foot; zoo trace 2:1469). A pull is what
     is left where the force departs from the first-order hold the inverse
     assumes (a jump between samples leaves an alternating tail decaying by the
     zeros of the sampled plate).
