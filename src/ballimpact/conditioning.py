@@ -174,8 +174,8 @@ PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: ho
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
 PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample this many of its noise deviations ... [-]
 PLATE_LOWPASS_SPIKE = 0.04  # ... above the low-passed peak: lost; the check must see a loss of this fraction [-]
-PEAK_FIT_S = 0.2e-3  # the exact undone force read at each sample from a quadratic fit over this long up to it ... [s]
-PEAK_FIT_RAMP_SAMPLES = 2  # ... over the whole pre-buckling ramp up to BUCKLING_TIME_S and this long after it [samples]
+PEAK_FIT_S = 0.2e-3  # the exact undone force read at each sample from a quadratic fit over this long around it [s]
+PEAK_FIT_RAMP_SAMPLES = 2  # ... up to it on the pre-buckling ramp: BUCKLING_TIME_S and this long after it [samples]
 PEAK_FIT_MIN = 6  # ... of at least this many samples [samples]
 PEAK_FIT_SIGMA = 3.0  # ... when its residual exceeds its expectation by at most this many of its deviations [-]
 PEAK_FIT_IMPULSE_HALF = 64  # the plate's inverse's impulse response kept this far each side for the fits [samples]
@@ -1520,7 +1520,6 @@ def _peak_between_samples(xc, fs, noise):
     return []
 
 
-
 def _undone_rows(fs, plate: PlateResonance, n):
     """The plate's inverse as rows: row i is what the undone force's sample i of n takes from each sensed sample,
     from PEAK_FIT_IMPULSE_HALF before the first to as long after the last [-] (n x (n + 2 PEAK_FIT_IMPULSE_HALF))."""
@@ -1544,6 +1543,7 @@ def _fit_stats(rows, n, centred=False):
     return design, pinv, float(np.trace(cov)), math.sqrt(2.0 * float(np.sum(cov * cov))), \
         np.sqrt(np.sum((design @ (pinv @ u)) ** 2, axis=1))
 
+
 def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
     """How much noisier the force undone from a plate is than the sensed noise ``noise`` [V] through the
     inverse says, read from the centred quadratic fits of ``length`` samples (made odd) over ``exact[a:b]``:
@@ -1558,6 +1558,7 @@ def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
     rss = np.sum((windows - (windows @ pinv.T) @ design.T) ** 2, axis=1)
     return max(math.sqrt(float(np.median(rss)) / expected) / noise, PEAK_FIT_NOISE)
 
+
 def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False):
     """A force undone from a plate read at each sample from a fit of the samples around it rather than from
     the sample alone: (reading [V], its standard error [V] or NaN where no fit holds), one per sample of
@@ -1570,7 +1571,7 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
     read at the samples off their middle). The one-sided fit never spans a
     drop after k: the ball's pre-buckling spike is a smooth ramp cut by a
     sudden drop (section 3.2.4 in Goodwill & Haake 2004), and its top is read
-    from the ramp before it; the centred one, half as noisy, suits the smooth
+    from the ramp before it; the centred one, less noisy, suits the smooth
     force after buckling. The undone noise rises towards the Nyquist
     frequency and a fit averages it out: its standard error and the residual
     it should leave come from the sensed white noise ``noise`` [V] through
@@ -1583,7 +1584,7 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
     a, b = max(int(a), 0), min(int(b), exact.size)
     out = exact[a:b].astype(float)
     error = np.full(out.size, math.nan)
-    length = min(int(length) | 1 if centred else int(length), out.size)
+    length = min(int(length) | 1, out.size - 1 + out.size % 2) if centred else min(int(length), out.size)
     if length < PEAK_FIT_MIN or not noise > 0:
         return out, error
     rows = _undone_rows(fs, plate, length)
