@@ -1064,3 +1064,17 @@ def test_fitted_force_reads_a_smooth_top_unbiased():
     se = float(np.mean(error))
     assert 0.75 * se <= float(np.std(miss)) <= 1.35 * se
     assert abs(float(np.mean(miss))) <= 3.0 * se / math.sqrt(len(miss))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_fit_noise_scale_finds_noise_the_stated_one_misses(seed):
+    """White noise through the plate's inverse, 500 samples: stated right, the scale is about 1 (never below it);
+    stated at half, the centred fits' residuals find it twice as large (1.7-2.3)."""
+    from ballimpact.conditioning import _fit_noise_scale
+    from ballimpact.plate import PlateResonance, undo_plate_resonance
+
+    fs, fn, zeta = SPIKE_PLATE
+    plate = PlateResonance(fn, zeta, 0.0, 0.0)
+    exact = undo_plate_resonance(np.random.default_rng(seed).normal(0.0, 1e-3, 600), fs, fn, zeta)
+    assert 1.0 <= _fit_noise_scale(exact, fs, 50, 550, 20, 1e-3, plate) <= 1.15
+    assert 1.7 <= _fit_noise_scale(exact, fs, 50, 550, 20, 0.5e-3, plate) <= 2.3
