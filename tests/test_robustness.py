@@ -453,3 +453,25 @@ def test_zoo_exact_undone_ends_fitted_through_the_plate(name, seed, index, what,
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, must_be_ok=True)
     assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)
+
+
+#: Traces of the benchmark excluded on main at 03757a8 although measurable: their plate undone and low-passed, "the
+#: exact undone force is too noisy to show that the low-pass keeps its peak" (its largest sample against the
+#: low-passed peak). Read from fits of the samples around each (the pre-buckling ramp one-sided, then centred,
+#: ``conditioning._fitted_force``), the exact undone force shows the low-pass keeps its peak: ok and right (name,
+#: seed, index, what).
+ZOO_FITTED_TOP = [
+    ("fitted-top-8.2kHz-damped-54kHz", 0, 686, "8.2 kHz plate, damping 0.17, at 54 kHz: a loss of 4.7 % unseen"),
+    ("fitted-top-16.9kHz-174kHz", 2, 26, "16.9 kHz plate, damping 0.09, at 174 kHz: a loss of 4.3 % unseen"),
+    ("fitted-top-13.8kHz-spike-121kHz", 1, 1388, "13.8 kHz plate, damping 0.18, under a pre-buckling-spike peak at "
+     "121 kHz: a loss of 5.3 % unseen"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_FITTED_TOP])
+def test_zoo_lowpass_peak_kept_from_the_fitted_top(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable and trace.rig.plate_hz is not None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)
+    assert result.plate_resonance_hz > 0  # undone (and low-passed): the case the fitted top decides

@@ -77,6 +77,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.optimize import minimize_scalar
 
 from .contact import ContactResult, detect_contact, robust_noise
+from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
                     refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain)
 from .problems import Problem, ProblemKind
@@ -175,6 +176,12 @@ PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: ho
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
 PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample this many of its noise deviations ... [-]
 PLATE_LOWPASS_SPIKE = 0.04  # ... above the low-passed peak: lost; the check must see a loss of this fraction [-]
+PEAK_FIT_S = 0.2e-3  # the exact undone force read at each sample from a quadratic fit over this long around it [s]
+PEAK_FIT_RAMP_SAMPLES = 2  # ... up to it on the pre-buckling ramp: BUCKLING_TIME_S and this long after it [samples]
+PEAK_FIT_MIN = 6  # ... of at least this many samples [samples]
+PEAK_FIT_SIGMA = 3.0  # ... when its residual exceeds its expectation by at most this many of its deviations [-]
+PEAK_FIT_IMPULSE_HALF = 64  # the plate's inverse's impulse response kept this far each side for the fits [samples]
+PEAK_FIT_NOISE = 1.0  # the sensed noise raised by the centred fits' median residual over its expectation, from this [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -878,21 +885,39 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
         c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
         if not isinstance(c, str) and not math.isinf(cutoff):
             # the low-pass must not hide a peak the exact undone force shows (a spike sharper than its kernel,
-            # whose top the checks of the exact force found between samples): its largest sample inside the
-            # contact (a sample off each end, where the undoing leaves a transient at a jump) at most
-            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed peak; and that noise
-            # low enough to show a loss of PLATE_LOWPASS_SPIKE
+            # whose top the checks of the exact force found between samples): inside the contact (a sample off
+            # each end, where the undoing leaves a transient at a jump) the exact force read at each sample from a
+            # fit of the samples around it (_fitted_force: the pre-buckling ramp from its start up to it, then
+            # PEAK_FIT_S centred on it; the sample alone, with the undone noise, where no fit holds) at most
+            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its standard error above the low-passed peak; and that
+            # error low enough to show a loss of PLATE_LOWPASS_SPIKE wherever the force may reach the peak
             i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
-            top = float(np.max(exact[i0:i1])) if i1 > i0 else math.inf
             peak = float(c[0].peak_V)
-            blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * fit.noise * undone_noise_gain(
-                fs, plate.frequency_hz, plate.damping_ratio)
-            if top - peak > blind:
-                c = (f"the low-pass lowers the exact undone force's largest sample by {100 * (top - peak) / top:.2g} % "
+            if i1 <= i0 + 1:
+                c = "the low-passed contact holds too few samples of the exact undone force"
+        if not isinstance(c, str) and not math.isinf(cutoff):
+            pb = min(max(int(math.floor((c[0].start_s - t0_s + BUCKLING_TIME_S) * fs)) + PEAK_FIT_RAMP_SAMPLES + 1,
+                         i0), i1)
+            noise = fit.noise * _fit_noise_scale(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), fit.noise, plate)
+            sigma = noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio)
+            parts = [_fitted_force(exact, fs, i0, pb, pb - i0, noise, plate),
+                     _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
+            top = np.concatenate([p[0] for p in parts])
+            alone = np.isnan(np.concatenate([p[1] for p in parts]))
+            error = np.where(alone, sigma, np.concatenate([p[1] for p in parts]))
+            blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * error
+            lost = top - peak > blind
+            unseen = (blind > PLATE_LOWPASS_SPIKE * peak) & (top + PLATE_PEAK_SIGMA * error
+                                                              > (1.0 + PLATE_LOWPASS_PEAK) * peak)
+            if np.any(lost):
+                k = int(np.argmax(np.where(lost, top - peak, -np.inf)))
+                what = "largest sample" if alone[k] else "top fitted over the samples around it"
+                c = (f"the low-pass lowers the exact undone force's {what} by {100 * (top[k] - peak) / top[k]:.2g} % "
                      "(a peak sharper than its kernel)")
-            elif blind > PLATE_LOWPASS_SPIKE * peak:
+            elif np.any(unseen):
                 c = (f"the exact undone force is too noisy to show that the low-pass keeps its peak (a loss of up to "
-                     f"{100 * blind / peak:.2g} % would not be seen; a spike sharper than the kernel may be lost)")
+                     f"{100 * float(np.max(blind[unseen])) / peak:.2g} % would not be seen; a spike sharper than the "
+                     "kernel may be lost)")
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
@@ -1531,6 +1556,99 @@ def _peak_between_samples(xc, fs, noise):
                             "(sample faster)")]
     return []
 
+
+def _undone_rows(fs, plate: PlateResonance, n):
+    """The plate's inverse as rows: row i is what the undone force's sample i of n takes from each sensed sample,
+    from PEAK_FIT_IMPULSE_HALF before the first to as long after the last [-] (n x (n + 2 PEAK_FIT_IMPULSE_HALF))."""
+    half = PEAK_FIT_IMPULSE_HALF
+    impulse = np.zeros(2 * half + 1)
+    impulse[half] = 1.0
+    h = undo_plate_resonance(impulse, fs, plate.frequency_hz, plate.damping_ratio)  # response at lag d: h[half + d]
+    lag = 2 * half + np.arange(n)[:, None] - np.arange(n + 2 * half)[None, :]
+    return np.where((lag >= 0) & (lag <= 2 * half), h[np.clip(lag, 0, 2 * half)], 0.0)
+
+
+def _fit_stats(rows, n, centred=False):
+    """A quadratic least-squares fit of n samples read at the last (the middle one when centred): its design,
+    pseudo-inverse, per unit sensed noise the residual's expected sum of squares and that sum's deviation, and
+    the standard error of its reading at each of the n samples [-]."""
+    design = np.vander(np.arange(n, dtype=float) - (0.5 * (n - 1) if centred else n - 1), 3, increasing=True)
+    pinv = np.linalg.pinv(design)
+    u = rows[:n, :n + 2 * PEAK_FIT_IMPULSE_HALF]
+    ru = u - design @ (pinv @ u)  # the residual's share of each sensed sample's noise
+    cov = ru @ ru.T  # the residual's covariance [noise^2]: its sum of squares has mean trace, variance 2 |cov|^2
+    return design, pinv, float(np.trace(cov)), math.sqrt(2.0 * float(np.sum(cov * cov))), \
+        np.sqrt(np.sum((design @ (pinv @ u)) ** 2, axis=1))
+
+
+def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
+    """How much noisier the force undone from a plate is than the sensed noise ``noise`` [V] through the
+    inverse says, read from the centred quadratic fits of ``length`` samples (made odd) over ``exact[a:b]``:
+    the square root of their residuals' median sum of squares over its expectation, at least
+    PEAK_FIT_NOISE [-] (what the inverse makes of a force not linear between the samples, the ADC's steps)."""
+    a, b = max(int(a), 0), min(int(b), exact.size)
+    length = int(length) | 1
+    if b - a < length or length < PEAK_FIT_MIN or not noise > 0:
+        return PEAK_FIT_NOISE
+    design, pinv, expected, _, _ = _fit_stats(_undone_rows(fs, plate, length), length, centred=True)
+    windows = np.lib.stride_tricks.sliding_window_view(exact[a:b], length)
+    rss = np.sum((windows - (windows @ pinv.T) @ design.T) ** 2, axis=1)
+    return max(math.sqrt(float(np.median(rss)) / expected) / noise, PEAK_FIT_NOISE)
+
+
+def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False):
+    """A force undone from a plate read at each sample from a fit of the samples around it rather than from
+    the sample alone: (reading [V], its standard error [V] or NaN where no fit holds), one per sample of
+    ``exact[a:b]``.
+
+    At sample k, a quadratic least-squares fit read at k: of
+    ``exact[max(k - length + 1, a):k + 1]`` (at least PEAK_FIT_MIN samples;
+    the first fit also read at the samples before its last), or centred, of
+    the ``length`` samples (made odd) around k (the first and last fit also
+    read at the samples off their middle). The one-sided fit never spans a
+    drop after k: the ball's pre-buckling spike is a smooth ramp cut by a
+    sudden drop (section 3.2.4 in Goodwill & Haake 2004), and its top is read
+    from the ramp before it; the centred one, less noisy, suits the smooth
+    force after buckling. The undone noise rises towards the Nyquist
+    frequency and a fit averages it out: its standard error and the residual
+    it should leave come from the sensed white noise ``noise`` [V] through
+    the plate's inverse (its impulse response; noise correlated from sample
+    to sample). A fit whose residual exceeds that expectation by
+    PEAK_FIT_SIGMA of its deviation (a Gaussian quadratic form) spans a drop
+    or a feature sharper than a parabola and does not hold: that sample
+    keeps its own value, with a NaN error.
+    """
+    a, b = max(int(a), 0), min(int(b), exact.size)
+    out = exact[a:b].astype(float)
+    error = np.full(out.size, math.nan)
+    length = min(int(length) | 1, out.size - 1 + out.size % 2) if centred else min(int(length), out.size)
+    if length < PEAK_FIT_MIN or not noise > 0:
+        return out, error
+    rows = _undone_rows(fs, plate, length)
+    seg = exact[a:b]
+
+    def holds(resid, expected, spread):
+        return np.sum(resid * resid, axis=-1) <= (expected + PEAK_FIT_SIGMA * spread) * noise * noise
+
+    for n in range(PEAK_FIT_MIN, 0 if centred else length):  # one-sided: the first samples from a up to them
+        design, pinv, expected, spread, se = _fit_stats(rows, n)
+        coef = pinv @ seg[:n]
+        if holds(seg[:n] - design @ coef, expected, spread):
+            at = slice(0, n) if n == PEAK_FIT_MIN else slice(n - 1, n)
+            out[at], error[at] = (design @ coef)[at], noise * se[at]
+    design, pinv, expected, spread, se = _fit_stats(rows, length, centred)  # fits of `length` samples, at once
+    windows = np.lib.stride_tricks.sliding_window_view(seg, length)
+    coef = windows @ pinv.T
+    ok = holds(windows - coef @ design.T, expected, spread)
+    at = length // 2 if centred else length - 1
+    k = np.arange(windows.shape[0]) + at
+    out[k[ok]], error[k[ok]] = coef[ok, 0], noise * se[at]
+    if centred:  # the first and the last fit read off their middle too
+        for w, span in ((0, slice(0, at)), (windows.shape[0] - 1, slice(at + 1, length))):
+            if ok[w]:
+                out[w + span.start:w + span.stop] = (design @ coef[w])[span]
+                error[w + span.start:w + span.stop] = noise * se[span]
+    return out, error
 
 def _second_hump(xc, fs, noise, peak):
     """A contact force that falls and rises again after its first maximum: not a ball's force.
