@@ -840,7 +840,9 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
                         (k0 - 2.0, k0 - 1.0), (0.5, 1.5), indexing="ij")
         grid = np.stack([v.ravel() for v in g], axis=1)  # wn, zeta, ts, rise
     else:
-        g = np.meshgrid(np.arange(t_lo, t_hi + 1e-9, 0.25), np.arange(0.0, FRONT_RISE_MAX + 1e-9, 0.5), indexing="ij")
+        # through an ideal plate a sample sees the jump's rise only where it falls: a fine grid, no local minimum
+        g = np.meshgrid(np.arange(t_lo, t_hi + 1e-9, 0.125), np.arange(0.0, FRONT_RISE_MAX + 1e-9, 0.25),
+                        indexing="ij")
         grid = np.stack([np.full(g[0].size, np.inf), np.zeros(g[0].size), g[0].ravel(), g[1].ravel()], axis=1)
     design = front_responses(n[None, :] - grid[:, 2:3], grid[:, 0:1], grid[:, 1:2], grid[:, 3:4])
     p0 = grid[int(np.argmin(solve(design)[0]))]
