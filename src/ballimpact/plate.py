@@ -739,28 +739,44 @@ def front_responses(u, wn, zeta, rise):
         Shape ``broadcast(...) + (3,)``: the responses to the unit jump, the
         unit ramp u and the parabola u^2 [-, samples, samples^2], zero before u = 0.
     """
-    u, wn, zeta, rise = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (u, wn, zeta, rise)))
-
-    def ramp_and_parabola(v):
-        on = v >= 0
-        t = np.where(on, v, 0.0)
-        ideal = ~np.isfinite(wn)
+    u, wn, zeta, rise = (np.asarray(v, dtype=float) for v in (u, wn, zeta, rise))
+    shape = np.broadcast_shapes(u.shape, wn.shape, zeta.shape, rise.shape)
+    ideal = ~np.isfinite(wn)
+    all_ideal, any_ideal = bool(np.all(ideal)), bool(np.any(ideal))
+    if not all_ideal:  # the plate's constants, once per resonance (not per sample)
         w = np.where(ideal, 1.0, wn)
         z = np.where(ideal, 0.5, zeta)
         sigma, wd = z * w, w * np.sqrt(np.maximum(1.0 - z * z, 1e-12))
         c, d = 2.0 * z / w, (2.0 * z * z - 1.0) / wd
         p0, p1 = 2.0 * (4.0 * z * z - 1.0) / (w * w), -4.0 * z / w
         qb = (-sigma * p0 - p1) / wd
-        decay = np.exp(-sigma * t)
-        cos, sin = np.cos(wd * t), np.sin(wd * t)
-        step = np.where(ideal, 1.0, 1.0 - decay * (cos + sigma / wd * sin))
-        ramp = np.where(ideal, t, t - c + decay * (c * cos + d * sin))
-        par = np.where(ideal, t * t, t * t + p1 * t + p0 + decay * (-p0 * cos + qb * sin))
-        return np.where(on, step, 0.0), np.where(on, ramp, 0.0), np.where(on, par, 0.0)
 
-    step, ramp, par = ramp_and_parabola(u)
-    spread = rise > 1e-9
-    jump = np.where(spread, (ramp - ramp_and_parabola(u - rise)[1]) / np.where(spread, rise, 1.0), step)
+    def responses(v, all_three=True):  # (step, ramp, parabola) responses at v, or the ramp's alone
+        v = np.broadcast_to(v, shape)
+        on = v >= 0
+        t = np.where(on, v, 0.0)
+        if all_ideal:
+            ramp = t
+        else:
+            decay = np.exp(-sigma * t)
+            cos, sin = np.cos(wd * t), np.sin(wd * t)
+            ramp = np.where(ideal, t, t - c + decay * (c * cos + d * sin)) if any_ideal else \
+                t - c + decay * (c * cos + d * sin)
+        ramp = np.where(on, ramp, 0.0)
+        if not all_three:
+            return ramp
+        if all_ideal:
+            step, par = np.ones(shape), t * t
+        else:
+            step = 1.0 - decay * (cos + sigma / wd * sin)
+            par = t * t + p1 * t + p0 + decay * (-p0 * cos + qb * sin)
+            if any_ideal:
+                step, par = np.where(ideal, 1.0, step), np.where(ideal, t * t, par)
+        return np.where(on, step, 0.0), ramp, np.where(on, par, 0.0)
+
+    step, ramp, par = responses(u)
+    spread = np.broadcast_to(rise > 1e-9, shape)
+    jump = np.where(spread, (ramp - responses(u - rise, all_three=False)) / np.where(spread, rise, 1.0), step)
     return np.stack([jump, ramp, par], axis=-1)
 
 
