@@ -46,7 +46,8 @@ the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved (or
 hum in a record shorter than one mains period), a quiet residual that is more
 than white noise, plate ringing during the contact (a spectral line) or after
-it, a peak that is one of the plate's swings, a peak between samples (the
+it, a peak that is one of the plate's swings (or lifted by its ringing from the
+force's jump), a peak between samples (the
 largest sample on a steep ramp, or the first of the contact), force
 below zero after the contact (the plate swinging back), a contact end that
 moves when fitted again from higher samples (a tail fading into the noise), a
