@@ -683,8 +683,8 @@ def undone_noise_gain(sample_rate_hz: float, frequency_hz: float, damping_ratio:
     return float(np.sqrt(np.sum(h * h)))
 
 
-FRONT_RISE_MAX = 4.0  # the force's jump rises over at most this many samples (the model's 10 us step and more) [samples]
-FRONT_START_SPAN = 3.0  # the force's start is looked for up to this many samples before the first contact sample [samples]
+FRONT_RISE_MAX = 4.0  # the force's jump rises over at most this many samples (the model's 10 us step) [samples]
+FRONT_START_SPAN = 3.0  # the force's start is looked for up to this many samples before the contact's first [samples]
 FRONT_MAX_FREQUENCY = 0.45  # resonances fitted up to this fraction of the sample rate [-]
 FRONT_GRID_FREQUENCIES = 16  # the starting grid: this many resonances, log-spaced ... [-]
 FRONT_GRID_DAMPING = (0.03, 0.1, 0.2, 0.35)  # ... each with these damping ratios [-]
