@@ -1608,8 +1608,8 @@ def _peak_on_front_ringing(x, fs, noise, peak, s_u, e_u):
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake 2004)
     the force jumps from zero and rises smoothly to the spike, which ends in
     the drop at buckling. A plate rings from the jump; when the spike's top
-    lands on a later maximum of that ringing (not the first overshoot, which
-    :func:`_peak_on_step_response` judges) the largest sample is lifted
+    lands on a later maximum of that ringing (the first overshoot is
+    :func:`_peak_on_step_response`'s too) the largest sample is lifted
     above the ball's force with nothing in the contact to show it (zoo trace
     3:824: a 13.7 kHz plate with damping 0.20 at 168 kHz, the peak 5.3 % high
     and ok). So when the contact's largest sample is within FRONT_PHASE_S
@@ -1628,9 +1628,8 @@ def _peak_on_front_ringing(x, fs, noise, peak, s_u, e_u):
     The fit looks for the force's jump from FRONT_PRE_SAMPLES samples before
     the first contact sample to that sample: a front still below
     FRONT_JUMP_FRACTION of the peak FRONT_PRE_SAMPLES samples after it (a
-    cloth's foot before the jump, as the synthetic chain's; zoo traces had
-    13 % or more on every plate the check flagged) is not the model's, and
-    is not judged.
+    cloth's foot before the jump, as the synthetic chain's) is not the
+    model's, and is not judged.
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
