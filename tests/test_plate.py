@@ -516,3 +516,93 @@ def test_undone_end_reaches_an_end_found_samples_off(fn_hz, zeta, off):
     assert_allclose(start.jump, 0.3, atol=0.02)
     with pytest.raises(ValueError, match="reach_samples"):
         undone_end(y, fs, fn_hz, zeta, math.inf, ts * fs, "start", reach_samples=0)
+
+
+# ------------------------------------------------- the contact's front through a plate (issue 9)
+
+
+def _front_knots(fs, start, jump, rise, slope, curvature, length):
+    """A jump rising linearly over ``rise`` samples, a ramp and a parabola from ``start`` [samples], as a
+    piecewise-linear force with knots every 0.01 sample (its error on the parabola: curvature * 1.25e-5)."""
+    u = np.arange(0.0, length, 0.01)
+    onset = np.clip(u / rise, 0.0, 1.0) if rise > 0 else np.ones(u.size)
+    f = jump * onset + slope * u + curvature * u * u
+    if rise == 0:
+        u, f = np.concatenate([[0.0], u]), np.concatenate([[0.0], f])
+        u[1] = 1e-7
+    return (start + u) / fs, f
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs, rise", [(13.7e3, 0.2, 168e3, 1.8), (5.0e3, 0.03, 50e3, 0.0),
+                                                   (30.0e3, 0.5, 200e3, 3.0), (8.5e3, 0.11, 120e3, 1.2)])
+def test_front_responses_are_the_plates_output(fn_hz, zeta, fs, rise):
+    from ballimpact.plate import front_responses
+
+    # the textbook ramp responses of a piecewise-linear force (this file's sensed_force), independent of the
+    # closed forms of the jump, ramp and parabola responses
+    start, jump, slope, curvature = 3.37, 400.0, 35.0, -0.6
+    kt, kf = _front_knots(fs, start, jump, rise, slope, curvature, 40.0)
+    n = np.arange(0.0, 38.0)
+    sensed = sensed_force(kt, kf, n / fs, fn_hz, zeta)
+    cols = front_responses(n - start, 2 * math.pi * fn_hz / fs, zeta, rise)
+    assert cols.shape == (n.size, 3)
+    assert_allclose(cols @ np.array([jump, slope, curvature]), sensed, atol=1e-6 * jump)
+    # an ideal plate: the force itself
+    ideal = front_responses(n - start, math.inf, 0.0, rise) @ np.array([jump, slope, curvature])
+    assert_allclose(ideal, piecewise_force(kt, kf, n / fs), atol=1e-6 * jump)
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs, seed", [(13.7e3, 0.2, 168e3, 0), (13.7e3, 0.2, 168e3, 1),
+                                                   (20.0e3, 0.25, 190e3, 2), (9.0e3, 0.05, 120e3, 3)])
+def test_fit_front_finds_the_plate_and_the_force_under_its_ringing(fn_hz, zeta, fs, seed):
+    from ballimpact.plate import fit_front
+
+    # the model's front (section 3.2.4: a jump at 2 mm of compression, then kCONST): 40 % of the peak in a jump over
+    # 10 us, a ramp bending over, 1e-3 of the peak of noise; sensed through a known plate
+    start, jump, slope, curvature, rise = 3.37, 400.0, 35.0, -0.6, 1e-5 * fs
+    kt, kf = _front_knots(fs, start, jump, rise, slope, curvature, 40.0)
+    n = np.arange(0, 26)
+    x = sensed_force(kt, kf, n / fs, fn_hz, zeta) + np.random.default_rng(seed).normal(0.0, 1.0, n.size)
+    fit = fit_front(x, fs, 0, n[-1], start=start + 0.6)
+    assert_allclose(fit.frequency_hz, fn_hz, rtol=0.02)
+    assert_allclose(fit.damping_ratio, zeta, rtol=0.1, atol=0.01)
+    assert_allclose(fit.start, start, atol=0.2)
+    assert_allclose(fit.jump, jump, rtol=0.05)
+    # the force under the last sample, which the plate's ringing lifts or lowers
+    assert_allclose(fit.force(n[-1]), piecewise_force(kt, kf, n[-1:] / fs)[0], atol=0.005 * kf.max())
+    assert fit.rss < 3.0 * n.size  # the noise's variance is 1
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 0.6, resonance=False)
+    assert ideal.frequency_hz == math.inf and ideal.rss > 100.0 * fit.rss
+
+
+def test_fit_front_through_an_ideal_plate_fits_the_force_to_its_noise():
+    from ballimpact.plate import fit_front
+
+    fs, start = 150e3, 3.6
+    kt, kf = _front_knots(fs, start, 300.0, 1.5, 30.0, -0.4, 40.0)
+    n = np.arange(0, 30)
+    x = piecewise_force(kt, kf, n / fs) + np.random.default_rng(4).normal(0.0, 1.0, n.size)
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 0.5, resonance=False)
+    assert ideal.rss < 2.0 * n.size
+    assert_allclose(ideal.force(n), piecewise_force(kt, kf, n / fs), atol=3.0)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(sample_rate_hz=0.0), "sample_rate_hz must be positive"),
+    (dict(start=math.nan), "start must be finite"),
+    (dict(force=np.full(40, np.nan)), "non-finite"),
+])
+def test_fit_front_rejects_bad_arguments(kwargs, match):
+    from ballimpact.plate import fit_front
+
+    args = {"force": np.zeros(40), "sample_rate_hz": 1e5, "first": 0, "last": 30, "start": 5.0}
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        fit_front(**args)
+
+
+def test_fit_front_gives_none_for_a_window_it_cannot_fit():
+    from ballimpact.plate import fit_front
+
+    assert fit_front(np.zeros(40), 1e5, 0, 5, 2.0) is None  # fewer than 8 samples
+    assert fit_front(np.zeros(40), 1e5, 30, 45, 33.0) is None  # past the record's end

@@ -46,7 +46,8 @@ the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved (or
 hum in a record shorter than one mains period), a quiet residual that is more
 than white noise, plate ringing during the contact (a spectral line) or after
-it, a peak that is one of the plate's swings, a peak between samples (the
+it, a peak that is one of the plate's swings (or lifted by its ringing from the
+force's jump), a peak between samples (the
 largest sample on a steep ramp, or the first of the contact), force
 below zero after the contact (the plate swinging back), a contact end that
 moves when fitted again from higher samples (a tail fading into the noise), a
@@ -80,6 +81,7 @@ from .contact import ContactResult, detect_contact, robust_noise
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
                     refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain)
+from .plate import fit_front
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -150,6 +152,12 @@ STEP_FRACTION = 5.0e-3  # ... each turn left by more than this fraction of the p
 STEP_SIGMA = 6.0  # ... and this many noise deviations of the average ... [-]
 STEP_FIRST_PERIOD = 1.0  # ... after a peak within this many of its periods of the start (the first overshoot) [-]
 STEP_STEEPEST = 1.5  # a fall after the peak steeper than this times a swing's steepest is the force's own drop [-]
+FRONT_PHASE_S = 0.2e-3  # a largest sample this soon (and a sample) after the contact start is checked ... [s]
+FRONT_MIN_SAMPLES = 8  # ... when the contact holds this many samples up to it ... [samples]
+FRONT_PRE_SAMPLES = 3  # ... by a fit from this many samples before the start to it ... [samples]
+FRONT_JUMP_FRACTION = 0.05  # ... when the force is above this fraction of the peak as many samples after the start [-]
+FRONT_SIGNIFICANCE = 25.0  # ... through a plate better than through an ideal one by this many variances ... [-]
+FRONT_LIFT_FRACTION = 0.03  # ... whose ringing lifts the largest sample above the force by more: not the ball's [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -1193,7 +1201,7 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     return (_level_problems(x, fs, fit, peak, scale, e_u, post_guard_s)
             + _end_problems(x, fs, fit, contact, s_u, e_u, scale, curve=True)
-            + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u)
+            + _ringing_problems(x, fs, fit.noise, peak, s_u, e_u, start_u, end_u, front=True)
             + _mains_problems(x, fs, fit, peak, scale, ambiguous, start_u, end_u))
 
 
@@ -1309,8 +1317,9 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
     return out
 
 
-def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u):
-    """Plate ringing after the contact, force below zero, a peak on ringing, a spectral line in the contact."""
+def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False):
+    """Plate ringing after the contact, force below zero, a peak on ringing, a spectral line in the contact; with
+    ``front`` (the sensed force), also a peak lifted by the plate's ringing from the force's jump."""
     out = []
     a = int(math.ceil(e_u + RING_GAP_S * fs))
     b = min(a + max(int(round(RING_WINDOW_S * fs)), 3), x.size)
@@ -1326,6 +1335,7 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u):
     out.extend(_peak_between_samples(xc, fs, noise))
     out.extend(_second_hump(xc, fs, noise, peak))
     out.extend(_peak_on_step_response(xc, fs, noise, peak, math.ceil(s_u) - s_u))
+    out.extend(_peak_on_front_ringing(x, fs, noise, peak, s_u, e_u) if front else [])
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
     if line is not None:
@@ -1745,6 +1755,62 @@ def _peak_on_step_response(xc, fs, noise, peak, lead=0.0):
                     f" % within {1e3 * low2 / fs:.2g} ms (a ball's force has no such bump): the plate's first "
                     f"overshoot of the force's jump, ringing at about {fs / (low2 - low1) / 1e3:.3g} kHz; the peak "
                     "is not the ball's")]
+
+
+def _peak_on_front_ringing(x, fs, noise, peak, s_u, e_u):
+    """The peak force lifted by the plate's ringing from the force's jump: a later swing of it, not the ball's.
+
+    In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake 2004)
+    the force jumps from zero and rises smoothly to the spike, which ends in
+    the drop at buckling. A plate rings from the jump; when the spike's top
+    lands on a later maximum of that ringing (the first overshoot is
+    :func:`_peak_on_step_response`'s too) the largest sample is lifted
+    above the ball's force with nothing in the contact to show it (zoo trace
+    3:824: a 13.7 kHz plate with damping 0.20 at 168 kHz, the peak 5.3 % high
+    and ok). So when the contact's largest sample is within FRONT_PHASE_S
+    (and a sample) of its start and FRONT_MIN_SAMPLES of the contact reach
+    it, the samples from FRONT_PRE_SAMPLES before the start to it are fitted
+    with a jump, a ramp and a parabola (:func:`ballimpact.plate.fit_front`),
+    once through a plate (fn and zeta free, at most 0.45 fs, at least one
+    period over the window) and once through an ideal plate. When the plate
+    fits better by more than FRONT_SIGNIFICANCE residual variances (the
+    larger of the noise's and the plate fit's own, per sample) and the
+    largest sample stands more than FRONT_LIFT_FRACTION of the peak above
+    the force the plate's fit finds under it, the peak is the plate's (also
+    when the ball's top comes later, hidden in a trough of the ringing: the
+    peak is then not measured either).
+
+    The fit looks for the force's jump from FRONT_PRE_SAMPLES samples before
+    the first contact sample to that sample: a front still below
+    FRONT_JUMP_FRACTION of the peak FRONT_PRE_SAMPLES samples after it (a
+    cloth's foot before the jump, as the synthetic chain's) is not the
+    model's, and is not judged.
+    """
+    k0 = int(math.ceil(s_u))
+    k1 = int(math.floor(e_u))
+    if not peak > 0 or k1 - k0 < MIN_CONTACT_SAMPLES or k0 - FRONT_PRE_SAMPLES < 0 or k1 >= x.size:
+        return []
+    i = k0 + int(np.argmax(x[k0:k1 + 1]))
+    if i - s_u > FRONT_PHASE_S * fs + 1.0 or i - k0 + 1 < FRONT_MIN_SAMPLES:
+        return []
+    if x[k0 + FRONT_PRE_SAMPLES] < FRONT_JUMP_FRACTION * peak:
+        return []  # no jump where the fit looks for one: a slower front (a cloth's foot) is not fitted
+    plate = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, i, s_u)
+    if plate is None:
+        return []
+    ideal = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, i, s_u, resonance=False)
+    variance = max(noise * noise, plate.rss / max(plate.n_samples - 7, 1))
+    gain = (ideal.rss - plate.rss) / variance if variance > 0 else math.inf
+    lift = float(x[i] - plate.force(i))
+    if gain > FRONT_SIGNIFICANCE and lift > FRONT_LIFT_FRACTION * peak:
+        return [Problem(ProblemKind.PEAK_ON_RINGING,
+                        f"peak force on the plate's ringing: from the contact start to its largest sample "
+                        f"({1e3 * (i - s_u) / fs:.2g} ms in) the force is a jump and a ramp through a plate of about "
+                        f"{plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}), with "
+                        f"{ideal.rss / max(plate.rss, 1e-300):.2g} times less residual than through an ideal plate, "
+                        f"whose ringing from the jump lifts the largest sample {100 * lift / peak:.2g} % of the peak "
+                        "above the force; the peak is not the ball's")]
+    return []
 
 
 def _negative_force(x, fs, noise, peak, end_u):

@@ -50,7 +50,7 @@ from ._checks import finite_samples, positive_scalar
 
 __all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
            "undone_noise_gain", "lowpass_kernel",
-           "lowpass_spread_samples", "refine_plate_resonance", "undone_end"]
+           "lowpass_spread_samples", "refine_plate_resonance", "undone_end", "FrontFit", "front_responses", "fit_front"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -690,3 +690,212 @@ def undone_noise_gain(sample_rate_hz: float, frequency_hz: float, damping_ratio:
     if not math.isinf(cutoff_hz):
         h = lowpass_zero_phase(h, fs, cutoff_hz)
     return float(np.sqrt(np.sum(h * h)))
+
+
+FRONT_RISE_MAX = 4.0  # the force's jump rises over at most this many samples (the model's 10 us step) [samples]
+FRONT_START_SPAN = 3.0  # the force's start is looked for up to this many samples before the contact's first [samples]
+FRONT_MAX_FREQUENCY = 0.45  # resonances fitted up to this fraction of the sample rate [-]
+FRONT_GRID_FREQUENCIES = 16  # the starting grid: this many resonances, log-spaced ... [-]
+FRONT_GRID_DAMPING = (0.03, 0.1, 0.2, 0.35)  # ... each with these damping ratios [-]
+FRONT_MAX_EVALUATIONS = 60  # least-squares evaluations from the grid's best at most [-]
+
+
+class FrontFit(NamedTuple):
+    """A contact's front fitted by :func:`fit_front`: a jump, a ramp and a parabola, through a plate or an ideal one."""
+
+    frequency_hz: float  #: the plate's resonance [Hz] (inf: an ideal plate)
+    damping_ratio: float  #: its damping ratio [-]
+    start: float  #: where the force starts [samples, fractional index]
+    rise: float  #: the samples over which its jump rises [samples]
+    jump: float  #: the jump [unit of the force]
+    slope: float  #: the ramp's slope after the start [unit of the force per sample]
+    curvature: float  #: the parabola's coefficient [unit of the force per sample^2]
+    rss: float  #: residual sum of squares over the window [unit of the force^2]
+    n_samples: int  #: samples in the window [-]
+
+    def force(self, index) -> np.ndarray:
+        """The fitted applied force (not the sensed one) at fractional sample indices [unit of the force]."""
+        u = np.asarray(index, dtype=float) - self.start
+        ramp = np.clip(u / self.rise, 0.0, 1.0) if self.rise > 0 else (u >= 0).astype(float)
+        return np.where(u >= 0, self.jump * ramp + self.slope * u + self.curvature * u * u, 0.0)
+
+
+def front_responses(u, wn, zeta, rise):
+    """The plate's response to a jump rising linearly over ``rise`` samples, a ramp and a parabola from u = 0.
+
+    Analytic (the continuous second-order plate of unit static gain sampled
+    at u): the step response ``1 - exp(-zeta wn u) (cos wd u + zeta wn / wd
+    sin wd u)``, the ramp response ``u - c + exp(-zeta wn u) (c cos wd u + d
+    sin wd u)`` (c = 2 zeta / wn, d = (2 zeta^2 - 1) / wd) and the
+    parabola's; the jump rising over ``rise`` samples is the difference of
+    two ramp responses over ``rise``. ``wn = inf`` is an ideal plate (the
+    force itself).
+
+    Parameters
+    ----------
+    u : array_like
+        Time since the force's start [samples], any shape (broadcast with the others).
+    wn : array_like
+        The resonance's angular frequency [rad per sample] (inf: no resonance).
+    zeta : array_like
+        Its damping ratio, 0 to 1 [-].
+    rise : array_like
+        The samples over which the jump rises [samples], >= 0 (0: a step).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``broadcast(...) + (3,)``: the responses to the unit jump, the
+        unit ramp u and the parabola u^2 [-, samples, samples^2], zero before u = 0.
+    """
+    u, wn, zeta, rise = (np.asarray(v, dtype=float) for v in (u, wn, zeta, rise))
+    shape = np.broadcast_shapes(u.shape, wn.shape, zeta.shape, rise.shape)
+    ideal = ~np.isfinite(wn)
+    all_ideal, any_ideal = bool(np.all(ideal)), bool(np.any(ideal))
+    if not all_ideal:  # the plate's constants, once per resonance (not per sample)
+        w = np.where(ideal, 1.0, wn)
+        z = np.where(ideal, 0.5, zeta)
+        sigma, wd = z * w, w * np.sqrt(np.maximum(1.0 - z * z, 1e-12))
+        c, d = 2.0 * z / w, (2.0 * z * z - 1.0) / wd
+        p0, p1 = 2.0 * (4.0 * z * z - 1.0) / (w * w), -4.0 * z / w
+        qb = (-sigma * p0 - p1) / wd
+
+    def responses(v, all_three=True):  # (step, ramp, parabola) responses at v, or the ramp's alone
+        v = np.broadcast_to(v, shape)
+        on = v >= 0
+        t = np.where(on, v, 0.0)
+        if all_ideal:
+            ramp = t
+        else:
+            decay = np.exp(-sigma * t)
+            cos, sin = np.cos(wd * t), np.sin(wd * t)
+            ramp = np.where(ideal, t, t - c + decay * (c * cos + d * sin)) if any_ideal else \
+                t - c + decay * (c * cos + d * sin)
+        ramp = np.where(on, ramp, 0.0)
+        if not all_three:
+            return ramp
+        if all_ideal:
+            step, par = np.ones(shape), t * t
+        else:
+            step = 1.0 - decay * (cos + sigma / wd * sin)
+            par = t * t + p1 * t + p0 + decay * (-p0 * cos + qb * sin)
+            if any_ideal:
+                step, par = np.where(ideal, 1.0, step), np.where(ideal, t * t, par)
+        return np.where(on, step, 0.0), ramp, np.where(on, par, 0.0)
+
+    step, ramp, par = responses(u)
+    spread = np.broadcast_to(rise > 1e-9, shape)
+    jump = np.where(spread, (ramp - responses(u - rise, all_three=False)) / np.where(spread, rise, 1.0), step)
+    return np.stack([jump, ramp, par], axis=-1)
+
+
+def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True):
+    """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
+
+    In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
+    2004: the cloth carries no load below 2 mm of compression, kB = kCONST
+    for the first 0.2 ms, Eq. (14) F = kB x + (cB + cM) x') the force jumps
+    from zero and then rises smoothly to the spike: ``J r(t - ts) + b (t -
+    ts) + q (t - ts)^2`` with r a rise from 0 to 1 over a few microseconds.
+    A plate of resonance fn and damping zeta answers the jump with a rise
+    over part of its period, an overshoot and a damped oscillation. The
+    samples ``first .. last`` are fitted with that force through the plate
+    (:func:`front_responses`; J, b, q linear, fn, zeta, ts and the rise by
+    nonlinear least squares from a grid) or, with ``resonance=False``,
+    through an ideal plate. Comparing the two says whether the samples need
+    the plate's ringing, and the fit says how far the ringing lifts a sample
+    above the force. Not in the paper; see the README,
+    "Robustness (issue 9)".
+
+    Parameters
+    ----------
+    force : array_like
+        The sensed force (any unit) [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    first, last : int
+        The window's first and last sample [-] (a few before the start, up to the peak).
+    start : float
+        The contact start found [samples, fractional index]: the force's start
+        is looked for from FRONT_START_SPAN samples before its first sample
+        to that sample.
+    resonance : bool
+        Fit through a plate (fn up to FRONT_MAX_FREQUENCY of the sample
+        rate, and down to one period over the window) or an ideal one.
+
+    Returns
+    -------
+    FrontFit or None
+        The fit; None when the window holds fewer than 8 samples, leaves the
+        record, or no resonance fits between one period over the window and
+        FRONT_MAX_FREQUENCY of fs.
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate, a non-finite start or non-finite samples.
+    """
+    from scipy.optimize import least_squares
+
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
+    if not math.isfinite(start):
+        raise ValueError(f"start must be finite, got {start!r}")
+    x = finite_samples("force", force)
+    first, last = int(first), int(last)
+    if first < 0 or last >= x.size or last - first + 1 < 8:
+        return None
+    y = x[first:last + 1]
+    n = np.arange(first, last + 1, dtype=float)
+    k0 = float(math.ceil(start))
+    t_lo, t_hi = k0 - FRONT_START_SPAN, k0
+    w_hi = 2.0 * math.pi * FRONT_MAX_FREQUENCY
+    w_lo = 2.0 * math.pi / max(last - start + 1.0, 1.0)  # at least one period over the window
+    if resonance and w_lo >= w_hi:
+        return None
+
+    def solve(design):  # least squares of J, b, q for each design [..., n, 3]: (rss, coef)
+        gram = np.swapaxes(design, -1, -2) @ design
+        rhs = np.swapaxes(design, -1, -2) @ y
+        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(3)
+        coef = np.linalg.solve(gram + ridge, rhs[..., None])[..., 0]
+        resid = y - (design @ coef[..., None])[..., 0]
+        return np.sum(resid * resid, axis=-1), coef, resid
+
+    if resonance:
+        g = np.meshgrid(np.geomspace(w_lo, w_hi, FRONT_GRID_FREQUENCIES), FRONT_GRID_DAMPING,
+                        (k0 - 2.0, k0 - 1.0), (0.5, 1.5), indexing="ij")
+        grid = np.stack([v.ravel() for v in g], axis=1)  # wn, zeta, ts, rise
+    else:
+        # through an ideal plate a sample sees the jump's rise only where it falls: a fine grid, no local minimum
+        g = np.meshgrid(np.arange(t_lo, t_hi + 1e-9, 0.125), np.arange(0.0, FRONT_RISE_MAX + 1e-9, 0.25),
+                        indexing="ij")
+        grid = np.stack([np.full(g[0].size, np.inf), np.zeros(g[0].size), g[0].ravel(), g[1].ravel()], axis=1)
+    design = front_responses(n[None, :] - grid[:, 2:3], grid[:, 0:1], grid[:, 1:2], grid[:, 3:4])
+    p0 = grid[int(np.argmin(solve(design)[0]))]
+
+    # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
+    if resonance:
+        lo, hi = np.array([0.8 * w_lo, 0.005, t_lo, 0.0]), np.array([w_hi, 0.9, t_hi, FRONT_RISE_MAX])
+        full = np.atleast_2d
+    else:
+        lo, hi, p0 = np.array([t_lo, 0.0]), np.array([t_hi, FRONT_RISE_MAX]), p0[2:]
+
+        def full(q):
+            q = np.atleast_2d(q)
+            return np.column_stack([np.full(q.shape[0], np.inf), np.zeros(q.shape[0]), q])
+
+    def residuals(rows):  # the residuals of each row of free parameters, all at once [rows, n]
+        rows = full(rows)
+        return solve(front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4]))[2]
+
+    def jacobian(q, *_):  # forward differences (backward at an upper bound), in one batch
+        step = 1e-6 * np.maximum(np.abs(q), 1e-2) * np.where(q < hi - 1e-9, 1.0, -1.0)
+        r = residuals(np.vstack([q, q + np.diag(step)]))
+        return ((r[1:] - r[0]) / step[:, None]).T
+
+    q = least_squares(lambda v: residuals(v)[0], np.clip(p0, lo, hi), jac=jacobian, bounds=(lo, hi), x_scale="jac",
+                      max_nfev=FRONT_MAX_EVALUATIONS).x
+    p = full(q)[0]
+    rss, coef, _ = solve(front_responses(n - p[2], p[0], p[1], p[3]))
+    return FrontFit(float(p[0] * fs / (2.0 * math.pi)), float(p[1]), float(p[2]), float(p[3]), float(coef[0]),
+                    float(coef[1]), float(coef[2]), float(rss), int(y.size))
