@@ -80,8 +80,7 @@ from scipy.optimize import minimize_scalar
 from .contact import ContactResult, detect_contact, robust_noise
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain)
-from .plate import fit_front
+                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain, fit_front)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -892,44 +891,54 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
         c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
         if not isinstance(c, str) and not math.isinf(cutoff):
-            # the low-pass must not hide a peak the exact undone force shows (a spike sharper than its kernel,
-            # whose top the checks of the exact force found between samples): inside the contact (a sample off
-            # each end, where the undoing leaves a transient at a jump) the exact force read at each sample from a
-            # fit of the samples around it (_fitted_force: the pre-buckling ramp from its start up to it, then
-            # PEAK_FIT_S centred on it; the sample alone, with the undone noise, where no fit holds) at most
-            # PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its standard error above the low-passed peak; and that
-            # error low enough to show a loss of PLATE_LOWPASS_SPIKE wherever the force may reach the peak
-            i0, i1 = int(math.ceil((c[0].start_s - t0_s) * fs)) + 1, int(math.floor((c[0].end_s - t0_s) * fs))
-            peak = float(c[0].peak_V)
-            if i1 <= i0 + 1:
-                c = "the low-passed contact holds too few samples of the exact undone force"
-        if not isinstance(c, str) and not math.isinf(cutoff):
-            pb = min(max(int(math.floor((c[0].start_s - t0_s + BUCKLING_TIME_S) * fs)) + PEAK_FIT_RAMP_SAMPLES + 1,
-                         i0), i1)
-            noise = fit.noise * _fit_noise_scale(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), fit.noise, plate)
-            sigma = noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio)
-            parts = [_fitted_force(exact, fs, i0, pb, pb - i0, noise, plate),
-                     _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
-            top = np.concatenate([p[0] for p in parts])
-            alone = np.isnan(np.concatenate([p[1] for p in parts]))
-            error = np.where(alone, sigma, np.concatenate([p[1] for p in parts]))
-            blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * error
-            lost = top - peak > blind
-            unseen = (blind > PLATE_LOWPASS_SPIKE * peak) & (top + PLATE_PEAK_SIGMA * error
-                                                              > (1.0 + PLATE_LOWPASS_PEAK) * peak)
-            if np.any(lost):
-                k = int(np.argmax(np.where(lost, top - peak, -np.inf)))
-                what = "largest sample" if alone[k] else "top fitted over the samples around it"
-                c = (f"the low-pass lowers the exact undone force's {what} by {100 * (top[k] - peak) / top[k]:.2g} % "
-                     "(a peak sharper than its kernel)")
-            elif np.any(unseen):
-                c = (f"the exact undone force is too noisy to show that the low-pass keeps its peak (a loss of up to "
-                     f"{100 * float(np.max(blind[unseen])) / peak:.2g} % would not be seen; a spike sharper than the "
-                     "kernel may be lost)")
+            c = _lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s) or c
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
+
+
+def _lowpass_hides_peak(exact, fs, noise, plate: PlateResonance, contact: ContactResult, t0_s) -> str | None:
+    """Why a low-passed undone force with this contact hides a peak the exact undone force ``exact`` shows, in
+    words; None when it does not (``noise`` the sensed noise [V]).
+
+    The low-pass must not hide a peak the exact undone force shows (a spike
+    sharper than its kernel, whose top the checks of the exact force found
+    between samples): inside the contact (a sample off each end, where the
+    undoing leaves a transient at a jump) the exact force read at each sample
+    from a fit of the samples around it (:func:`_fitted_force`: the
+    pre-buckling ramp from its start up to it, then PEAK_FIT_S centred on
+    it; the sample alone, with the undone noise, where no fit holds) at most
+    PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its standard error above the
+    low-passed peak; and that error low enough to show a loss of
+    PLATE_LOWPASS_SPIKE wherever the force may reach the peak.
+    """
+    i0, i1 = int(math.ceil((contact.start_s - t0_s) * fs)) + 1, int(math.floor((contact.end_s - t0_s) * fs))
+    peak = float(contact.peak_V)
+    if i1 <= i0 + 1:
+        return "the low-passed contact holds too few samples of the exact undone force"
+    pb = min(max(int(math.floor((contact.start_s - t0_s + BUCKLING_TIME_S) * fs)) + PEAK_FIT_RAMP_SAMPLES + 1,
+                 i0), i1)
+    noise = noise * _fit_noise_scale(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate)
+    sigma = noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio)
+    parts = [_fitted_force(exact, fs, i0, pb, pb - i0, noise, plate),
+             _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
+    top = np.concatenate([p[0] for p in parts])
+    alone = np.isnan(np.concatenate([p[1] for p in parts]))
+    error = np.where(alone, sigma, np.concatenate([p[1] for p in parts]))
+    blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * error
+    lost = top - peak > blind
+    unseen = (blind > PLATE_LOWPASS_SPIKE * peak) & (top + PLATE_PEAK_SIGMA * error > (1.0 + PLATE_LOWPASS_PEAK) * peak)
+    if np.any(lost):
+        k = int(np.argmax(np.where(lost, top - peak, -np.inf)))
+        what = "largest sample" if alone[k] else "top fitted over the samples around it"
+        return (f"the low-pass lowers the exact undone force's {what} by {100 * (top[k] - peak) / top[k]:.2g} % "
+                "(a peak sharper than its kernel)")
+    if np.any(unseen):
+        return (f"the exact undone force is too noisy to show that the low-pass keeps its peak (a loss of up to "
+                f"{100 * float(np.max(blind[unseen])) / peak:.2g} % would not be seen; a spike sharper than the "
+                "kernel may be lost)")
+    return None
 
 
 def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
