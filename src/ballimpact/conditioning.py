@@ -1669,6 +1669,7 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
                 error[w + span.start:w + span.stop] = noise * se[span]
     return out, error
 
+
 def _second_hump(xc, fs, noise, peak):
     """A contact force that falls and rises again after its first maximum: not a ball's force.
 
