@@ -126,6 +126,8 @@ RING_LINE_NOISE_FACTOR = 6.0  # ... and this many times the noise's amplitude in
 RING_LINE_SIDE_BINS = 4  # a bump no more prominent over the median of the bins below it (at least this many) ... [-]
 RING_LINE_EDGE_FRACTION = 3.0e-4  # ... and below this fraction of the peak is the force's own spectrum, no line [-]
 RING_MAX_FRACTION = 0.02  # rms of the corrected signal there above this fraction of the peak: a problem [-]
+FOOT_CHECK_S = 0.5e-3  # the corrected signal this long before the contact start (less a sample) ... [s]
+FOOT_CHECK_SIGMA = 5.0  # ... holds no foot standing this many standard errors out of the noise [-]
 SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from higher samples is not known [-]
 CURVE_MIN_RATE_HZ = 33.0e3  # ... unless the force's curve pins it, at this sample rate or above [Hz]
 CURVE_LATE_FRACTION = 2.5e-3  # the force's curve meets zero later than the end by more of TC: a convex fade [-]
@@ -1085,10 +1087,7 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         # early for no force there (its foot or edge fallback read into the plate's first overshoot) is no
         # lost foot when the ends are fitted through the plate
         seg = x[max(int(math.floor(s_u)) - 1, 0):max(int(math.floor(cs_u)), 0)][::-1]
-        n = np.arange(1, seg.size + 1)
-        level, ramp = np.cumsum(seg), n * np.cumsum(seg) - np.cumsum(np.arange(seg.size) * seg)  # weights 1; n - i
-        foot = (float(max(np.max(level / np.sqrt(n)), np.max(ramp / np.sqrt(n * (n + 1) * (2 * n + 1) / 6.0))))
-                / fit.noise if seg.size and fit.noise > 0 else math.inf)
+        foot = _foot_sigma(seg, fit.noise) if seg.size else math.inf
         if not fitted or not foot <= PLATE_FOOT_SIGMA:
             return "the undone force starts later than the sensed one (a foot lost in its noise)" + tail
     return c, y
@@ -1278,6 +1277,20 @@ def _residual_where(y, pre, post, white, peak) -> str:
     return "hum or drift not resolved?"
 
 
+def _foot_sigma(seg, noise) -> float:
+    """How far a foot stands out of white noise ``noise`` [V] in ``seg`` [V], the samples before a contact start
+    nearest first: the largest, over every length n from the start back, of the level (the samples' sum over
+    sqrt(n)) and of a ramp up to the start (weights n - i, over their norm), in standard errors [-]; inf with no
+    noise, 0 with no samples."""
+    if not seg.size:
+        return 0.0
+    if not noise > 0:
+        return math.inf
+    n = np.arange(1, seg.size + 1)
+    level, ramp = np.cumsum(seg), n * np.cumsum(seg) - np.cumsum(np.arange(seg.size) * seg)  # weights 1; n - i
+    return float(max(np.max(level / np.sqrt(n)), np.max(ramp / np.sqrt(n * (n + 1) * (2 * n + 1) / 6.0)))) / noise
+
+
 def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, curve=False):
     """Contact ends that hold no force, are located to half a sample only or move when fitted again; with
     ``curve``, also an end that the force's curve before it (``contact.curve_end_s``) puts more than
@@ -1316,6 +1329,17 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
                                f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
                                "there"))
+    # a foot before the start (a cloth that carries a little load before the core does) is part of the contact:
+    # the corrected signal before the start (less the sample before it, which a start found a fraction of a
+    # sample late leaves some force in) must hold none that stands out of the noise as a level or a ramp
+    k = int(math.floor(s_u)) - 1
+    seg = x[max(k - int(round(FOOT_CHECK_S * fs)), 0):max(k, 0)][::-1]
+    foot = _foot_sigma(seg, fit.noise)
+    if curve and foot > FOOT_CHECK_SIGMA:
+        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                           f"contact start not determined: the corrected signal in the {1e3 * FOOT_CHECK_S:.2g} ms "
+                           f"before it stands {foot:.3g} standard errors out of the noise (a foot of force before "
+                           "the rise, or a baseline wrong there): the force may start earlier"))
     late = contact.curve_end_s - contact.end_s
     if curve and late > CURVE_LATE_FRACTION * contact.contact_time_s:  # NaN: no curve, no problem
         out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
