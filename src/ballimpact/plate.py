@@ -440,7 +440,7 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
 
     For each fraction ``frac`` of a sample on a grid of ``step``: the arrays
     ``K * undo(P f(n - frac))`` for f = H(t), t H(t), t^2 H(t) and, last, the
-    parabola t^2 for all t (P the plate's continuous response, analytic;
+    parabola t^2 for all t (P the plate's continuous response, analytic: :func:`front_responses`;
     undo :func:`undo_plate_resonance`; K the low-pass taps) over
     ``n = -span .. span``; an array of shape (fractions, 4, 2 span + 1) [-].
     """
@@ -448,21 +448,11 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
     n = np.arange(-span - pad, span + pad + 1, dtype=float)
     wn = 2.0 * math.pi * frequency_hz / fs  # [rad / sample]
     zeta = damping_ratio
-    sigma, wd = zeta * wn, wn * math.sqrt(max(1.0 - zeta * zeta, 1e-12))
-    c, d = 2.0 * zeta / wn, (2.0 * zeta * zeta - 1.0) / wd
     p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn  # the parabola's steady response
-    qa = -p0
-    qb = (sigma * qa - p1) / wd
     t = n[None, :] - np.arange(0.0, 1.0 - 1e-9, step)[:, None]  # [frac, n]
-    on = t >= 0
-    tt = np.where(on, t, 0.0)
-    decay = np.exp(-sigma * tt)
-    cos, sin = np.cos(wd * tt), np.sin(wd * tt)
     steady_q = t * t + p1 * t + p0
-    responses = np.stack([np.where(on, 1.0 - decay * (cos + sigma / wd * sin), 0.0),
-                          np.where(on, tt - c + decay * (c * cos + d * sin), 0.0),
-                          np.where(on, steady_q + decay * (qa * cos + qb * sin), 0.0),
-                          steady_q], axis=1)  # [frac, response, n]
+    responses = np.concatenate([np.moveaxis(front_responses(t, wn, zeta, 0.0), -1, 1), steady_q[:, None, :]],
+                               axis=1)  # [frac, response, n]: step, ramp, parabola (analytic), the steady parabola
     u = _undo_rows(responses, fs, frequency_hz, damping_ratio)
     if taps.size > 1:
         from scipy.ndimage import convolve1d
