@@ -606,3 +606,16 @@ def test_fit_front_gives_none_for_a_window_it_cannot_fit():
 
     assert fit_front(np.zeros(40), 1e5, 0, 5, 2.0) is None  # fewer than 8 samples
     assert fit_front(np.zeros(40), 1e5, 30, 45, 33.0) is None  # past the record's end
+
+
+@pytest.mark.parametrize("fs, fn, zeta, cutoff", [(50e3, 8e3, 0.1, math.inf), (168e3, 13.7e3, 0.2, 40e3),
+                                                   (100e3, 20e3, 0.02, math.inf)])
+def test_undone_impulse_response_has_unit_static_gain(fs, fn, zeta, cutoff):
+    """The plate's inverse (and the low-pass, unit sum) keeps a constant force: its impulse response sums to 1
+    (to 1e-6 over 200 lags each side), and its samples at lags beyond 150 have decayed below 1e-6 of its largest."""
+    from ballimpact.plate import undone_impulse_response
+
+    h = undone_impulse_response(fs, fn, zeta, 200, cutoff)
+    assert h.shape == (401,)
+    assert_allclose(np.sum(h), 1.0, atol=1e-6)
+    assert np.max(np.abs(np.r_[h[:50], h[-50:]])) < 1e-6 * np.max(np.abs(h))

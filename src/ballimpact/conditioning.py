@@ -80,7 +80,8 @@ from scipy.optimize import minimize_scalar
 from .contact import ContactResult, detect_contact, robust_noise
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain, fit_front)
+                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain, fit_front,
+                    undone_impulse_response)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -1604,9 +1605,7 @@ def _undone_rows(fs, plate: PlateResonance, n):
     """The plate's inverse as rows: row i is what the undone force's sample i of n takes from each sensed sample,
     from PEAK_FIT_IMPULSE_HALF before the first to as long after the last [-] (n x (n + 2 PEAK_FIT_IMPULSE_HALF))."""
     half = PEAK_FIT_IMPULSE_HALF
-    impulse = np.zeros(2 * half + 1)
-    impulse[half] = 1.0
-    h = undo_plate_resonance(impulse, fs, plate.frequency_hz, plate.damping_ratio)  # response at lag d: h[half + d]
+    h = undone_impulse_response(fs, plate.frequency_hz, plate.damping_ratio, half)  # response at lag d: h[half + d]
     lag = 2 * half + np.arange(n)[:, None] - np.arange(n + 2 * half)[None, :]
     return np.where((lag >= 0) & (lag <= 2 * half), h[np.clip(lag, 0, 2 * half)], 0.0)
 

@@ -50,7 +50,8 @@ from ._checks import finite_samples, positive_scalar
 
 __all__ = ["PlateResonance", "identify_plate_resonance", "undo_plate_resonance", "lowpass_zero_phase",
            "undone_noise_gain", "lowpass_kernel",
-           "lowpass_spread_samples", "refine_plate_resonance", "undone_end", "FrontFit", "front_responses", "fit_front"]
+           "lowpass_spread_samples", "refine_plate_resonance", "undone_end", "FrontFit", "front_responses", "fit_front",
+           "undone_impulse_response"]
 
 IV_LAG = 5  # samples between a second difference and its instrument (its noise is correlated over 2) [samples]
 MIN_RING_SAMPLES = 16  # fewest samples to identify the resonance from [samples]
@@ -674,12 +675,35 @@ def undone_noise_gain(sample_rate_hz: float, frequency_hz: float, damping_ratio:
     """
     fs = float(sample_rate_hz)
     half = 64 + (0 if math.isinf(cutoff_hz) else int(math.ceil(0.5 * fs / cutoff_hz)))
-    impulse = np.zeros(2 * half + 1)
-    impulse[half] = 1.0
-    h = undo_plate_resonance(impulse, fs, frequency_hz, damping_ratio)
-    if not math.isinf(cutoff_hz):
-        h = lowpass_zero_phase(h, fs, cutoff_hz)
+    h = undone_impulse_response(fs, frequency_hz, damping_ratio, half, cutoff_hz)
     return float(np.sqrt(np.sum(h * h)))
+
+
+def undone_impulse_response(sample_rate_hz: float, frequency_hz: float, damping_ratio: float, half_samples: int,
+                            cutoff_hz: float = math.inf) -> np.ndarray:
+    """Impulse response of the plate's inverse (:func:`undo_plate_resonance`), then a :func:`lowpass_zero_phase`
+    at ``cutoff_hz``: what the undone force's sample takes from a sensed sample at each lag [-].
+
+    Parameters
+    ----------
+    sample_rate_hz, frequency_hz : float
+        Sample rate and the plate's resonance [Hz].
+    damping_ratio : float
+        The plate's damping ratio [-].
+    half_samples : int
+        Lags kept each side of zero [samples] (the inverse is two-sided).
+    cutoff_hz : float
+        Half-amplitude frequency of the low-pass [Hz]; ``inf`` for none.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2 half_samples + 1`` values [-], lag ``d`` at index ``half_samples + d``.
+    """
+    impulse = np.zeros(2 * int(half_samples) + 1)
+    impulse[int(half_samples)] = 1.0
+    h = undo_plate_resonance(impulse, sample_rate_hz, frequency_hz, damping_ratio)
+    return h if math.isinf(cutoff_hz) else lowpass_zero_phase(h, sample_rate_hz, cutoff_hz)
 
 
 FRONT_RISE_MAX = 4.0  # the force's jump rises over at most this many samples (the model's 10 us step) [samples]
