@@ -152,6 +152,11 @@ ZOO_REGRESSION = [
     # ok but wrong on main at commit a56273e, on seed 3 (held out until then): a force with two humps
     ("plate-848Hz-two-humps", 3, 1077, "848 Hz plate, damping 0.22, at 50 kHz: the spike's ringing makes a "
      "second hump, TC -12 %, peak +27 %", False),
+    # ok but wrong on main at 6efe980 (seed 3): the spike's ramp, cut by its drop between two samples, rose
+    # 6.5 % of the peak per sample; the largest sample stood 5.1 % below the top (a marginal trace: its samples
+    # cannot pin the top to 5 %, and the middle of the range they allow is within 2.4 %)
+    ("spike-top-between-samples-50kHz", 3, 823, "punctured ball at 50 kHz, its spike's top 0.9 sample after the "
+     "largest sample: peak -5.1 %", True),
 ]
 
 

@@ -16,9 +16,23 @@ __all__ = [
     "calibration_factor",
     "contact_summary",
     "force_from_voltage",
+    "force_top",
     "integrate_motion",
     "voltage_impulse",
 ]
+
+
+#: A sampled maximum is a ramp cut by a drop between it and the next sample (the ball's
+#: pre-buckling spike, section 3.2.4 in Goodwill & Haake 2004) when the next sample falls
+#: below the ramp's quadratic continuation through the three samples up to the maximum by
+#: more than this many standard errors of that third difference [-].
+RAMP_DROP_SIGMA = 4.0
+#: ... and the ramp's last rise is within these fractions of the rise before it (a straight or
+#: gently bending ramp: a swing of plate ringing or a jump smoothed by a plate is neither) [-].
+RAMP_RISE_RATIO = (0.5, 1.25)
+#: ... from a sample above this fraction of the largest sample (the force's jump from zero,
+#: at the contact start, is no ramp) [-].
+RAMP_FLOOR_FRACTION = 0.1
 
 
 def _time_and_values(time_s, values, name: str):
@@ -170,9 +184,10 @@ class ContactSummary:
     Attributes
     ----------
     peak_force_N : float
-        Largest force sample [N].
+        Top of the force [N]: the largest sample, or the middle of the range a
+        spike's top cut by a drop between two samples can take (:func:`force_top`).
     time_to_peak_s : float
-        Time of the largest force after the first sample [s].
+        Time of that top after the first sample [s].
     max_displacement_m : float
         Largest centre-of-mass displacement [m].
     impulse_N_s : float
@@ -189,7 +204,74 @@ class ContactSummary:
     final_velocity_m_s: float
 
 
-def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float) -> ContactSummary:
+def force_top(time_s, force_N, noise_N: float):
+    """The top of a sampled contact force: the largest sample, or where a ramp cut by a drop can peak.
+
+    The ball's pre-buckling spike is a ramp that ends in a sudden drop (section
+    3.2.4 in Goodwill & Haake 2004, Eq. (14) with kB = kCONST for the first
+    0.2 ms). Its top falls anywhere between the last sample of the ramp and the
+    next one, so the largest sample misses it by up to the ramp's rise over one
+    sample, and by half of it on average. A sampled maximum k is such a ramp when
+    the next sample falls below the quadratic continuation of the three samples
+    up to it, ``R = 3 F[k] - 3 F[k-1] + F[k-2]``, by more than RAMP_DROP_SIGMA
+    standard errors of that difference (``sqrt(20) noise_N``: a smooth top is
+    continued to within its third difference), its last two rises agree within
+    RAMP_RISE_RATIO, and they start above RAMP_FLOOR_FRACTION of the largest
+    sample. The top then lies between ``F[k]`` and the ramp continued to the next
+    sample, ``min(R, F[k] + rise)``, and its middle is taken, at the middle of
+    the interval: its error is at most half that range, against a whole range
+    for the sample itself. Elsewhere the top is the largest sample: a smooth top
+    sampled at tens of kHz is within 0.1 %, and a parabola through three samples
+    overshoots the spike's corner.
+
+    Whether the top is known to a tolerance is not judged here
+    (``conditioning``'s "peak force between samples" excludes a ramp whose
+    range exceeds it). Use it on a force the samples show as it is, not on one
+    whose plate resonance was undone: the inverse lifts the last ramp sample
+    before a drop.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times [s], strictly increasing.
+    force_N : array_like
+        Contact force [N].
+    noise_N : float
+        Standard deviation of the force's noise [N] (>= 0).
+
+    Returns
+    -------
+    peak_N : float
+        Top of the force [N].
+    time_s : float
+        Its time [s] (a sample's, or the middle between two).
+    half_range_N : float
+        Half the range the top can take [N]; 0 at the largest sample.
+    """
+    t, f = _time_and_values(time_s, force_N, "force_N")
+    noise = float(noise_N)
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ValueError(f"noise_N must be finite and >= 0, got {noise_N!r}")
+    i = int(np.argmax(f))
+    best = (float(f[i]), float(t[i]), 0.0)
+    floor = RAMP_FLOOR_FRACTION * float(f[i])
+    lo, hi = RAMP_RISE_RATIO
+    for k in range(2, f.size - 1):
+        if not (f[k] >= f[k - 1] and f[k] > f[k + 1] and f[k - 2] >= floor):
+            continue
+        rise, before = float(f[k] - f[k - 1]), float(f[k - 1] - f[k - 2])
+        ramp_next = 3.0 * f[k] - 3.0 * f[k - 1] + f[k - 2]
+        if not (before > 0 and lo * before <= rise <= hi * before
+                and ramp_next - f[k + 1] > RAMP_DROP_SIGMA * math.sqrt(20.0) * noise):
+            continue
+        half = 0.5 * max(0.0, min(float(ramp_next), float(f[k]) + rise) - float(f[k]))
+        if f[k] + half > best[0]:
+            best = (float(f[k]) + half, 0.5 * float(t[k] + t[k + 1]), half)
+    return best
+
+
+def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float, *,
+                    noise_N: float | None = None) -> ContactSummary:
     """Peak force, time to peak, largest displacement and impulse of a contact.
 
     Parameters
@@ -203,6 +285,10 @@ def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float) -> ContactS
         Ball mass [kg].
     vin_m_s : float
         Inbound speed VB [m/s].
+    noise_N : float, optional
+        Standard deviation of the force's noise [N]. Given, the peak is
+        :func:`force_top`'s (a spike's top cut by a drop between two samples
+        taken at the middle of its range); None, the largest sample.
 
     Returns
     -------
@@ -212,11 +298,11 @@ def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float) -> ContactS
     """
     t, f = _time_and_values(time_s, force_N, "force_N")
     velocity, displacement = integrate_motion(t, f, mass_kg, vin_m_s)
-    # The largest sample, not a parabola through the top three: the force has sharp
-    # corners (the pre-buckling spike of section 3.2.4) where a parabola overshoots,
-    # and at ~67 kHz a smooth peak is sampled to well within 0.1 %.
-    k = int(np.argmax(f))
-    peak, t_peak = float(f[k]), float(t[k])
+    if noise_N is None:
+        k = int(np.argmax(f))
+        peak, t_peak = float(f[k]), float(t[k])
+    else:
+        peak, t_peak, _ = force_top(t, f, noise_N)
     return ContactSummary(
         peak_force_N=peak,
         time_to_peak_s=t_peak - float(t[0]),

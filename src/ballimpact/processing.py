@@ -330,7 +330,10 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
                                 "N/V (plate.kcal_range_N_per_V)"))
     force = force_from_voltage(v_contact, kcal)
     velocity, displacement = integrate_motion(t_rel, force, row.mass_kg, res.vin_m_s)
-    summary = contact_summary(t_rel, force, row.mass_kg, res.vin_m_s)
+    # the spike's top between two samples is judged on a force as sensed, not on one whose plate
+    # resonance was undone (the inverse lifts the last ramp sample before a drop)
+    noise_N = cond.noise_rms_V * kcal if cond.plate is None and math.isfinite(cond.noise_rms_V) else None
+    summary = contact_summary(t_rel, force, row.mass_kg, res.vin_m_s, noise_N=noise_N)
     res.force_N, res.velocity_m_s, res.displacement_m = force, velocity, displacement
     res.impulse_N_s = row.mass_kg * (res.vin_m_s + res.vout_m_s)
     res.peak_force_N = summary.peak_force_N
