@@ -1259,3 +1259,23 @@ def test_foot_sigma_on_white_noise_stays_below_the_check():
     values = [_foot_sigma(rng.normal(0.0, 1e-3, int(rng.integers(25, 101))), 1e-3) for _ in range(500)]
     assert sum(v > FOOT_CHECK_SIGMA for v in values) <= 1
     assert 1.0 < float(np.median(values)) < 3.0
+
+
+@pytest.mark.parametrize("jump", [0.03, 0.1])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_an_end_that_jumps_is_no_convex_fade(jump, seed):
+    """A half-sine force (4 V, 4 ms, 50 kHz, 1 mV noise, DC-coupled) cut off where it has fallen to 3 or 10 % of
+    its peak: it jumps to zero. The end is located to half a sample from the jump; the force's curve, fitted
+    there too, meets zero up to a sample and a half after it (no curve models a jump), which is not the
+    convex fade the end check looks for: no problem, and TC within 0.5 % of the truth."""
+    fs, tc_half_sine = 50e3, 4.0e-3
+    start_s = (1000.3 + 0.113 * seed) / fs
+    t = np.arange(int(0.08 * fs)) / fs
+    phase = (t - start_s) / tc_half_sine
+    cut = 1.0 - math.asin(jump) / math.pi  # the phase where the half-sine has fallen to ``jump`` of its peak
+    force = np.where((phase > 0) & (phase < cut), 4.0 * np.sin(np.pi * np.clip(phase, 0.0, 1.0)), 0.0)
+    v = force + np.random.default_rng(seed).normal(0.0, 1e-3, t.size)
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    assert "end_jump" in c.contact.flags
+    assert not c.problems, c.problems
+    assert_allclose(c.contact.contact_time_s, cut * tc_half_sine, rtol=0.005)

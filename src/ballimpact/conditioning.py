@@ -1297,7 +1297,9 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
     ``curve``, also an end that the force's curve before it (``contact.curve_end_s``) puts more than
     CURVE_LATE_FRACTION of TC later: the force flattens into its end (a convex fade), its last part is below
     the noise, and the line through the samples above it meets zero early (zoo trace 2:1489: TC -1.1 %, its
-    refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC)."""
+    refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC); not after an end
+    flagged as a jump (located to half a sample, there is no line through a fade there: the curve meets zero up to
+    a sample after the last sample of a true jump, and after a concave fade's end taken for one)."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)
@@ -1342,6 +1344,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                            f"before it stands {foot:.3g} standard errors out of the noise (a foot of force before "
                            "the rise, or a baseline wrong there): the force may start earlier"))
     late = contact.curve_end_s - contact.end_s
+    if "end_jump" in contact.flags:  # a jump's end is the middle of its interval: no line through a fade to judge
+        late = math.nan
     if curve and late > CURVE_LATE_FRACTION * contact.contact_time_s:  # NaN: no curve, no problem
         out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                            f"contact end not determined to 1 %: the force's curve before it meets zero "

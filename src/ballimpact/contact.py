@@ -74,6 +74,7 @@ CURVE_MIN_SAMPLES = 4  # ... but over at least this many samples inside the cont
 CURVE_SEARCH = 3.0  # its zero is looked for within this many samples of the hinge's end ... [samples]
 CURVE_STEP = 0.05  # ... on a grid this fine, the least's neighbours refined by a parabola [samples]
 CURVE_MIN_SLOPE = 3.0  # ... pinned only where the force's slope there is this many noise deviations per sample [-]
+CURVE_RATE_HZ = 50.0e3  # faster: the search and the slope per CURVE_RATE_HZ sample (noise averaged over it) [Hz]
 CURVE_CHI2 = 4.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
@@ -600,7 +601,9 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
     by_curve = (math.nan, math.nan)
-    if curve and not {"end_jump", "ringing_after_contact", "contact_at_trace_end"} & set(flags):
+    # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
+    # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
+    if curve and not {"ringing_after_contact", "contact_at_trace_end"} & set(flags):
         by_curve = _curve_end(xs, sigma, u_start, u_end, peak_index, max(run_b, peak_index), fs)
 
     return ContactResult(
@@ -777,7 +780,9 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
     fitted, by least squares, with ``a s + b s^2`` (s = end - t, zero after
     the end, a >= 0) over the last CURVE_FITS[0][1] of TC and the quiet
     samples after it, the end profiled on a grid of CURVE_STEP samples within
-    CURVE_SEARCH samples of ``end_s``; its standard uncertainty is the
+    CURVE_SEARCH samples of ``end_s`` (above CURVE_RATE_HZ, within the time of
+    CURVE_SEARCH samples at CURVE_RATE_HZ: a faster rig's end is not known to
+    fewer of its samples); its standard uncertainty is the
     half-width of the ends whose residual sum of squares is within one noise
     variance of the least (chi-square with one degree of freedom). The same
     fit with a cubic over CURVE_FITS[1][1] of TC tells how much the end
@@ -804,7 +809,10 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
         allow the fit).
     se_s : float
         Its standard uncertainty [s]; inf when the end is not bounded within
-        CURVE_SEARCH samples, NaN with a NaN end.
+        the search, or when the force's slope at the end is below
+        CURVE_MIN_SLOPE noise deviations per sample (above CURVE_RATE_HZ: its
+        rise over a sample at CURVE_RATE_HZ, against the noise averaged over
+        that time) and the force may flatten into its end; NaN with a NaN end.
 
     Raises
     ------
@@ -834,26 +842,30 @@ def _curve_end(xs, sigma: float, u_start: float, u_end: float, peak_index: int, 
     fits start after the peak, and the end is not before floor_u (the last sample above the contact threshold)."""
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     tc = u_end - u_start
+    # above CURVE_RATE_HZ, in the time of one sample at it: the search's reach, and the slope over that time
+    # against the noise averaged over it (faster sampling pins the same curve no worse)
+    rate = max(fs / CURVE_RATE_HZ, 1.0)
     ends = []
     for degree, fraction in CURVE_FITS:
         lo = max(int(math.floor(u_end - max(fraction * tc, CURVE_MIN_SAMPLES))), peak_index, 0)
         hi = min(int(math.ceil(u_end)) + n_pre, xs.size - 1)
         ends.append(_profile_end(xs[lo:hi + 1], np.arange(lo, hi + 1, dtype=float), sigma, u_end, floor_u,
-                                 degree, xs.size - 1))
+                                 degree, xs.size - 1, CURVE_SEARCH * rate))
     (u2, se2, slope), (u3, _, _) = ends
     if not (math.isfinite(u2) and math.isfinite(u3)):
         return u2, math.inf if math.isfinite(u2) else math.nan
-    if not slope >= CURVE_MIN_SLOPE * sigma:
+    if not slope * rate ** 1.5 >= CURVE_MIN_SLOPE * sigma:
         return u2, math.inf  # a force that flattens into its end: where it meets zero is not in the samples
     return u2, math.hypot(se2, u2 - u3)
 
 
-def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, last: float):
+def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, last: float,
+                 search: float = CURVE_SEARCH):
     """Least-squares end of ``sum_k c_k s^k`` (k = 1..degree, s = max(end - u, 0), c_1 >= 0) on a grid near
     u_end [samples], its standard uncertainty (half the width of the ends within CURVE_CHI2 noise variances of
     the least residual, over its square root; inf when that reaches the grid's edge) [samples] and the slope
     c_1 there [force per sample]; NaNs when the samples cannot tell."""
-    grid = u_end + np.arange(-CURVE_SEARCH, CURVE_SEARCH + 0.5 * CURVE_STEP, CURVE_STEP)
+    grid = u_end + np.arange(-search, search + 0.5 * CURVE_STEP, CURVE_STEP)
     grid = grid[(grid >= floor_u) & (grid <= last)]
     if grid.size < 3 or y.size < degree + 2:
         return math.nan, math.nan, math.nan
