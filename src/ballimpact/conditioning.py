@@ -191,7 +191,7 @@ PEAK_FIT_RAMP_SAMPLES = 2  # ... up to it on the pre-buckling ramp: BUCKLING_TIM
 PEAK_FIT_MIN = 6  # ... of at least this many samples [samples]
 PEAK_FIT_SIGMA = 3.0  # ... when its residual exceeds its expectation by at most this many of its deviations [-]
 PEAK_FIT_IMPULSE_HALF = 64  # the plate's inverse's impulse response kept this far each side for the fits [samples]
-PEAK_FIT_SHORTER = 3  # ... a sample no fit holds at is read from centred fits this many times halved [-]
+PEAK_FIT_WEIGHTED = 2  # ... and from weighted centred fits, this long and halved (this many lengths) [-]
 PEAK_FIT_NOISE = 1.0  # the sensed noise raised by the centred fits' median residual over its expectation, from this [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
@@ -952,17 +952,17 @@ def _fitted_top(exact, fs, noise, plate: PlateResonance, contact: ContactResult,
              _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
     top = np.concatenate([p[0] for p in parts])
     err = np.concatenate([p[1] for p in parts])
-    # a sample whose fits do not hold (a ramp's one-sided ones, or a centred one by chance: PEAK_FIT_SIGMA is
-    # exceeded now and then over hundreds of windows), or hold with a larger error (the ramp's unweighted ones), is
-    # read from the centred fit around it, half as long, and half as long again, that holds with the least error
-    # (no fit across the drop at buckling holds: its weighted residual sees the step)
+    # the same samples read from centred fits weighted by the undone noise's covariance (PEAK_FIT_S long, then
+    # half as long), where one holds with a smaller error than the reading above or where none held: the noise
+    # the inverse amplified towards the Nyquist frequency no longer hides the peak (no fit across the drop at
+    # buckling holds: its weighted residual sees the step)
     length = int(round(PEAK_FIT_S * fs)) | 1
-    for _ in range(PEAK_FIT_SHORTER):
+    for _ in range(PEAK_FIT_WEIGHTED):
         if length < PEAK_FIT_MIN:
             break
-        shorter = _fitted_force(exact, fs, i0, i1, length, noise, plate, centred=True)
-        take = np.isfinite(shorter[1]) & ~(err <= shorter[1])  # where no fit held, or held with a larger error
-        top[take], err[take] = shorter[0][take], shorter[1][take]
+        weighted = _fitted_force(exact, fs, i0, i1, length, noise, plate, centred=True, weighted=True)
+        take = np.isfinite(weighted[1]) & ~(err <= weighted[1])
+        top[take], err[take] = weighted[0][take], weighted[1][take]
         length = (length // 2) | 1
     alone = np.isnan(err)
     error = np.where(alone, sigma, err)
@@ -1635,22 +1635,21 @@ def _undone_rows(fs, plate: PlateResonance, n):
     return np.where((lag >= 0) & (lag <= 2 * half), h[np.clip(lag, 0, 2 * half)], 0.0)
 
 
-def _fit_stats(rows, n, centred=False):
+def _fit_stats(rows, n, centred=False, weighted=False):
     """A quadratic fit of n samples of an undone force read at the last (the middle one when centred): its design,
     the matrix that takes the n samples to its coefficients, the matrix that whitens its residual, per unit
     sensed noise that residual's expected sum of squares and that sum's deviation, and the standard error of its
     reading at each of the n samples [-].
 
     The undone noise is the sensed white noise through the plate's inverse ``rows``: amplified towards the
-    Nyquist frequency and correlated from sample to sample. The centred fit weighs the samples by the inverse
-    of that noise's covariance (generalised least squares, as if fitted to the sensed samples: the noise the
-    inverse amplified counts for what it is), its whitened residual a chi-square of n - 3 degrees of freedom.
-    The one-sided fit (the pre-buckling ramp up to its drop) is an ordinary least-squares fit: the inverse's
-    transient of a drop between samples reaches back into its last samples at the high frequencies that the
-    weighting would otherwise read as a misfit."""
+    Nyquist frequency and correlated from sample to sample. Unweighted (ordinary least squares), the whitening
+    matrix is the identity and the residual's sum of squares has the mean and deviation of that noise's
+    quadratic form. Weighted, the samples count by the inverse of that noise's covariance (generalised least
+    squares, as if fitted to the sensed samples: the noise the inverse amplified counts for what it is), and
+    the whitened residual's sum of squares is a chi-square of n - 3 degrees of freedom."""
     design = np.vander(np.arange(n, dtype=float) - (0.5 * (n - 1) if centred else n - 1), 3, increasing=True)
     u = rows[:n, :n + 2 * PEAK_FIT_IMPULSE_HALF]
-    if not centred:
+    if not weighted:
         pinv = np.linalg.pinv(design)
         ru = u - design @ (pinv @ u)  # the residual's share of each sensed sample's noise
         cov = ru @ ru.T  # the residual's covariance [noise^2]: its sum of squares has mean trace, variance 2 |cov|^2
@@ -1680,7 +1679,7 @@ def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
     return max(math.sqrt(float(np.median(rss)) / expected) / noise, PEAK_FIT_NOISE)
 
 
-def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False):
+def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False, weighted=False):
     """A force undone from a plate read at each sample from a fit of the samples around it rather than from
     the sample alone: (reading [V], its standard error [V] or NaN where no fit holds), one per sample of
     ``exact[a:b]``.
@@ -1700,7 +1699,10 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
     to sample). A fit whose residual exceeds that expectation by
     PEAK_FIT_SIGMA of its deviation (a Gaussian quadratic form) spans a drop
     or a feature sharper than a parabola and does not hold: that sample
-    keeps its own value, with a NaN error.
+    keeps its own value, with a NaN error. ``weighted`` (centred fits only)
+    weighs the samples by the inverse covariance of that noise (see
+    :func:`_fit_stats`): a reading as if fitted to the sensed samples, whose
+    error is about the sensed noise's rather than the amplified one's.
     """
     a, b = max(int(a), 0), min(int(b), exact.size)
     out = exact[a:b].astype(float)
@@ -1721,7 +1723,7 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
         if holds(seg[:n] - design @ coef, whiten, expected, spread):
             at = slice(0, n) if n == PEAK_FIT_MIN else slice(n - 1, n)
             out[at], error[at] = (design @ coef)[at], noise * se[at]
-    design, pinv, whiten, expected, spread, se = _fit_stats(rows, length, centred)  # fits of `length` samples
+    design, pinv, whiten, expected, spread, se = _fit_stats(rows, length, centred, weighted)  # `length` samples
     windows = np.lib.stride_tricks.sliding_window_view(seg, length)
     coef = windows @ pinv.T
     ok = holds(windows - coef @ design.T, whiten, expected, spread)
