@@ -191,7 +191,6 @@ PEAK_FIT_RAMP_SAMPLES = 2  # ... up to it on the pre-buckling ramp: BUCKLING_TIM
 PEAK_FIT_MIN = 6  # ... of at least this many samples [samples]
 PEAK_FIT_SIGMA = 3.0  # ... when its residual exceeds its expectation by at most this many of its deviations [-]
 PEAK_FIT_IMPULSE_HALF = 64  # the plate's inverse's impulse response kept this far each side for the fits [samples]
-PEAK_FIT_WEIGHTED = 2  # ... and from weighted centred fits, this long and halved (this many lengths) [-]
 PEAK_FIT_NOISE = 1.0  # the sensed noise raised by the centred fits' median residual over its expectation, from this [-]
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
@@ -952,18 +951,21 @@ def _fitted_top(exact, fs, noise, plate: PlateResonance, contact: ContactResult,
              _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
     top = np.concatenate([p[0] for p in parts])
     err = np.concatenate([p[1] for p in parts])
-    # the same samples read from centred fits weighted by the undone noise's covariance (PEAK_FIT_S long, then
-    # half as long), where one holds with a smaller error than the reading above or where none held: the noise
-    # the inverse amplified towards the Nyquist frequency no longer hides the peak (no fit across the drop at
-    # buckling holds: its weighted residual sees the step)
+    # after buckling, where the ball's force is smooth, the samples are read from centred fits weighted by the
+    # undone noise's covariance too, where one holds with a smaller error than the reading above or where none
+    # held: the noise the inverse amplified towards the Nyquist frequency no longer hides the peak. Only from
+    # where no such fit's window can reach the drop at buckling: pb, less nothing, plus the largest kernel
+    # half-width of a cutoff at the resonance (the low-passed contact may start that early) and the window (a
+    # weighted fit across a drop of 5-10 % of the peak holds at 1 % noise, and reads it smoothed)
     length = int(round(PEAK_FIT_S * fs)) | 1
-    for _ in range(PEAK_FIT_WEIGHTED):
-        if length < PEAK_FIT_MIN:
-            break
-        weighted = _fitted_force(exact, fs, i0, i1, length, noise, plate, centred=True, weighted=True)
-        take = np.isfinite(weighted[1]) & ~(err <= weighted[1])
-        top[take], err[take] = weighted[0][take], weighted[1][take]
-        length = (length // 2) | 1
+    after = pb + int(math.ceil(0.5 * fs / plate.frequency_hz)) + length
+    if after + length // 2 < i1:
+        weighted = _fitted_force(exact, fs, after - length // 2, i1, length, noise, plate, centred=True,
+                                 weighted=True)
+        at = slice(after - i0, i1 - i0)
+        w_top, w_err = weighted[0][length // 2:], weighted[1][length // 2:]
+        take = np.isfinite(w_err) & ~(err[at] <= w_err)
+        top[at][take], err[at][take] = w_top[take], w_err[take]
     alone = np.isnan(err)
     error = np.where(alone, sigma, err)
     return top, error, alone
