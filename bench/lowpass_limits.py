@@ -97,7 +97,8 @@ def limits(trace):
                 out.append(next((name for key, name in KINDS if key in c), "other"))
         else:
             tc = (c[0].end_s - c[0].start_s) / trace.truth.tc_s - 1.0
-            out.append(f"pass (TC {100 * tc:+.2f} %, peak {100 * (c[0].peak_V / (trace.truth.peak_N * unit) - 1):+.2f} %)")
+            peak = c[0].peak_V / (trace.truth.peak_N * unit) - 1.0
+            out.append(f"pass (TC {100 * tc:+.2f} %, peak {100 * peak:+.2f} %)")
     return out
 
 
