@@ -887,7 +887,9 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
 def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
     """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
     (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
-    low-passed one failed, in words (str)."""
+    low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down
+    until one hides the peak (:func:`_lowpass_hides_peak`): a lower one would only lower the low-passed peak
+    further."""
     exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
@@ -913,9 +915,10 @@ def _lowpass_hides_peak(exact, fs, noise, plate: PlateResonance, contact: Contac
     sharper than its kernel, whose top the checks of the exact force found
     between samples): inside the contact (a sample off each end, where the
     undoing leaves a transient at a jump) the exact force read at each sample
-    from a fit of the samples around it (:func:`_fitted_force`: the
+    from a fit of the samples around it (:func:`_fitted_top`: the
     pre-buckling ramp from its start up to it, then PEAK_FIT_S centred on
-    it; the sample alone, with the undone noise, where no fit holds) at most
+    it, after buckling also weighted by the undone noise's covariance; the
+    sample alone, with the undone noise, where no fit holds) at most
     PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its standard error above the
     low-passed peak; and that error low enough to show a loss of
     PLATE_LOWPASS_SPIKE wherever the force may reach the peak.
