@@ -1279,3 +1279,133 @@ def test_an_end_that_jumps_is_no_convex_fade(jump, seed):
     assert "end_jump" in c.contact.flags
     assert not c.problems, c.problems
     assert_allclose(c.contact.contact_time_s, cut * tc_half_sine, rtol=0.005)
+
+
+# ------------------------------------------------- weighted fits of the exact undone force (issue 9, low-pass guard)
+
+
+def test_weighted_fit_reads_a_smooth_top_with_half_the_error():
+    """Centred fits weighted by the undone noise's covariance read the smooth top after buckling (0.9 at 30 samples
+    after the drop, SPIKE_PLATE, 0.2 % noise) without bias (within 3 standard errors of the mean over 40 draws), with
+    their reported error (0.75-1.35 times the scatter), and at most 0.6 times the unweighted fits' error and 0.4
+    times the sensed noise (the undone sample's own noise is about 10 times the sensed noise)."""
+    from ballimpact.conditioning import PEAK_FIT_S, _fitted_force
+    from ballimpact.plate import PlateResonance
+
+    fs, fn, zeta = SPIKE_PLATE
+    noise = 2e-3
+    errors = {}
+    for weighted in (False, True):
+        def smooth_top(exact, start, weighted=weighted):
+            a = int(math.floor(start + SPIKE_DROP_AT)) + 4
+            top = int(round(start + SPIKE_DROP_AT + 30.0))
+            out, err = _fitted_force(exact, fs, a, a + 50, int(round(PEAK_FIT_S * fs)), noise,
+                                     PlateResonance(fn, zeta, 0.0, 0.0), centred=True, weighted=weighted)
+            return out[top - a], err[top - a], top
+
+        miss, errors[weighted] = _fitted_reads(smooth_top, noise)
+        assert abs(float(np.mean(miss))) <= 3.0 * errors[weighted] / math.sqrt(len(miss))
+    assert errors[True] <= 0.6 * errors[False]
+    assert errors[True] <= 0.4 * noise
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_weighted_fit_does_not_hold_across_the_drop(seed):
+    """No weighted centred fit whose window spans the pre-buckling drop (SPIKE_PLATE, 0.2 % noise) holds: its
+    weighted residual sees the step, so the spike's top is never read smoothed across it; the fits well after
+    the drop hold."""
+    from ballimpact.conditioning import PEAK_FIT_S, _fitted_force
+    from ballimpact.plate import PlateResonance, undo_plate_resonance
+
+    fs, fn, zeta = SPIKE_PLATE
+    sensed, _, start = _spike_through_plate(fs, fn, zeta, SPIKE_DROP_AT, 2e-3, seed=seed)
+    exact = undo_plate_resonance(sensed, fs, fn, zeta)
+    length = int(round(PEAK_FIT_S * fs)) | 1
+    a = int(math.ceil(start)) + 1
+    _, error = _fitted_force(exact, fs, a, a + 70, length, 2e-3, PlateResonance(fn, zeta, 0.0, 0.0), centred=True,
+                             weighted=True)
+    drop = start + SPIKE_DROP_AT - a  # [samples] from a
+    spans = np.abs(np.arange(error.size) - drop) < 0.5 * length - 1.0  # the window around the sample holds the drop
+    assert not np.any(np.isfinite(error[spans]))
+    assert np.all(np.isfinite(error[int(drop) + length + 2:error.size - length]))
+
+
+def _guarded_lowpass(force_knots, fs, fn, zeta, noise, seed):
+    """A piecewise-linear force (knot times [s] and forces [V]) through the continuous plate (analytic ramp
+    responses, test_plate.sensed_force) with seeded white noise [V], undone exactly and low-passed at twice fn:
+    the low-pass guard's verdict (None: kept) and the low-passed peak over the force's [-]."""
+    from test_plate import sensed_force
+
+    from ballimpact.conditioning import _lowpass_hides_peak
+    from ballimpact.contact import detect_contact
+    from ballimpact.plate import PlateResonance, lowpass_zero_phase, undo_plate_resonance
+
+    kt, kf = force_knots
+    t = np.arange(int(0.030 * fs)) / fs
+    sensed = sensed_force(kt, kf, t, fn, zeta) + np.random.default_rng(seed).normal(0.0, noise, t.size)
+    exact = undo_plate_resonance(sensed, fs, fn, zeta)
+    contact = detect_contact(lowpass_zero_phase(exact, fs, 2.0 * fn), fs)
+    return (_lowpass_hides_peak(exact, fs, noise, PlateResonance(fn, zeta, 0.0, 0.0), contact, 0.0),
+            float(contact.peak_V) / float(np.max(kf)))
+
+
+GUARD_T0 = 0.010 + 0.37 / 100e3  # the force's start in the low-pass guard's tests [s]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
+def test_lowpass_guard_shows_a_smooth_top_kept(seed):
+    """A smooth ball-like force (a jump to 0.15, a 4 ms hump of 1) through a 5 kHz plate (damping 0.03) at
+    100 kHz with 0.4 % noise: its exact undone force's noise (the sensed noise times ``undone_noise_gain``) is
+    tens of times the sensed noise, and the unweighted fits' errors are too large to show a loss of 4 %; the
+    weighted fits after buckling show the low-pass at 10 kHz keeps the peak (it does, to 1 %: the force's truth)."""
+    u = np.linspace(0.0, 1.0, 81)[1:]
+    kt = np.concatenate([[GUARD_T0, GUARD_T0 + 1e-9], GUARD_T0 + u * 4.0e-3])
+    kf = np.concatenate([[0.0, 0.15], np.sin(np.pi * u) ** 1.2 + 0.15 * (1.0 - u) ** 2])
+    kf[-1] = 0.0
+    why, kept = _guarded_lowpass((kt, kf), 100e3, 5e3, 0.03, 4e-3, seed)
+    assert why is None
+    assert_allclose(kept, 1.0, atol=0.01)
+
+
+@pytest.mark.parametrize("noise", [2e-3, 5e-3, 1e-2])
+@pytest.mark.parametrize("drop", [0.9, 0.95])
+def test_lowpass_guard_refuses_to_flatten_the_buckling_drop(noise, drop):
+    """The model's pre-buckling spike (a jump to 0.4, a ramp to 1 at 0.2 ms, a drop to ``drop`` - 0.05, a smooth
+    rest) through the 5 kHz plate at 150 kHz with 0.2-1 % noise: the low-pass at 10 kHz takes 5-9 % of its top,
+    and the guard refuses it for every noise draw (the weighted fits, which may hold across such a drop at 1 %
+    noise and read it smoothed, are not used there)."""
+    fs = 150e3
+    t0 = 0.010 + 0.37 / fs
+    td = t0 + 0.2e-3 + 0.4 / fs
+    u = np.linspace(0.0, 1.0, 81)[1:]
+    kt = np.concatenate([[t0, t0 + 1e-9, td, td + 1e-9], td + u * 3.8e-3])
+    kf = np.concatenate([[0.0, 0.4, 1.0, drop - 0.05], drop - 0.05 + 0.04 * np.sin(np.pi * u) - (drop - 0.05) * u ** 3])
+    kf[-1] = 0.0
+    for seed in range(4):
+        why, kept = _guarded_lowpass((kt, kf), fs, 5e3, 0.03, noise, seed)
+        assert kept < 0.95
+        assert why is not None and re.search(r"lowers the exact undone force|too noisy to show", why), why
+
+
+@pytest.mark.parametrize("fs, fn, noise", [(150e3, 5e3, 1e-3), (100e3, 4e3, 2e-3), (60e3, 3.5e3, 5e-4)])
+def test_plate_cutoffs_start_where_the_undone_noise_is_quiet_and_go_down_to_the_resonance(fs, fn, noise):
+    """The low-passes tried on a refused undone force (peak 1): from the first cutoff that brings white noise
+    through the plate's inverse and the low-pass to PLATE_LOWPASS_NOISE of the peak (measured on 20 000 seeded
+    samples pushed through both), down in steps of sqrt(2), never below the resonance, at most PLATE_LOWPASS_TRIES
+    of them (now six: which one passes every check depends on the force)."""
+    from ballimpact.conditioning import PLATE_LOWPASS_NOISE, PLATE_LOWPASS_TRIES, _plate_cutoffs
+    from ballimpact.plate import PlateResonance, lowpass_zero_phase, undo_plate_resonance
+
+    zeta = 0.03
+    cutoffs = _plate_cutoffs(fs, PlateResonance(fn, zeta, 0.0, 0.0), noise, 1.0)
+    assert 1 <= len(cutoffs) <= PLATE_LOWPASS_TRIES == 6
+    assert min(cutoffs) >= fn
+    assert_allclose(np.array(cutoffs[:-1]) / np.array(cutoffs[1:]), math.sqrt(2.0), rtol=1e-12)
+    white = undo_plate_resonance(np.random.default_rng(0).normal(0.0, noise, 20000), fs, fn, zeta)
+
+    def rms(cutoff):
+        return float(np.std(lowpass_zero_phase(white, fs, cutoff)[100:-100]))
+
+    assert rms(cutoffs[0]) <= 1.05 * PLATE_LOWPASS_NOISE
+    if cutoffs[0] * math.sqrt(2.0) < 0.5 * fs:
+        assert rms(cutoffs[0] * math.sqrt(2.0)) > 0.95 * PLATE_LOWPASS_NOISE

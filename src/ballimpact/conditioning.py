@@ -178,7 +178,7 @@ PLATE_LOWPASS_NOISE = 5.0e-3  # a refused undone force is low-passed until its n
 PLATE_LOWPASS_PEAK = 0.01  # ... and lower the peak by at most this fraction (from its curvature there) [-]
 PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the resonance [-]
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
-PLATE_LOWPASS_TRIES = 3  # ... at most this many of them, from the first quiet enough [-]
+PLATE_LOWPASS_TRIES = 6  # ... at most this many of them, from the first quiet enough (until one hides the peak) [-]
 PLATE_LOWPASS_END_INSIDE = (6, 12)  # a low-passed force's ends fitted with this many samples inside [samples]
 PLATE_EXACT_END_REACH = 6  # an exact undone force's ends fitted this many samples either side of those found [samples]
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
@@ -887,17 +887,23 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
 def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
     """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
     (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
-    low-passed one failed, in words (str)."""
+    low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down
+    until one hides the peak (:func:`_lowpass_hides_peak`): a lower one would only lower the low-passed peak
+    further."""
     exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
         c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
+        hides = None
         if not isinstance(c, str) and not math.isinf(cutoff):
-            c = _lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s) or c
+            hides = _lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
+            c = hides or c
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
+        if hides:  # a lower cutoff only lowers the low-passed peak further below the exact force's
+            break
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
 
 
@@ -909,9 +915,10 @@ def _lowpass_hides_peak(exact, fs, noise, plate: PlateResonance, contact: Contac
     sharper than its kernel, whose top the checks of the exact force found
     between samples): inside the contact (a sample off each end, where the
     undoing leaves a transient at a jump) the exact force read at each sample
-    from a fit of the samples around it (:func:`_fitted_force`: the
+    from a fit of the samples around it (:func:`_fitted_top`: the
     pre-buckling ramp from its start up to it, then PEAK_FIT_S centred on
-    it; the sample alone, with the undone noise, where no fit holds) at most
+    it, after buckling also weighted by the undone noise's covariance; the
+    sample alone, with the undone noise, where no fit holds) at most
     PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its standard error above the
     low-passed peak; and that error low enough to show a loss of
     PLATE_LOWPASS_SPIKE wherever the force may reach the peak.
@@ -920,15 +927,7 @@ def _lowpass_hides_peak(exact, fs, noise, plate: PlateResonance, contact: Contac
     peak = float(contact.peak_V)
     if i1 <= i0 + 1:
         return "the low-passed contact holds too few samples of the exact undone force"
-    pb = min(max(int(math.floor((contact.start_s - t0_s + BUCKLING_TIME_S) * fs)) + PEAK_FIT_RAMP_SAMPLES + 1,
-                 i0), i1)
-    noise = noise * _fit_noise_scale(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate)
-    sigma = noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio)
-    parts = [_fitted_force(exact, fs, i0, pb, pb - i0, noise, plate),
-             _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
-    top = np.concatenate([p[0] for p in parts])
-    alone = np.isnan(np.concatenate([p[1] for p in parts]))
-    error = np.where(alone, sigma, np.concatenate([p[1] for p in parts]))
+    top, error, alone = _fitted_top(exact, fs, noise, plate, contact, t0_s, i0, i1)
     blind = PLATE_LOWPASS_PEAK * peak + PLATE_PEAK_SIGMA * error
     lost = top - peak > blind
     unseen = (blind > PLATE_LOWPASS_SPIKE * peak) & (top + PLATE_PEAK_SIGMA * error > (1.0 + PLATE_LOWPASS_PEAK) * peak)
@@ -942,6 +941,37 @@ def _lowpass_hides_peak(exact, fs, noise, plate: PlateResonance, contact: Contac
                 f"{100 * float(np.max(blind[unseen])) / peak:.2g} % would not be seen; a spike sharper than the "
                 "kernel may be lost)")
     return None
+
+
+def _fitted_top(exact, fs, noise, plate: PlateResonance, contact: ContactResult, t0_s, i0, i1):
+    """The exact undone force read from fits at each sample of ``exact[i0:i1]`` for :func:`_lowpass_hides_peak`:
+    (reading [V], its standard error [V], True where no fit holds and the error is the undone noise's)."""
+    pb = min(max(int(math.floor((contact.start_s - t0_s + BUCKLING_TIME_S) * fs)) + PEAK_FIT_RAMP_SAMPLES + 1,
+                 i0), i1)
+    noise = noise * _fit_noise_scale(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate)
+    sigma = noise * undone_noise_gain(fs, plate.frequency_hz, plate.damping_ratio)
+    parts = [_fitted_force(exact, fs, i0, pb, pb - i0, noise, plate),
+             _fitted_force(exact, fs, pb, i1, int(round(PEAK_FIT_S * fs)), noise, plate, centred=True)]
+    top = np.concatenate([p[0] for p in parts])
+    err = np.concatenate([p[1] for p in parts])
+    # after buckling, where the ball's force is smooth, the samples are read from centred fits weighted by the
+    # undone noise's covariance too, where one holds with a smaller error than the reading above or where none
+    # held: the noise the inverse amplified towards the Nyquist frequency no longer hides the peak. Only from
+    # where no such fit's window can reach the drop at buckling: pb, less nothing, plus the largest kernel
+    # half-width of a cutoff at the resonance (the low-passed contact may start that early) and the window (a
+    # weighted fit across a drop of 5-10 % of the peak holds at 1 % noise, and reads it smoothed)
+    length = int(round(PEAK_FIT_S * fs)) | 1
+    after = pb + int(math.ceil(0.5 * fs / plate.frequency_hz)) + length
+    if after + length // 2 < i1:
+        weighted = _fitted_force(exact, fs, after - length // 2, i1, length, noise, plate, centred=True,
+                                 weighted=True)
+        at = slice(after - i0, i1 - i0)
+        w_top, w_err = weighted[0][length // 2:], weighted[1][length // 2:]
+        take = np.isfinite(w_err) & ~(err[at] <= w_err)
+        top[at][take], err[at][take] = w_top[take], w_err[take]
+    alone = np.isnan(err)
+    error = np.where(alone, sigma, err)
+    return top, error, alone
 
 
 def _plate_cutoffs(fs, plate: PlateResonance, noise, peak) -> list:
@@ -1614,17 +1644,33 @@ def _undone_rows(fs, plate: PlateResonance, n):
     return np.where((lag >= 0) & (lag <= 2 * half), h[np.clip(lag, 0, 2 * half)], 0.0)
 
 
-def _fit_stats(rows, n, centred=False):
-    """A quadratic least-squares fit of n samples read at the last (the middle one when centred): its design,
-    pseudo-inverse, per unit sensed noise the residual's expected sum of squares and that sum's deviation, and
-    the standard error of its reading at each of the n samples [-]."""
+def _fit_stats(rows, n, centred=False, weighted=False):
+    """A quadratic fit of n samples of an undone force read at the last (the middle one when centred): its design,
+    the matrix that takes the n samples to its coefficients, the matrix that whitens its residual, per unit
+    sensed noise that residual's expected sum of squares and that sum's deviation, and the standard error of its
+    reading at each of the n samples [-].
+
+    The undone noise is the sensed white noise through the plate's inverse ``rows``: amplified towards the
+    Nyquist frequency and correlated from sample to sample. Unweighted (ordinary least squares), the whitening
+    matrix is the identity and the residual's sum of squares has the mean and deviation of that noise's
+    quadratic form. Weighted, the samples count by the inverse of that noise's covariance (generalised least
+    squares, as if fitted to the sensed samples: the noise the inverse amplified counts for what it is), and
+    the whitened residual's sum of squares is a chi-square of n - 3 degrees of freedom."""
     design = np.vander(np.arange(n, dtype=float) - (0.5 * (n - 1) if centred else n - 1), 3, increasing=True)
-    pinv = np.linalg.pinv(design)
     u = rows[:n, :n + 2 * PEAK_FIT_IMPULSE_HALF]
-    ru = u - design @ (pinv @ u)  # the residual's share of each sensed sample's noise
-    cov = ru @ ru.T  # the residual's covariance [noise^2]: its sum of squares has mean trace, variance 2 |cov|^2
-    return design, pinv, float(np.trace(cov)), math.sqrt(2.0 * float(np.sum(cov * cov))), \
-        np.sqrt(np.sum((design @ (pinv @ u)) ** 2, axis=1))
+    if not weighted:
+        pinv = np.linalg.pinv(design)
+        ru = u - design @ (pinv @ u)  # the residual's share of each sensed sample's noise
+        cov = ru @ ru.T  # the residual's covariance [noise^2]: its sum of squares has mean trace, variance 2 |cov|^2
+        return design, pinv, np.eye(n), float(np.trace(cov)), math.sqrt(2.0 * float(np.sum(cov * cov))), \
+            np.sqrt(np.sum((design @ (pinv @ u)) ** 2, axis=1))
+    cov = u @ u.T  # the undone noise's covariance over the n samples [sensed noise^2]
+    whiten = np.linalg.solve(np.linalg.cholesky(cov), np.eye(n))  # the whitened noise is white, of unit variance
+    dw = whiten @ design
+    inv = np.linalg.inv(dw.T @ dw)
+    dof = max(n - 3, 1)
+    return design, inv @ dw.T @ whiten, whiten, float(dof), math.sqrt(2.0 * dof), \
+        np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", design, inv, design), 0.0))
 
 
 def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
@@ -1636,13 +1682,13 @@ def _fit_noise_scale(exact, fs, a, b, length, noise, plate: PlateResonance):
     length = int(length) | 1
     if b - a < length or length < PEAK_FIT_MIN or not noise > 0:
         return PEAK_FIT_NOISE
-    design, pinv, expected, _, _ = _fit_stats(_undone_rows(fs, plate, length), length, centred=True)
+    design, pinv, whiten, expected, _, _ = _fit_stats(_undone_rows(fs, plate, length), length, centred=True)
     windows = np.lib.stride_tricks.sliding_window_view(exact[a:b], length)
-    rss = np.sum((windows - (windows @ pinv.T) @ design.T) ** 2, axis=1)
+    rss = np.sum(((windows - (windows @ pinv.T) @ design.T) @ whiten.T) ** 2, axis=1)
     return max(math.sqrt(float(np.median(rss)) / expected) / noise, PEAK_FIT_NOISE)
 
 
-def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False):
+def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred=False, weighted=False):
     """A force undone from a plate read at each sample from a fit of the samples around it rather than from
     the sample alone: (reading [V], its standard error [V] or NaN where no fit holds), one per sample of
     ``exact[a:b]``.
@@ -1662,7 +1708,10 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
     to sample). A fit whose residual exceeds that expectation by
     PEAK_FIT_SIGMA of its deviation (a Gaussian quadratic form) spans a drop
     or a feature sharper than a parabola and does not hold: that sample
-    keeps its own value, with a NaN error.
+    keeps its own value, with a NaN error. ``weighted`` (centred fits only)
+    weighs the samples by the inverse covariance of that noise (see
+    :func:`_fit_stats`): a reading as if fitted to the sensed samples, whose
+    error is about the sensed noise's rather than the amplified one's.
     """
     a, b = max(int(a), 0), min(int(b), exact.size)
     out = exact[a:b].astype(float)
@@ -1673,19 +1722,20 @@ def _fitted_force(exact, fs, a, b, length, noise, plate: PlateResonance, centred
     rows = _undone_rows(fs, plate, length)
     seg = exact[a:b]
 
-    def holds(resid, expected, spread):
-        return np.sum(resid * resid, axis=-1) <= (expected + PEAK_FIT_SIGMA * spread) * noise * noise
+    def holds(resid, whiten, expected, spread):
+        white = resid @ whiten.T
+        return np.sum(white * white, axis=-1) <= (expected + PEAK_FIT_SIGMA * spread) * noise * noise
 
     for n in range(PEAK_FIT_MIN, 0 if centred else length):  # one-sided: the first samples from a up to them
-        design, pinv, expected, spread, se = _fit_stats(rows, n)
+        design, pinv, whiten, expected, spread, se = _fit_stats(rows, n)
         coef = pinv @ seg[:n]
-        if holds(seg[:n] - design @ coef, expected, spread):
+        if holds(seg[:n] - design @ coef, whiten, expected, spread):
             at = slice(0, n) if n == PEAK_FIT_MIN else slice(n - 1, n)
             out[at], error[at] = (design @ coef)[at], noise * se[at]
-    design, pinv, expected, spread, se = _fit_stats(rows, length, centred)  # fits of `length` samples, at once
+    design, pinv, whiten, expected, spread, se = _fit_stats(rows, length, centred, weighted)  # `length` samples
     windows = np.lib.stride_tricks.sliding_window_view(seg, length)
     coef = windows @ pinv.T
-    ok = holds(windows - coef @ design.T, expected, spread)
+    ok = holds(windows - coef @ design.T, whiten, expected, spread)
     at = length // 2 if centred else length - 1
     k = np.arange(windows.shape[0]) + at
     out[k[ok]], error[k[ok]] = coef[ok, 0], noise * se[at]
