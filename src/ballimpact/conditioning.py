@@ -1898,7 +1898,7 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     plate = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, drop=True, rise_max=OVERSHOOT_RISE_MAX)
     if plate is None:
         return []
-    variance = max(noise * noise, plate.rss / max(plate.n_samples - 11, 1))
+    variance = max(noise * noise, plate.rss / max(plate.n_samples - 10, 1))
     gain = (ideal.rss - plate.rss) / variance if variance > 0 else math.inf
     lift = float(x[i] - plate.force(i))
     if gain > FRONT_SIGNIFICANCE and lift > FRONT_LIFT_FRACTION * peak \
