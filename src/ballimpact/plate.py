@@ -870,12 +870,15 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     FrontFit or None
         The fit; None when the window holds fewer than 8 samples, leaves the
         record, or no resonance fits between one period over the window and
-        FRONT_MAX_FREQUENCY of fs.
+        FRONT_MAX_FREQUENCY of fs. With ``drop``, its ``drop_*`` fields hold
+        the drop and the changes after it (``curvature`` is 0: no parabola
+        before the drop).
 
     Raises
     ------
     ValueError
-        For a non-positive sample rate, a non-finite start or non-finite samples.
+        For a non-positive sample rate, a non-finite start, a negative or
+        non-finite rise_max, or non-finite samples.
     """
     from scipy.optimize import least_squares
 
