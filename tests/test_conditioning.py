@@ -1281,19 +1281,25 @@ def _first_overshoot_problems(fs, plate_hz, zeta, phase, ball, vin, seed, noise_
     (25.5e3, 8.5e3, 0.11, "pressureless", 30.0, 0.1),  # the class reported: 3 samples a period, peak +17 to +22 %
     (25.5e3, 8.5e3, 0.11, "pressureless", 30.0, 0.7),
     (25.5e3, 8.5e3, 0.11, "pressureless", 30.0, 0.95),
-    (30.0e3, 12.9e3, 0.077, "pressureless", 34.0, 0.4),  # 2.3 samples a period
+    (30.0e3, 12.9e3, 0.077, "pressureless", 34.0, 0.4),  # 2.3 samples a period: maybe an alias, no evidence
+    (30.0e3, 12.9e3, 0.077, "pressureless", 34.0, 0.7),
     (65.0e3, 24.4e3, 0.037, "punctured", 13.0, 0.7),  # 2.7 samples a period, lightly damped
 ])
 def test_peak_on_the_plates_first_overshoot_sampled_a_few_times_a_period_is_a_problem(fs, plate_hz, zeta, ball, vin,
                                                                                        phase):
-    from ballimpact.conditioning import _peak_on_front_ringing
+    from ballimpact.conditioning import OVERSHOOT_MIN_PERIOD, _peak_on_front_ringing
 
     # the plate's first overshoot of the force's jump is the largest sample, 1-2 samples into the contact, and its
     # ringing is gone a period or two later; the front through a plate, with the drop at buckling, finds the plate
     problems, x, true_peak = _first_overshoot_problems(fs, plate_hz, zeta, phase, ball, vin, seed=int(10 * phase))
     assert x.max() > 1.1 * true_peak  # what is at stake
-    assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], problems
-    assert problems[0].message.startswith("peak force on plate ringing: the largest sample"), problems
+    if fs / plate_hz >= OVERSHOOT_MIN_PERIOD:  # evidence of the plate, undone where that passes every check
+        assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], problems
+        assert problems[0].message.startswith("peak force on plate ringing: the largest sample"), problems
+    else:  # near fs / 2 a resonance above it rings the same through its alias: named, no evidence
+        assert [p.kind for p in problems] == [ProblemKind.PEAK_BETWEEN_SAMPLES], problems
+        assert problems[0].message.startswith("peak force between samples: the largest sample"), problems
+        assert "seen through its alias" in problems[0].message
     assert_allclose(float(re.search(r"plate of about (\S+) kHz", problems[0].message).group(1)) * 1e3, plate_hz,
                     rtol=0.05)
     assert float(re.search(r"lifts the largest sample (\S+) % of the peak", problems[0].message).group(1)) > 3.0

@@ -163,6 +163,7 @@ FRONT_LIFT_FRACTION = 0.03  # ... whose ringing lifts the largest sample above t
 OVERSHOOT_MAX_SAMPLES = 4.5  # a largest sample at most this long after the start (half a period of 2-6 samples) ... [samples]
 OVERSHOOT_AFTER_SAMPLES = 10  # fewer samples up to it: fitted on this many after it, with a drop at buckling [samples]
 OVERSHOOT_MAX_DAMPING = 0.35  # ... through a plate damped at most this much (more: a smoother, no ringing) [-]
+OVERSHOOT_MIN_PERIOD = 2.5  # a plate fitted with fewer samples per period may be an alias: not evidence [samples]
 OVERSHOOT_RISE_MAX = 1.0  # ... the jumps rising over at most this many samples (the model's: 10 us) [samples]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
@@ -1876,9 +1877,16 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     per sample), its damping is at most OVERSHOOT_MAX_DAMPING (a fit at the
     bound smooths the force's shape; it is no ringing) and the largest
     sample stands more than FRONT_LIFT_FRACTION of the peak above the force
-    it finds under it, the peak is the plate's. A ball's front through an
-    ideal plate, its spike's top and its drop sampled anywhere, needs no
-    plate (tests/test_conditioning.py).
+    it finds under it, the peak is the plate's: evidence of the plate
+    (PEAK_ON_RINGING), whose resonance is then identified and undone where
+    that passes every check, unless the plate fitted rings with fewer than
+    OVERSHOOT_MIN_PERIOD samples per period: a resonance above fs / 2 is
+    sampled as its alias below it, and undone as that alias its force is
+    wrong (zoo trace 2:1022: 24.9 kHz at 43.3 kHz, fitted at 19.5 kHz, the
+    undone peak -5.1 %), so the peak is then named as not resolved by the
+    samples (PEAK_BETWEEN_SAMPLES), which is no evidence. A ball's front
+    through an ideal plate, its spike's top and its drop sampled anywhere,
+    needs no plate (tests/test_conditioning.py).
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
@@ -1901,18 +1909,23 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     variance = max(noise * noise, plate.rss / max(plate.n_samples - 10, 1))
     gain = (ideal.rss - plate.rss) / variance if variance > 0 else math.inf
     lift = float(x[i] - plate.force(i))
-    if gain > FRONT_SIGNIFICANCE and lift > FRONT_LIFT_FRACTION * peak \
-            and plate.damping_ratio <= OVERSHOOT_MAX_DAMPING:
-        return [Problem(ProblemKind.PEAK_ON_RINGING,
-                        f"peak force on plate ringing: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the "
-                        f"contact start, is the plate's first overshoot of the force's jump: the contact's front "
-                        f"(to {last - i} samples after it) is a jump and a ramp through a plate of about "
-                        f"{plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}, "
-                        f"{fs / plate.frequency_hz:.2g} samples per period), with "
-                        f"{ideal.rss / max(plate.rss, 1e-300):.2g} times less residual than through an ideal plate, "
-                        f"whose overshoot lifts the largest sample {100 * lift / peak:.2g} % of the peak above the "
-                        "force; the peak is not the ball's")]
-    return []
+    if not (gain > FRONT_SIGNIFICANCE and lift > FRONT_LIFT_FRACTION * peak
+            and plate.damping_ratio <= OVERSHOOT_MAX_DAMPING):
+        return []
+    seen = (f"the contact's front (to {last - i} samples after it) is a jump and a ramp through a plate of about "
+            f"{plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}, "
+            f"{fs / plate.frequency_hz:.2g} samples per period), with {ideal.rss / max(plate.rss, 1e-300):.2g} times "
+            f"less residual than through an ideal plate, whose overshoot lifts the largest sample "
+            f"{100 * lift / peak:.2g} % of the peak above the force")
+    if fs / plate.frequency_hz < OVERSHOOT_MIN_PERIOD:  # near fs / 2: a resonance above it looks the same
+        return [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES,
+                        f"peak force between samples: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the "
+                        f"contact start, is a plate's first overshoot of the force's jump, ringing near half the "
+                        f"sample rate (or above it, seen through its alias): {seen}; the peak is not the ball's "
+                        "(sample faster)")]
+    return [Problem(ProblemKind.PEAK_ON_RINGING,
+                    f"peak force on plate ringing: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the contact "
+                    f"start, is the plate's first overshoot of the force's jump: {seen}; the peak is not the ball's")]
 
 
 def _negative_force(x, fs, noise, peak, end_u):
