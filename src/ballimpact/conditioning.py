@@ -1375,7 +1375,8 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False)
     out.extend(_second_hump(xc, fs, noise, peak))
     out.extend(_peak_on_step_response(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     out.extend(_peak_on_front_ringing(x, fs, noise, peak, s_u, e_u) if front else [])
-    out.extend(_peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u) if front else [])
+    if front and not {p.kind for p in out} & PLATE_EVIDENCE:  # with evidence already the plate's undoing is tried
+        out.extend(_peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
     if line is not None:
@@ -1886,7 +1887,9 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     undone peak -5.1 %), so the peak is then named as not resolved by the
     samples (PEAK_BETWEEN_SAMPLES), which is no evidence. A ball's front
     through an ideal plate, its spike's top and its drop sampled anywhere,
-    needs no plate (tests/test_conditioning.py).
+    needs no plate (tests/test_conditioning.py). Not run when the checks
+    before it found evidence of the plate already (its undoing is tried
+    then whatever this check finds): a few ms of fits saved.
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
