@@ -619,3 +619,58 @@ def test_undone_impulse_response_has_unit_static_gain(fs, fn, zeta, cutoff):
     assert h.shape == (401,)
     assert_allclose(np.sum(h), 1.0, atol=1e-6)
     assert np.max(np.abs(np.r_[h[:50], h[-50:]])) < 1e-6 * np.max(np.abs(h))
+
+
+def _drop_knots(fs, start, jump, slope, drop_at, drop, slope_after, curvature_after, length, rise=0.25):
+    """The model's front and its drop at buckling as a piecewise-linear force, knots every 0.01 sample: a jump
+    rising over ``rise`` samples at ``start`` and a ramp; at ``drop_at`` [samples after the start] a drop rising
+    over ``rise`` too, then a ramp and a parabola from there."""
+    u = np.arange(0.0, length, 0.01)
+    f = jump * np.clip(u / rise, 0.0, 1.0) + slope * u
+    v = u - drop_at
+    f = f + np.where(v >= 0, drop * np.clip(v / rise, 0.0, 1.0) + slope_after * v + curvature_after * v * v, 0.0)
+    return (start + u) / fs, f
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs, seed", [(8.5e3, 0.11, 25.5e3, 0), (8.5e3, 0.11, 25.5e3, 1),
+                                                   (24.4e3, 0.04, 65.0e3, 2), (12.9e3, 0.08, 30.0e3, 3)])
+def test_fit_front_with_the_drop_finds_a_plate_sampled_a_few_times_a_period(fn_hz, zeta, fs, seed):
+    from ballimpact.plate import fit_front
+
+    # the model's front (section 3.2.4): a jump of 60 % of the peak, a ramp to the pre-buckling spike 2.7 samples
+    # later, the drop at buckling, a slower ramp bending over after it; through a plate of 2.3-3 samples a period,
+    # 1e-3 of the peak of noise: its first overshoot lifts the second sample above the force
+    start, jump, slope, drop_at, drop = 3.37, 600.0, 60.0, 2.7, -150.0
+    kt, kf = _drop_knots(fs, start, jump, slope, drop_at, drop, -20.0, -0.8, 20.0)
+    n = np.arange(0, 18)
+    x = sensed_force(kt, kf, n / fs, fn_hz, zeta) + np.random.default_rng(seed).normal(0.0, 1.0, n.size)
+    fit = fit_front(x, fs, 0, n[-1], start=start + 0.6, drop=True, rise_max=1.0)
+    assert_allclose(fit.frequency_hz, fn_hz, rtol=0.03)
+    assert_allclose(fit.damping_ratio, zeta, rtol=0.2, atol=0.01)
+    assert_allclose(fit.start, start, atol=0.3)
+    assert_allclose(fit.drop_start, start + drop_at, atol=0.5)
+    assert fit.drop < 0 and fit.jump > 0 and fit.slope >= 0
+    assert_allclose(fit.force(n), piecewise_force(kt, kf, n / fs), atol=0.01 * kf.max())
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 0.6, resonance=False, drop=True, rise_max=1.0)
+    assert ideal.frequency_hz == math.inf and ideal.rss > 100.0 * fit.rss
+
+
+def test_fit_front_with_the_drop_through_an_ideal_plate_fits_the_force_to_its_noise():
+    from ballimpact.plate import fit_front
+
+    fs, start = 25.0e3, 3.6
+    kt, kf = _drop_knots(fs, start, 600.0, 60.0, 2.3, -150.0, -20.0, -0.8, 20.0)
+    n = np.arange(0, 18)
+    x = piecewise_force(kt, kf, n / fs) + np.random.default_rng(5).normal(0.0, 1.0, n.size)
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 0.5, resonance=False, drop=True, rise_max=1.0)
+    assert ideal.rss < 2.0 * n.size
+    assert_allclose(ideal.force(n), piecewise_force(kt, kf, n / fs), atol=3.0)
+    assert fit_front(x, fs, 0, n[-1], start=start + 0.5, resonance=False, drop=True, rise_max=1.0,
+                     refine=False).rss >= ideal.rss
+
+
+def test_fit_front_rejects_a_negative_rise_max():
+    from ballimpact.plate import fit_front
+
+    with pytest.raises(ValueError, match="rise_max must be finite and non-negative"):
+        fit_front(np.zeros(40), 1e5, 0, 30, 5.0, rise_max=-1.0)

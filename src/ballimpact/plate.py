@@ -40,6 +40,7 @@ them. Nothing here can tell; the caller must check the undone force (see
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -712,6 +713,7 @@ FRONT_MAX_FREQUENCY = 0.45  # resonances fitted up to this fraction of the sampl
 FRONT_GRID_FREQUENCIES = 16  # the starting grid: this many resonances, log-spaced ... [-]
 FRONT_GRID_DAMPING = (0.03, 0.1, 0.2, 0.35)  # ... each with these damping ratios [-]
 FRONT_MAX_EVALUATIONS = 60  # least-squares evaluations from the grid's best at most [-]
+FRONT_DROP_MAX_DAMPING = 0.4  # with the drop at buckling, damping ratios fitted up to this [-]
 
 
 class FrontFit(NamedTuple):
@@ -726,12 +728,23 @@ class FrontFit(NamedTuple):
     curvature: float  #: the parabola's coefficient [unit of the force per sample^2]
     rss: float  #: residual sum of squares over the window [unit of the force^2]
     n_samples: int  #: samples in the window [-]
+    drop_start: float = math.inf  #: where a second jump (the drop at buckling) starts [samples] (inf: none fitted)
+    drop: float = 0.0  #: that jump, rising over ``rise`` too (negative: a drop) [unit of the force]
+    drop_slope: float = 0.0  #: the change of the ramp's slope from it [unit of the force per sample]
+    drop_curvature: float = 0.0  #: ... and of the parabola's coefficient [unit of the force per sample^2]
 
     def force(self, index) -> np.ndarray:
         """The fitted applied force (not the sensed one) at fractional sample indices [unit of the force]."""
+        def jump(u):
+            ramp = np.clip(u / self.rise, 0.0, 1.0) if self.rise > 0 else (u >= 0).astype(float)
+            return np.where(u >= 0, ramp, 0.0)
+
         u = np.asarray(index, dtype=float) - self.start
-        ramp = np.clip(u / self.rise, 0.0, 1.0) if self.rise > 0 else (u >= 0).astype(float)
-        return np.where(u >= 0, self.jump * ramp + self.slope * u + self.curvature * u * u, 0.0)
+        out = np.where(u >= 0, self.jump * jump(u) + self.slope * u + self.curvature * u * u, 0.0)
+        if math.isfinite(self.drop_start):
+            v = np.asarray(index, dtype=float) - self.drop_start
+            out = out + self.drop * jump(v) + np.where(v >= 0, self.drop_slope * v + self.drop_curvature * v * v, 0.0)
+        return out
 
 
 def front_responses(u, wn, zeta, rise):
@@ -803,7 +816,8 @@ def front_responses(u, wn, zeta, rise):
     return np.stack([jump, ramp, par], axis=-1)
 
 
-def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True):
+def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True,
+              drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True):
     """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
 
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
@@ -836,24 +850,43 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     resonance : bool
         Fit through a plate (fn up to FRONT_MAX_FREQUENCY of the sample
         rate, and down to one period over the window) or an ideal one.
+    drop : bool
+        Also fit a second jump (rising over the same samples) and a change
+        of the ramp's slope and of the parabola from anywhere in the window
+        after the force's first sample: the model's drop at buckling
+        (section 3.2.4: kB falls from kCONST to Eq. (4) 0.2 ms after first
+        contact), for a window that runs on past the pre-buckling spike;
+        the jump and the ramp before it then rise (>= 0) and the drop
+        falls (<= 0), as the model's force does.
+    rise_max : float
+        The most samples the jumps may rise over [samples] (FRONT_RISE_MAX:
+        the model's 10 us step at up to 400 kHz).
+    refine : bool
+        Refine the starting grid's best fit by least squares; False returns
+        the grid's best (a residual no smaller than the refined one's; fast).
 
     Returns
     -------
     FrontFit or None
         The fit; None when the window holds fewer than 8 samples, leaves the
         record, or no resonance fits between one period over the window and
-        FRONT_MAX_FREQUENCY of fs.
+        FRONT_MAX_FREQUENCY of fs. With ``drop``, its ``drop_*`` fields hold
+        the drop and the changes after it (``curvature`` is 0: no parabola
+        before the drop).
 
     Raises
     ------
     ValueError
-        For a non-positive sample rate, a non-finite start or non-finite samples.
+        For a non-positive sample rate, a non-finite start, a negative or
+        non-finite rise_max, or non-finite samples.
     """
     from scipy.optimize import least_squares
 
     fs = positive_scalar("sample_rate_hz", sample_rate_hz)
     if not math.isfinite(start):
         raise ValueError(f"start must be finite, got {start!r}")
+    if not (rise_max >= 0 and math.isfinite(rise_max)):
+        raise ValueError(f"rise_max must be finite and non-negative, got {rise_max!r}")
     x = finite_samples("force", force)
     first, last = int(first), int(last)
     if first < 0 or last >= x.size or last - first + 1 < 8:
@@ -867,13 +900,35 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     if resonance and w_lo >= w_hi:
         return None
 
-    def solve(design):  # least squares of J, b, q for each design [..., n, 3]: (rss, coef)
+    def unconstrained(design):  # least squares of J, b, q (and the drop's) for each design [..., n, 3 or 5]
         gram = np.swapaxes(design, -1, -2) @ design
         rhs = np.swapaxes(design, -1, -2) @ y
-        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(3)
+        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(design.shape[-1])
         coef = np.linalg.solve(gram + ridge, rhs[..., None])[..., 0]
         resid = y - (design @ coef[..., None])[..., 0]
         return np.sum(resid * resid, axis=-1), coef, resid
+
+    def solve(design):  # (rss, coef, resid); with the drop, J >= 0, b >= 0 and the drop <= 0
+        if not drop:
+            return unconstrained(design)
+        gram = np.swapaxes(design, -1, -2) @ design
+        rhs = (np.swapaxes(design, -1, -2) @ y)[..., None]
+        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(5)
+        best_rss, best_coef = None, None
+        for off in itertools.product((False, True), repeat=3):  # each sign-constrained column free or held at 0
+            keep = np.array([not off[0], not off[1], not off[2], True, True], dtype=float)
+            coef = np.linalg.solve(gram * np.outer(keep, keep) + ridge, rhs * keep[:, None])[..., 0]
+            rss = float(y @ y) - 2.0 * np.sum(coef * rhs[..., 0], axis=-1) \
+                + np.einsum("...i,...ij,...j->...", coef, gram, coef)
+            sign = coef[..., :3] * np.array([1.0, 1.0, -1.0])
+            rss = np.where(np.all(sign >= -1e-12 * (1.0 + np.abs(coef[..., :3])), axis=-1), rss, np.inf)
+            if best_rss is None:
+                best_rss, best_coef = rss, coef
+            else:
+                better = rss < best_rss
+                best_rss, best_coef = np.where(better, rss, best_rss), np.where(better[..., None], coef, best_coef)
+        resid = y - (design @ best_coef[..., None])[..., 0]
+        return np.sum(resid * resid, axis=-1), best_coef, resid
 
     if resonance:
         g = np.meshgrid(np.geomspace(w_lo, w_hi, FRONT_GRID_FREQUENCIES), FRONT_GRID_DAMPING,
@@ -881,26 +936,44 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         grid = np.stack([v.ravel() for v in g], axis=1)  # wn, zeta, ts, rise
     else:
         # through an ideal plate a sample sees the jump's rise only where it falls: a fine grid, no local minimum
-        g = np.meshgrid(np.arange(t_lo, t_hi + 1e-9, 0.125), np.arange(0.0, FRONT_RISE_MAX + 1e-9, 0.25),
+        g = np.meshgrid(np.arange(t_lo, t_hi + 1e-9, 0.125), np.arange(0.0, rise_max + 1e-9, 0.25),
                         indexing="ij")
         grid = np.stack([np.full(g[0].size, np.inf), np.zeros(g[0].size), g[0].ravel(), g[1].ravel()], axis=1)
-    design = front_responses(n[None, :] - grid[:, 2:3], grid[:, 0:1], grid[:, 1:2], grid[:, 3:4])
-    p0 = grid[int(np.argmin(solve(design)[0]))]
+    if drop:  # the drop's start on every half sample after the force's first contact sample
+        tb = np.arange(k0 + 0.5, last, 0.5)
+        grid = np.column_stack([np.repeat(grid, tb.size, axis=0), np.tile(tb, grid.shape[0])])
+        if grid.size == 0:
+            return None
+
+    def design_of(rows):  # the responses of each row of (wn, zeta, ts, rise[, tb]) [rows, n, 3 or 5]
+        cols = front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+        if not drop:
+            return cols
+        later = front_responses(n[None, :] - rows[:, 4:5], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+        # no parabola before the drop, and the ramp up to it rises by at most the jump: J = a + b L, a >= 0, b >= 0
+        span = np.maximum(rows[:, 4:5] - rows[:, 2:3], 0.0)[..., None]  # L, from the start to the drop [samples]
+        return np.concatenate([cols[..., :1], cols[..., 1:2] + span * cols[..., :1], later], axis=-1)
+
+    p0 = grid[int(np.argmin(solve(design_of(grid))[0]))]
+    if not refine:
+        return _front_fit(p0, solve(design_of(p0[None, :])), drop, fs, y.size)
 
     # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
     if resonance:
-        lo, hi = np.array([0.8 * w_lo, 0.005, t_lo, 0.0]), np.array([w_hi, 0.9, t_hi, FRONT_RISE_MAX])
+        lo, hi = np.array([0.8 * w_lo, 0.005, t_lo, 0.0]), np.array([w_hi, FRONT_DROP_MAX_DAMPING if drop else 0.9, t_hi, rise_max])
         full = np.atleast_2d
     else:
-        lo, hi, p0 = np.array([t_lo, 0.0]), np.array([t_hi, FRONT_RISE_MAX]), p0[2:]
+        lo, hi, p0 = np.array([t_lo, 0.0]), np.array([t_hi, rise_max]), p0[2:]
 
         def full(q):
             q = np.atleast_2d(q)
             return np.column_stack([np.full(q.shape[0], np.inf), np.zeros(q.shape[0]), q])
+    if drop:
+        lo, hi = np.append(lo, k0), np.append(hi, float(last))
 
     def residuals(rows):  # the residuals of each row of free parameters, all at once [rows, n]
         rows = full(rows)
-        return solve(front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4]))[2]
+        return solve(design_of(rows))[2]
 
     def jacobian(q, *_):  # forward differences (backward at an upper bound), in one batch
         step = 1e-6 * np.maximum(np.abs(q), 1e-2) * np.where(q < hi - 1e-9, 1.0, -1.0)
@@ -910,6 +983,17 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     q = least_squares(lambda v: residuals(v)[0], np.clip(p0, lo, hi), jac=jacobian, bounds=(lo, hi), x_scale="jac",
                       max_nfev=FRONT_MAX_EVALUATIONS).x
     p = full(q)[0]
-    rss, coef, _ = solve(front_responses(n - p[2], p[0], p[1], p[3]))
+    return _front_fit(p, solve(design_of(p[None, :])), drop, fs, y.size)
+
+
+def _front_fit(p, solved, drop: bool, fs: float, n: int) -> FrontFit:
+    """The FrontFit of parameters p (wn, zeta, ts, rise[, tb]) and their linear least squares (rss, coef, resid)."""
+    rss, coef = float(solved[0][0]), solved[1][0]
+    if drop:  # (J - b L, b, D, the slope's and the parabola's change at the drop): no parabola before it
+        span = max(float(p[4] - p[2]), 0.0)
+        coef, extra = (np.array([coef[0] + coef[1] * span, coef[1], 0.0]),
+                       (float(p[4]), float(coef[2]), float(coef[3]), float(coef[4])))
+    else:
+        extra = ()
     return FrontFit(float(p[0] * fs / (2.0 * math.pi)), float(p[1]), float(p[2]), float(p[3]), float(coef[0]),
-                    float(coef[1]), float(coef[2]), float(rss), int(y.size))
+                    float(coef[1]), float(coef[2]), float(rss), int(n), *extra)

@@ -1,0 +1,100 @@
+"""Where a plate's first overshoot passes for the peak: the model's forces through second-order plates (issue 9).
+
+    python bench/overshoot_map.py --n 600 --seed 2            # plates sampled 2.2-8 times a period
+    python bench/overshoot_map.py --n 600 --seed 1 --all      # any plate of 3-30 kHz below 0.45 fs
+
+Apart from the zoo's seeds: each rig is tests/zoo.py's benign rig ("plate" mode) with a ball of Table 2 (the
+four in turn, parameters within the zoo's +-20 %) at 10-35 m/s, a plate of 3-30 kHz with damping 0.02-0.3
+(log-uniform), a sample rate of 20-200 kHz (by default 2.2-8 samples per plate period), white noise of 0.1-0.5 %
+of the peak and a random sample phase; it is rendered and judged as the zoo's traces are (``zoo.run_trace``).
+Prints the categories per samples-per-period and damping band and the ok-but-wrong traces.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing as mp
+import sys
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+import numpy as np  # noqa: E402
+
+import zoo  # noqa: E402
+
+BALLS = ("pressureless", "pressurised", "punctured", "oversize")
+RATIO_BANDS = (2.0, 3.0, 4.0, 6.0, 10.0, 20.0, 100.0)  # sample rate / plate resonance [-]
+ZETA_BANDS = (0.02, 0.05, 0.1, 0.2, 0.3)  # damping ratio [-]
+
+
+def rig_for(seed: int, index: int, few: bool):
+    """The rig of one map trace and the generator to render it with."""
+    rng = np.random.default_rng([seed, index])
+    if few:
+        while True:
+            fn = zoo._loguniform(rng, 3e3, 30e3)
+            fs = fn * zoo._loguniform(rng, 2.2, 8.0)
+            if 20e3 <= fs <= 200e3:
+                break
+    else:
+        fs = zoo._loguniform(rng, 20e3, 200e3)
+        fn = zoo._loguniform(rng, 3e3, min(30e3, 0.45 * fs))
+    zeta = zoo._loguniform(rng, 0.02, 0.3)
+    vin = float(rng.uniform(10.0, 35.0))
+    noise_fraction = float(rng.uniform(0.001, 0.005))
+    scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
+             float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
+    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], scale=scale, vin_m_s=vin, mode="plate", sample_rate_hz=fs,
+                  plate_hz=fn, plate_zeta=zeta, noise_V=noise_fraction * zoo._BENIGN["peak_volts"])
+    return zoo.Rig(**fields), rng
+
+
+def run_one(args):
+    seed, index, few = args
+    rig, rng = rig_for(seed, index, few)
+    trace = zoo.render(rig, rng, f"map {seed}:{index}")
+    result, j = zoo.run_trace(trace)
+    return (index, rig, j.category, 100 * j.errors["tc"], 100 * j.errors["peak"], trace.truth.peak_is_spike,
+            result.plate_resonance_hz)
+
+
+def _band(value, edges):
+    for lo, hi in zip(edges, edges[1:]):
+        if lo <= value < hi:
+            return f"{lo:g}-{hi:g}"
+    return f">= {edges[-1]:g}"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=600, help="number of rigs")
+    ap.add_argument("--seed", type=int, default=2)
+    ap.add_argument("--all", action="store_true", help="any plate below 0.45 fs (default: 2.2-8 samples a period)")
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args(argv)
+    jobs = [(a.seed, i, not a.all) for i in range(a.n)]
+    with mp.Pool(a.workers) as pool:
+        rows = pool.map(run_one, jobs, chunksize=4)
+    cats = Counter(r[2] for r in rows)
+    print(f"{a.n} rigs (seed {a.seed}, {'any plate' if a.all else '2.2-8 samples a period'}): "
+          + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    for name, key, edges in (("samples per period", lambda r: r[1].sample_rate_hz / r[1].plate_hz, RATIO_BANDS),
+                             ("damping ratio", lambda r: r[1].plate_zeta, ZETA_BANDS)):
+        table = Counter((_band(key(r), edges), r[2]) for r in rows)
+        for band in sorted({b for b, _ in table}, key=lambda b: float(b.split("-")[0].lstrip(">= "))):
+            print(f"  {name} {band:>9}: " + ", ".join(f"{c} {table[(band, c)]}" for c in zoo.CATEGORIES
+                                                     if table[(band, c)]))
+    for index, rig, cat, tc, peak, spike, undone in rows:
+        if cat == "ok_wrong":
+            print(f"  ok but wrong {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz,"
+                  f" plate {rig.plate_hz / 1e3:.2f} kHz ({rig.sample_rate_hz / rig.plate_hz:.2f} samples a period)"
+                  f" damping {rig.plate_zeta:.3f}: TC {tc:+.2f} %, peak {peak:+.1f} %{' (spike)' if spike else ''}"
+                  f"{'' if math.isnan(undone) else ', plate undone'}")
+
+
+if __name__ == "__main__":
+    main()
