@@ -273,14 +273,6 @@ ZOO_EDGE_BUMP = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_EDGE_BUMP])
-def test_zoo_force_spectrum_bump_is_no_ringing(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable and trace.rig.plate_hz is None, name
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
-
-
 #: Traces of the benchmark still ok but wrong on main (strict xfail: this test turns red when one is fixed,
 #: so that it moves to ZOO_REGRESSION): the kinds the README lists under "What remains".
 ZOO_STILL_WRONG: list = [
@@ -460,14 +452,6 @@ ZOO_CONVEX_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_END_CURVE])
-def test_zoo_end_from_the_force_curve(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable and trace.rig.plate_hz is None, name
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
-
-
 @pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_CONVEX_END])
 def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
@@ -511,8 +495,10 @@ ZOO_FADE_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_FADE_END])
-def test_zoo_fade_end_from_the_force_curve(name, seed, index, what, tmp_path):
+@pytest.mark.parametrize("name, seed, index, what",
+                         [pytest.param(*c, id=c[0]) for c in ZOO_EDGE_BUMP + ZOO_END_CURVE + ZOO_FADE_END])
+def test_zoo_ideal_plate_case_ok_and_right(name, seed, index, what, tmp_path):
+    """ZOO_EDGE_BUMP, ZOO_END_CURVE and ZOO_FADE_END: ideal-plate traces once excluded, ok and right now."""
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
