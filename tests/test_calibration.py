@@ -247,7 +247,7 @@ def _spike(drop_phase, rise_frac=0.06, noise_N=0.0, seed=0):
     t = np.arange(60) / SPIKE_FS
     t_drop = (n_ramp + drop_phase) / SPIKE_FS
     ramp = TOP_N * (1.0 - rise_frac * (t_drop - t) * SPIKE_FS)
-    after = 0.7 * TOP_N + 0.25 * TOP_N * np.sin(np.pi * np.clip((t - t_drop) / (t[-1] - t_drop), 0, 1))
+    after = 0.7 * TOP_N + 0.15 * TOP_N * np.sin(np.pi * np.clip((t - t_drop) / (t[-1] - t_drop), 0, 1))
     f = np.where(t <= t_drop, np.maximum(ramp, 0.0), after)
     f = f + np.random.default_rng(seed).normal(0.0, noise_N, t.size)
     return t, f, n_ramp
