@@ -22,9 +22,9 @@ __all__ = [
 ]
 
 
-#: A sampled maximum is a ramp cut by a drop between it and the next sample (the ball's
+#: The largest sample ends a ramp cut by a drop between it and the next sample (the ball's
 #: pre-buckling spike, section 3.2.4 in Goodwill & Haake 2004) when the next sample falls
-#: below the ramp's quadratic continuation through the three samples up to the maximum by
+#: below the ramp's quadratic continuation through the three samples up to it by
 #: more than this many standard errors of that third difference [-].
 RAMP_DROP_SIGMA = 4.0
 #: ... and the ramp's last rise is within these fractions of the rise before it (a straight or
