@@ -165,6 +165,14 @@ OVERSHOOT_AFTER_SAMPLES = 10  # fewer samples up to it: fitted on this many afte
 OVERSHOOT_MAX_DAMPING = 0.35  # ... through a plate damped at most this much (more: a smoother, no ringing) [-]
 OVERSHOOT_MIN_PERIOD = 2.5  # a plate fitted with fewer samples per period may be an alias: not evidence [samples]
 OVERSHOOT_RISE_MAX = 1.0  # ... the jumps rising over at most this many samples (the model's: 10 us) [samples]
+FAST_RING_GAP_SAMPLES = 2  # the front's ringing is read from this long after buckling (BUCKLING_TIME_S in) ... [samples]
+FAST_RING_WINDOW_S = 0.3e-3  # ... over this long (at least FAST_RING_MIN_SAMPLES), less a cubic (the force) ... [s]
+FAST_RING_MIN_SAMPLES = 12  # ... [samples]
+FAST_RING_SIGMA = 3.0  # ... whose residual's rms above this many noise deviations ... [-]
+FAST_RING_FRACTION = 5.0e-3  # ... and this fraction of the peak ... [-]
+FAST_RING_MAX_PERIOD = 3.6  # ... alternating with a period of at most this many samples: the ends are not known [samples]
+FAST_RING_JUMPED = 0.2  # ... when the front, once above this fraction of the peak, ... [-]
+FAST_RING_ZERO = 0.02  # ... swings back below this fraction of it, or half a sample exceeds JUMP_MAX_FRACTION of TC [-]
 NEGATIVE_WINDOW_S = 3.0e-3  # the corrected signal this long after the contact must not go below zero ... [s]
 NEGATIVE_SMOOTH_S = 0.05e-3  # ... averaged over this long (at least one sample) ... [s]
 NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
@@ -1411,6 +1419,8 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False)
     out.extend(_peak_on_front_ringing(x, fs, noise, peak, s_u, e_u) if front else [])
     if front and not {p.kind for p in out} & PLATE_EVIDENCE:  # with evidence already the plate's undoing is tried
         out.extend(_peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u))
+    if front and not {p.kind for p in out} & PLATE_EVIDENCE:
+        out.extend(_start_on_fast_ringing(x, fs, noise, peak, s_u, e_u))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
     if line is not None:
@@ -1984,6 +1994,68 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
                     f"peak force on plate ringing: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the contact "
                     f"start, is the plate's first overshoot of the force's jump: {seen}; the peak is not the ball's")]
 
+
+
+def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
+    """The contact's ends read off a front that rings near half the sample rate: not known to 1 %.
+
+    The force's jump (section 3.2.4 in Goodwill & Haake 2004: zero below
+    2 mm of compression) sets a lightly damped plate ringing. Sampled 2-3.6
+    times per period, the ringing alternates from sample to sample with a slow
+    beat, and the samples of the front are the force plus a swing of up to the
+    jump: the hinge through them puts the start up to 3 samples off (one of
+    them swung down to zero reads as the last quiet sample, or the rise is
+    sampled as a ramp), and TC 1.4-1.7 % off in bench/overshoot_map.py's
+    plates at 2.2-3.5 samples a period, while the peak, later, is right and
+    no other check sees the ringing: it dies before the contact's middle
+    (where :func:`_ringing_line`'s window weighs the samples) and turns too
+    fast for :func:`_turning_points`. It is read after the drop at buckling
+    (FAST_RING_GAP_SAMPLES after BUCKLING_TIME_S from the start, where the
+    model's force is smooth) over FAST_RING_WINDOW_S: those samples less a
+    cubic fitted to them leave more than FAST_RING_SIGMA noise deviations
+    and FAST_RING_FRACTION of the peak in rms, with a lag-one correlation
+    (corrected for the noise's share) of a period of at most
+    FAST_RING_MAX_PERIOD samples (``cos(2 pi / period)``; white noise: 0).
+    At OVERSHOOT_MIN_PERIOD samples per period or more it is evidence of the
+    plate (PLATE_RINGING: its undoing is tried); below, or above fs / 2 seen
+    through its alias, the ringing is named and the ends not determined
+    (CONTACT_END_UNDETERMINED, no evidence: an alias undone is wrong).
+    """
+    k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))
+    a = k0 + int(math.ceil(BUCKLING_TIME_S * fs)) + FAST_RING_GAP_SAMPLES
+    b = min(a + max(int(round(FAST_RING_WINDOW_S * fs)), FAST_RING_MIN_SAMPLES), k1 - FAST_RING_GAP_SAMPLES)
+    if not (peak > 0 and noise > 0) or a < 0 or b - a < FAST_RING_MIN_SAMPLES or b > x.size:
+        return []
+    y = x[a:b]
+    u = np.linspace(-1.0, 1.0, y.size)
+    r = y - np.polynomial.polynomial.polyval(u, np.polynomial.polynomial.polyfit(u, y, 3))
+    power = float(np.mean(r * r))
+    white = noise * noise * (y.size - 4) / y.size  # the noise's share of it
+    rms = math.sqrt(power)
+    if not (rms > FAST_RING_SIGMA * noise and rms > FAST_RING_FRACTION * peak):
+        return []
+    rho = float(np.sum(r[1:] * r[:-1])) / (y.size * (power - white))
+    if not rho < math.cos(2.0 * math.pi / FAST_RING_MAX_PERIOD):
+        return []
+    period = 2.0 * math.pi / math.acos(max(rho, -1.0))
+    # the force, once jumped, never returns to zero: a front sample back at zero is a swing as large as the jump
+    front = x[max(k0 - FRONT_PRE_SAMPLES, 0):min(a, x.size)]
+    jumped = np.flatnonzero(front > FAST_RING_JUMPED * peak)
+    dip = jumped.size and float(np.min(front[jumped[0]:])) < FAST_RING_ZERO * peak
+    # else the rise is the plate's answer to a jump: the start located to half a sample at best, as a jump's
+    if not dip and 0.5 <= JUMP_MAX_FRACTION * (e_u - s_u):
+        return []
+    seen = (f"the force {1e3 * (a - s_u) / fs:.2g}-{1e3 * (b - s_u) / fs:.2g} ms into the contact swings about a "
+            f"smooth curve by {100 * rms / peak:.2g} % of the peak rms ({rms / noise:.3g} noise deviations), "
+            f"alternating from sample to sample (about {period:.2g} samples a period, "
+            f"{fs / period / 1e3:.3g} kHz): the plate rings from the force's jump")
+    if period >= OVERSHOOT_MIN_PERIOD:
+        return [Problem(ProblemKind.PLATE_RINGING,
+                        f"plate ringing near half the sample rate at the contact's front: {seen}, and the samples "
+                        "the contact's start is read from swing with it: TC is not known to 1 %")]
+    return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                    f"contact start not determined to 1 %: {seen}, near half the sample rate (or above it, seen "
+                    "through its alias), and the samples the start is read from swing with it (sample faster)")]
 
 def _negative_force(x, fs, noise, peak, end_u):
     """A pull on the plate after the contact: the plate's own motion (or a wrong baseline), never the ball's force.
