@@ -2016,10 +2016,20 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     and FAST_RING_FRACTION of the peak in rms, with a lag-one correlation
     (corrected for the noise's share) of a period of at most
     FAST_RING_MAX_PERIOD samples (``cos(2 pi / period)``; white noise: 0).
-    At OVERSHOOT_MIN_PERIOD samples per period or more it is evidence of the
+    Such ringing moves the start found by more than 1 % of TC when a sample
+    of the front, once above FAST_RING_JUMPED of the peak, swings back below
+    FAST_RING_ZERO of it (the ball's force never returns to zero after its
+    jump: a swing as large as the jump), or when the contact holds so few
+    samples that half a sample exceeds JUMP_MAX_FRACTION of TC (the rise
+    sampled through the plate is its answer to a jump, located to half a
+    sample at best, as :func:`_end_problems` charges a jump); otherwise the
+    start is left as found (on the ok traces of the zoo's seeds 0-3 that
+    ring so, the start was right: tests/test_conditioning.py). At
+    OVERSHOOT_MIN_PERIOD samples per period or more it is evidence of the
     plate (PLATE_RINGING: its undoing is tried); below, or above fs / 2 seen
-    through its alias, the ringing is named and the ends not determined
-    (CONTACT_END_UNDETERMINED, no evidence: an alias undone is wrong).
+    through its alias, the ringing is named and the start not determined
+    (CONTACT_END_UNDETERMINED, no evidence: an alias undone is wrong). Not
+    in the paper; see the README, "Robustness (issue 9)".
     """
     k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))
     a = k0 + int(math.ceil(BUCKLING_TIME_S * fs)) + FAST_RING_GAP_SAMPLES
@@ -2045,17 +2055,22 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     # else the rise is the plate's answer to a jump: the start located to half a sample at best, as a jump's
     if not dip and 0.5 <= JUMP_MAX_FRACTION * (e_u - s_u):
         return []
+    why = (f"a sample of the front swings back below {100 * FAST_RING_ZERO:g} % of the peak after the force's jump "
+           "(a swing as large as the jump)" if dip else
+           f"the rise is the plate's answer to the force's jump, so the start is located to half a sample at best, "
+           f"{100 * 0.5 / (e_u - s_u):.2g} % of TC ({e_u - s_u:.0f} samples)")
     seen = (f"the force {1e3 * (a - s_u) / fs:.2g}-{1e3 * (b - s_u) / fs:.2g} ms into the contact swings about a "
             f"smooth curve by {100 * rms / peak:.2g} % of the peak rms ({rms / noise:.3g} noise deviations), "
-            f"alternating from sample to sample (about {period:.2g} samples a period, "
-            f"{fs / period / 1e3:.3g} kHz): the plate rings from the force's jump")
+            f"alternating from sample to sample (about {period:.2g} samples a period, {fs / period / 1e3:.3g} kHz): "
+            f"the plate rings from the force's jump, and {why}")
     if period >= OVERSHOOT_MIN_PERIOD:
         return [Problem(ProblemKind.PLATE_RINGING,
-                        f"plate ringing near half the sample rate at the contact's front: {seen}, and the samples "
-                        "the contact's start is read from swing with it: TC is not known to 1 %")]
+                        f"plate ringing near half the sample rate at the contact's front: {seen}; the start is not "
+                        "known to 1 % of TC")]
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
-                    f"contact start not determined to 1 %: {seen}, near half the sample rate (or above it, seen "
-                    "through its alias), and the samples the start is read from swing with it (sample faster)")]
+                    f"contact start not determined to 1 %: {seen}; the plate rings near half the sample rate (or "
+                    "above it, seen through its alias: not undone) (sample faster)")]
+
 
 def _negative_force(x, fs, noise, peak, end_u):
     """A pull on the plate after the contact: the plate's own motion (or a wrong baseline), never the ball's force.
