@@ -2013,9 +2013,11 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     (FAST_RING_GAP_SAMPLES after BUCKLING_TIME_S from the start, where the
     model's force is smooth) over FAST_RING_WINDOW_S: those samples less a
     cubic fitted to them leave more than FAST_RING_SIGMA noise deviations
-    and FAST_RING_FRACTION of the peak in rms, with a lag-one correlation
-    (corrected for the noise's share) of a period of at most
-    FAST_RING_MAX_PERIOD samples (``cos(2 pi / period)``; white noise: 0).
+    and FAST_RING_FRACTION of the peak in rms, ringing with a period of at
+    most FAST_RING_MAX_PERIOD samples (its frequency w from ``y[n - 1] +
+    y[n + 1] = 2 cos(w) y[n] + cubic(n)`` by least squares, the noise's
+    power taken out of the normal equations; a decay reads cos(w) a little
+    nearer -1, i.e. nearer fs / 2).
     Such ringing moves the start found by more than 1 % of TC when a sample
     of the front, once above FAST_RING_JUMPED of the peak, swings back below
     FAST_RING_ZERO of it (the ball's force never returns to zero after its
@@ -2040,14 +2042,22 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     u = np.linspace(-1.0, 1.0, y.size)
     r = y - np.polynomial.polynomial.polyval(u, np.polynomial.polynomial.polyfit(u, y, 3))
     power = float(np.mean(r * r))
-    white = noise * noise * (y.size - 4) / y.size  # the noise's share of it
     rms = math.sqrt(power)
     if not (rms > FAST_RING_SIGMA * noise and rms > FAST_RING_FRACTION * peak):
         return []
-    rho = float(np.sum(r[1:] * r[:-1])) / (y.size * (power - white))
-    if not rho < math.cos(2.0 * math.pi / FAST_RING_MAX_PERIOD):
+    # a sinusoid of w radians a sample obeys y[n - 1] + y[n + 1] = 2 cos(w) y[n], a cubic a cubic: fitted jointly
+    # (the noise's power taken out of the normal equations: no bias towards cos(w) = 0)
+    mid, um = y[1:-1], u[1:-1]
+    design = np.column_stack([mid, np.ones(mid.size), um, um * um, um * um * um])
+    gram = design.T @ design
+    gram[0, 0] -= mid.size * noise * noise
+    try:
+        cos_w = 0.5 * float(np.linalg.solve(gram, design.T @ (y[:-2] + y[2:]))[0])
+    except np.linalg.LinAlgError:
         return []
-    period = 2.0 * math.pi / math.acos(max(rho, -1.0))
+    if not cos_w < math.cos(2.0 * math.pi / FAST_RING_MAX_PERIOD):
+        return []
+    period = 2.0 * math.pi / math.acos(max(cos_w, -1.0))
     # the force, once jumped, never returns to zero: a front sample back at zero is a swing as large as the jump
     front = x[max(k0 - FRONT_PRE_SAMPLES, 0):min(a, x.size)]
     jumped = np.flatnonzero(front > FAST_RING_JUMPED * peak)
@@ -2061,7 +2071,7 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
            f"{100 * 0.5 / (e_u - s_u):.2g} % of TC ({e_u - s_u:.0f} samples)")
     seen = (f"the force {1e3 * (a - s_u) / fs:.2g}-{1e3 * (b - s_u) / fs:.2g} ms into the contact swings about a "
             f"smooth curve by {100 * rms / peak:.2g} % of the peak rms ({rms / noise:.3g} noise deviations), "
-            f"alternating from sample to sample (about {period:.2g} samples a period, {fs / period / 1e3:.3g} kHz): "
+            f"alternating from sample to sample (about {period:.3g} samples a period, {fs / period / 1e3:.3g} kHz): "
             f"the plate rings from the force's jump, and {why}")
     if period >= OVERSHOOT_MIN_PERIOD:
         return [Problem(ProblemKind.PLATE_RINGING,
