@@ -1995,7 +1995,6 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
                     f"start, is the plate's first overshoot of the force's jump: {seen}; the peak is not the ball's")]
 
 
-
 def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     """The contact's ends read off a front that rings near half the sample rate: not known to 1 %.
 
