@@ -217,7 +217,9 @@ def force_top(time_s, force_N, noise_N: float):
     standard errors of that difference (``sqrt(20) noise_N``: a smooth top is
     continued to within its third difference), its last two rises agree within
     RAMP_RISE_RATIO, and they start above RAMP_FLOOR_FRACTION of the largest
-    sample. The top then lies between ``F[k]`` and the ramp continued to the next
+    sample and after no fall (a fall before the ramp's two rises, ``F[k-3] >
+    F[k-2]``, makes it a swing of plate ringing: a 12.9 kHz plate at 35.5 kHz lifted
+    to +8.2 % of the spike's top, bench/spike_top_map.py). The top then lies between ``F[k]`` and the ramp continued to the next
     sample, ``min(R, F[k] + rise)``, and its middle is taken, at the middle of
     the interval: its error is at most half that range, against a whole range
     for the sample itself. Elsewhere the top is the largest sample: a smooth top
@@ -259,6 +261,8 @@ def force_top(time_s, force_N, noise_N: float):
     top = (float(f[k]), float(t[k]), 0.0)
     if not 2 <= k < f.size - 1 or f[k - 2] < RAMP_FLOOR_FRACTION * f[k]:
         return top
+    if k >= 3 and f[k - 3] > f[k - 2]:
+        return top  # a fall before the ramp: a swing of plate ringing, no ball's ramp
     rise, before = float(f[k] - f[k - 1]), float(f[k - 1] - f[k - 2])
     ramp_next = float(3.0 * f[k] - 3.0 * f[k - 1] + f[k - 2])
     lo, hi = RAMP_RISE_RATIO
