@@ -219,10 +219,14 @@ def force_top(time_s, force_N, noise_N: float):
     RAMP_RISE_RATIO, and they start above RAMP_FLOOR_FRACTION of the largest
     sample and after no fall (a fall before the ramp's two rises, ``F[k-3] >
     F[k-2]``, makes it a swing of plate ringing: a 12.9 kHz plate at 35.5 kHz lifted
-    to +8.2 % of the spike's top, bench/spike_top_map.py). The top then lies between ``F[k]`` and the ramp continued to the next
-    sample, ``min(R, F[k] + rise)``, and its middle is taken, at the middle of
-    the interval: its error is at most half that range, against a whole range
-    for the sample itself. Elsewhere the top is the largest sample: a smooth top
+    to +8.2 % of the spike's top, bench/spike_top_map.py). The ramp bends ever
+    less towards its top (the model's rises fall by less and less), so it lies
+    below its last chord continued, ``F[k] + rise``, and above the quadratic
+    ``R``, which falls short of the top (a spike at 24 kHz: the middle of
+    ``[F[k], R]`` 5.6 % low). The top then lies between ``F[k]`` and
+    ``F[k] + rise``, and its middle is taken, at the middle of the interval: its
+    error is at most half that range, against a whole range for the sample
+    itself. Elsewhere the top is the largest sample: a smooth top
     sampled at tens of kHz is within 0.1 %, and a parabola through three samples
     overshoots the spike's corner. A lower sampled maximum is not lifted above the
     largest sample: where the smooth part of the contact holds the peak, its
@@ -269,7 +273,7 @@ def force_top(time_s, force_N, noise_N: float):
     if not (before > 0 and lo * before <= rise <= hi * before
             and ramp_next - f[k + 1] > RAMP_DROP_SIGMA * math.sqrt(20.0) * noise):
         return top
-    half = 0.5 * max(0.0, min(ramp_next, float(f[k]) + rise) - float(f[k]))
+    half = 0.5 * rise
     return float(f[k]) + half, 0.5 * float(t[k] + t[k + 1]), half
 
 
