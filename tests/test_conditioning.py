@@ -1541,3 +1541,22 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
             assert abs(force_top(np.arange(xc.size) / fs, xc, noise)[0] / true_peak - 1.0) <= 0.05, phase
         if _peak_between_samples(xc, fs, noise, lifted=False) == []:
             assert abs(xc.max() / true_peak - 1.0) <= 0.05, phase
+
+
+@pytest.mark.parametrize("phase", [0.0, 0.05, 0.4, 0.95])
+def test_peak_between_samples_a_swing_of_ringing_is_no_spike(phase):
+    from ballimpact.conditioning import _peak_between_samples
+
+    # a half-sine of 4 ms with an 8 kHz plate's ringing (half its amplitude, 1 ms decay) at 67 kHz: a swing's
+    # crest (a lower maximum that a whole rise would lift over 5 % above the largest sample) follows a fall: it is
+    # no spike's ramp and hides no top above the largest sample (the analytic force's maximum is within 0.5 %)
+    fs, tc = 67e3, 4e-3
+    def force(t):
+        return np.sin(np.pi * t / tc) + 0.5 * np.exp(-t / 1e-3) * np.sin(2 * np.pi * 8e3 * t)
+    x = force((np.arange(int(tc * fs)) + phase) / fs)
+    true_top = force(np.linspace(0.0, tc, 200_001)).max()
+    assert x.max() >= (1 - 5e-3) * true_top
+    i = int(np.argmax(x))
+    k = max((k for k in range(2, x.size - 1) if k != i and x[k - 2] < x[k - 1] <= x[k] > x[k + 1]), key=lambda k: x[k])
+    assert x[k] + max(x[k] - x[k - 1], x[k - 1] - x[k - 2]) > 1.05 * x.max()  # a whole rise above it: 5 % over
+    assert _peak_between_samples(x, fs, 1e-4 * x.max()) == []
