@@ -1601,23 +1601,18 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     it; a jump smoothed over two or three samples cannot be told from a
     spike's ramp and is judged as one.
 
-    The bound judged is the one on what is reported (zoo seed 4: an ok spike
-    top -5.4 %, its samples no clean ramp cut by a drop, judged by half a rise).
     With ``lifted`` (the sensed force, whose peak
     :func:`ballimpact.calibration.force_top` reads), where force_top lifts the
     largest sample to the middle of the range a ramp cut by a drop can take,
-    the top is missed by at most half that range (half the last rise), which
-    must be within PEAK_SAMPLING_FRACTION / 2 of the peak, as must half the
-    larger of the last two rises (the rule above, kept: judging force_top's half
-    range alone passes more spikes, all within 5 % on bench/spike_top_map.py,
-    and with them ok traces whose TC is 1-2 % off). Where it keeps a sample (the largest
-    one when it does not lift it, every lower maximum, and an undone force,
-    ``lifted`` False), the top is missed by up to the whole rise above that
-    sample, which must be within the same PEAK_SAMPLING_FRACTION / 2 of the peak
-    (bench/spike_top_map.py). A spike's ramp rises from the contact start: a
-    lower maximum after a fall (by more than the noise of a difference) is a
-    swing of ringing, judged by half a rise as before (the demo's
-    punctured-015, whose swing at 99.5 % of the largest sample rose by 5.6 %).
+    the reported top is off by up to half that range (half the last rise),
+    which must also be within PEAK_SAMPLING_FRACTION / 2 of the peak. Where a
+    sample is kept (the largest one when force_top does not lift it, a lower
+    maximum, an undone force: ``lifted`` False) the top may be up to a whole
+    rise above it, but it is judged by half a rise, on average: judging the
+    whole rise there (bench/spike_top_map.py; zoo seed 4's ok spike top at
+    -5.4 % was of this class) excluded 168 more measurable traces of the
+    zoo's seeds 0-3, all right, and good impacts of the synthetic sessions
+    (README, "Robustness (issue 9)").
     """
     if xc.size < 3:
         return []
@@ -1648,12 +1643,13 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
         floor = PEAK_RAMP_FLOOR * peak if k == i else jump_floor
         rises = [float(xc[j] - xc[j - 1]) for j in (k, k - 1) if j >= 1 and xc[j - 1] >= floor]
         rise = max(rises, default=0.0) - 2.0 * math.sqrt(2.0) * noise
-        # the top there: up to a whole rise above a sample kept (the drop anywhere in the interval),
-        # up to half the range above the middle force_top lifts the largest sample to
+        # the top there: half a rise above the sample on average (the drop anywhere in the interval);
+        # at the largest sample this is the rise against PEAK_SAMPLING_FRACTION; where force_top lifts
+        # it, also the half range of the top it reports
         lift = k == i and half > 0.0
-        # a lower maximum after a fall is a swing (of ringing), no spike's top: half a rise there
-        swing = k != i and bool(np.any(np.diff(xc[:k + 1]) < -2.0 * math.sqrt(2.0) * noise))
-        miss = max(half, 0.5 * rise) if lift else float(xc[k]) + (0.5 if swing else 1.0) * rise - peak
+        miss = float(xc[k]) + 0.5 * rise - peak
+        if lift:
+            miss = max(miss, half)
         if miss > 0.5 * PEAK_SAMPLING_FRACTION * peak:
             where = ("the largest sample" if k == i else
                      f"a sampled maximum of {100 * xc[k] / peak:.3g} % of the largest sample, "
@@ -1661,8 +1657,8 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
             return [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES,
                             f"peak force between samples: the force rises by {100 * rise / peak:.2g} % of the peak in "
                             f"the {1e6 / fs:.3g} us before {where} and may go on rising before it drops: "
-                            f"the {'middle of its range' if lift else 'largest sample'} may miss the peak by up to "
-                            f"{100 * miss / peak:.2g} % (sample faster)")]
+                            f"the largest sample may miss the peak by {100 * miss / peak:.2g} % on average "
+                            "(sample faster)")]
     return []
 
 
