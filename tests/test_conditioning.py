@@ -1482,41 +1482,24 @@ def _ramp_cut_by_a_drop(fs, rise_frac, drop_phase, noise_frac=0.0, hump=0.9, see
     return f + np.random.default_rng(seed).normal(0.0, noise_frac, t.size)
 
 
-@pytest.mark.parametrize("noise_frac", [0.0, 2e-3])
-@pytest.mark.parametrize("drop_phase", [0.1, 0.5, 0.9])
-def test_peak_between_samples_judges_what_is_reported(drop_phase, noise_frac):
+def test_peak_between_samples_judges_the_range_of_the_lifted_top():
     from ballimpact.calibration import force_top
     from ballimpact.conditioning import _peak_between_samples
 
-    # a ramp of 7 % of the top per sample cut by a drop: force_top lifts the largest sample to the middle of the
-    # range the top can take, half a rise (3.5 %) from either end, so the lifted top passes; the largest sample
-    # as it is (an undone force, whose peak is not lifted) misses the top by up to a whole rise: not known to 5 %
-    fs, noise = 25e3, max(noise_frac, 1e-9)
-    x = _ramp_cut_by_a_drop(fs, 0.07, drop_phase, noise_frac, seed=int(10 * drop_phase))
+    # a straight ramp of 10.4 % of the top per sample cut by a drop, noise 0.35 % of the top: half a rise less
+    # two noise deviations of a difference is 4.7 %, but force_top lifts the largest sample by half the last
+    # rise (5.2 %) and its top may be off by that much: with the drop just after the last ramp sample, 5.1 % high
+    fs, noise = 25e3, 3.5e-3
+    x = _ramp_cut_by_a_drop(fs, 0.104, 0.01)
     top, _, half = force_top(np.arange(x.size) / fs, x, noise)
-    assert half > 0 and abs(top - 1.0) <= half + 3 * noise  # the truth within the lifted top's half range
-    assert _peak_between_samples(x, fs, noise) == []
-    problems = _peak_between_samples(x, fs, noise, lifted=False)
-    assert [p.kind for p in problems] == [ProblemKind.PEAK_BETWEEN_SAMPLES], problems
-    assert "the largest sample may miss the peak by up to" in problems[0].message
-    if drop_phase >= 0.9:
-        assert 1.0 - x.max() > 0.05  # what is at stake: the largest sample 6.3 % low
-
-
-@pytest.mark.parametrize("drop_phase", [0.8, 0.95])
-def test_peak_between_samples_whole_rise_where_the_sample_is_kept(drop_phase):
-    from ballimpact.calibration import force_top
-    from ballimpact.conditioning import _peak_between_samples
-
-    # a ramp of 8 % per sample whose top fell between samples while the smooth hump after the drop holds the
-    # largest sample (94 % of the top): force_top keeps that sample, which misses the top by 6 %; the ramp's
-    # last sample (a lower maximum) may hide a top up to a whole rise above it, more than 5 % above the largest
-    fs, noise = 25e3, 1e-3
-    x = _ramp_cut_by_a_drop(fs, 0.08, drop_phase, 1e-3, hump=0.94, seed=3)
-    assert 1.0 - x.max() > 0.05 and force_top(np.arange(x.size) / fs, x, noise)[2] == 0.0
+    assert_allclose(half, 0.052, rtol=1e-9)
+    assert abs(top - 1.0) <= half + 1e-12  # the analytic top within the lifted top's half range
+    assert top - 1.0 > 0.05  # what is at stake
     problems = _peak_between_samples(x, fs, noise)
     assert [p.kind for p in problems] == [ProblemKind.PEAK_BETWEEN_SAMPLES], problems
-    assert "a sampled maximum of" in problems[0].message
+    assert "may miss the peak by 5.2 %" in problems[0].message
+    # an undone force's largest sample is not lifted: judged by half a rise, less the noise, as before
+    assert _peak_between_samples(x, fs, noise, lifted=False) == []
 
 
 @pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin", [
@@ -1530,8 +1513,8 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
     from ballimpact.conditioning import _peak_between_samples
 
     # the model's force (its spike the peak) through a known plate at ten sample phases, noise 0.3 % of the
-    # peak: where the check passes, the top that processing reports (force_top's on the sensed force, the largest
-    # sample on an undone one) is within 5 % of the model's peak
+    # peak: where the check passes, the top that processing reports (force_top's on the sensed force) is within
+    # 5 % of the model's peak
     for phase in np.linspace(0.05, 0.95, 10):
         sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
         noise = 3e-3 * true_peak
@@ -1539,24 +1522,3 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
         xc = x[1:int(np.flatnonzero(sensed > 0.01 * true_peak)[-1]) + 1]
         if _peak_between_samples(xc, fs, noise) == []:
             assert abs(force_top(np.arange(xc.size) / fs, xc, noise)[0] / true_peak - 1.0) <= 0.05, phase
-        if _peak_between_samples(xc, fs, noise, lifted=False) == []:
-            assert abs(xc.max() / true_peak - 1.0) <= 0.05, phase
-
-
-@pytest.mark.parametrize("phase", [0.0, 0.05, 0.4, 0.95])
-def test_peak_between_samples_a_swing_of_ringing_is_no_spike(phase):
-    from ballimpact.conditioning import _peak_between_samples
-
-    # a half-sine of 4 ms with an 8 kHz plate's ringing (half its amplitude, 1 ms decay) at 67 kHz: a swing's
-    # crest (a lower maximum that a whole rise would lift over 5 % above the largest sample) follows a fall: it is
-    # no spike's ramp and hides no top above the largest sample (the analytic force's maximum is within 0.5 %)
-    fs, tc = 67e3, 4e-3
-    def force(t):
-        return np.sin(np.pi * t / tc) + 0.5 * np.exp(-t / 1e-3) * np.sin(2 * np.pi * 8e3 * t)
-    x = force((np.arange(int(tc * fs)) + phase) / fs)
-    true_top = force(np.linspace(0.0, tc, 200_001)).max()
-    assert x.max() >= (1 - 5e-3) * true_top
-    i = int(np.argmax(x))
-    k = max((k for k in range(2, x.size - 1) if k != i and x[k - 2] < x[k - 1] <= x[k] > x[k + 1]), key=lambda k: x[k])
-    assert x[k] + max(x[k] - x[k - 1], x[k - 1] - x[k - 2]) > 1.05 * x.max()  # a whole rise above it: 5 % over
-    assert _peak_between_samples(x, fs, 1e-4 * x.max()) == []
