@@ -579,3 +579,22 @@ def test_zoo_alias_first_overshoot_excluded(name, seed, index, what, tmp_path):
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
     assert result.status == "excluded" and "first overshoot of the force's jump" in result.reason, result.reason
+
+
+#: Zoo rigs rendered with other noise (``zoo.render`` with the generator [99, seed, index, draw], as
+#: bench/fade_ends.py re-draws them), ok but wrong on main at ffc2770: a punctured ball's steep fall at 50 kHz, one
+#: low sample on it, and the force's curve ending 0.92 % of TC early with a one-sigma uncertainty of 0.19 %; its
+#: three-sigma interval sees the other end now, and the end is not determined (name, seed, index, draw, what).
+ZOO_CURVE_SECOND_END = [
+    ("punctured-curve-end-early-50kHz", 1, 707, 1, "zoo rig 1:707, noise draw 1: TC -1.09 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, draw, what", [pytest.param(*c, id=c[0]) for c in ZOO_CURVE_SECOND_END])
+def test_zoo_curve_end_with_a_second_end_not_taken(name, seed, index, draw, what, tmp_path):
+    rig = zoo.trace_for(seed, index).rig
+    trace = zoo.render(rig, np.random.default_rng([99, seed, index, draw]), name)
+    assert trace.truth.measurable and rig.plate_hz is None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert result.status == "excluded" and "contact end not determined to 1 %" in result.reason, result.reason
