@@ -665,3 +665,30 @@ def test_end_from_curve_uncertainty_sees_a_second_end_in_the_noise():
             z.append(abs(got - end_s) / se)
     z = np.array(z)
     assert z.size >= 20 and np.max(z) <= 3.0, (z.size, np.round(np.sort(z)[-5:], 2))
+
+
+def test_hinge_end_uncertainty_is_honest_on_a_linear_fade():
+    """A force whose end is a straight fade of one noise deviation per sample (a 20-sample ramp from 20 noise
+    deviations, after a flat top), at 200 seeded sub-sample placements: the hinge's end is within 3 of its standard
+    uncertainties (``end_se_s``, the three-sigma interval over three) of the true end in at least 98 % of the draws
+    where it is finite, and that uncertainty is of the order of the ends' scatter (a fade with about a noise
+    deviation per sample leaves its end known to a sample or so, not to a tenth of one)."""
+    fs, noise = 50e3, 1.0e-3
+    errs, ses = [], []
+    for seed in range(200):
+        rng = np.random.default_rng([5, seed])
+        end_u = 400.0 + rng.uniform(0.0, 1.0)
+        u = np.arange(600, dtype=float)
+        force = np.clip((end_u - u) * noise, 0.0, 20 * noise)  # flat top, then one noise deviation per sample
+        force[:200] = 0.0
+        force[200:205] = np.linspace(0.0, 20 * noise, 5)  # a steep rise
+        v = force + rng.normal(0.0, noise, u.size)
+        c = detect_contact(v, fs, noise_rms_V=noise)
+        assert c.found and c.end_se_s > 0
+        if math.isfinite(c.end_se_s):
+            errs.append(c.end_s * fs - end_u)
+            ses.append(c.end_se_s * fs)
+    errs, ses = np.array(errs), np.array(ses)
+    assert errs.size >= 100, errs.size
+    assert np.mean(np.abs(errs) <= 3.0 * ses) >= 0.98, np.round(np.sort(np.abs(errs) / ses)[-5:], 2)
+    assert 0.5 < float(np.median(ses)) / float(np.std(errs)) < 2.0, (np.median(ses), np.std(errs))
