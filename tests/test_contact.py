@@ -671,7 +671,7 @@ def test_hinge_end_uncertainty_is_honest_on_a_linear_fade():
     """A force whose end is a straight fade of one noise deviation per sample (a 20-sample ramp from 20 noise
     deviations, after a flat top), at 200 seeded sub-sample placements: the hinge's end is within 3 of its standard
     uncertainties (``end_se_s``, the three-sigma interval over three) of the true end in at least 98 % of the draws
-    where it is finite, and that uncertainty is of the order of the ends' scatter (a fade with about a noise
+    where it is finite (``curve=True``), and that uncertainty is of the order of the ends' scatter (a fade with about a noise
     deviation per sample leaves its end known to a sample or so, not to a tenth of one)."""
     fs, noise = 50e3, 1.0e-3
     errs, ses = [], []
@@ -683,7 +683,7 @@ def test_hinge_end_uncertainty_is_honest_on_a_linear_fade():
         force[:200] = 0.0
         force[200:205] = np.linspace(0.0, 20 * noise, 5)  # a steep rise
         v = force + rng.normal(0.0, noise, u.size)
-        c = detect_contact(v, fs, noise_rms_V=noise)
+        c = detect_contact(v, fs, noise_rms_V=noise, curve=True)
         assert c.found and c.end_se_s > 0
         if math.isfinite(c.end_se_s):
             errs.append(c.end_s * fs - end_u)

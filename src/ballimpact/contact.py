@@ -76,6 +76,7 @@ CURVE_STEP = 0.05  # ... on a grid this fine, the least's neighbours refined by 
 CURVE_MIN_SLOPE = 3.0  # ... pinned only where the force's slope there is this many noise deviations per sample [-]
 CURVE_RATE_HZ = 50.0e3  # faster: the search and the slope per CURVE_RATE_HZ sample (noise averaged over it) [Hz]
 CURVE_CHI2 = 9.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
+HINGE_SE_STEP = 0.1  # the hinge's corner profiled on a grid this fine for the ends' uncertainties [samples]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
@@ -145,7 +146,8 @@ class ContactResult:
         not at a jump nor with ringing after the contact; NaN otherwise) and
         its standard uncertainty [s]: see :func:`end_from_curve`.
     start_se_s, end_se_s : float
-        Standard uncertainty of each end from its hinge's fit [s]: half the
+        Standard uncertainty of each end from its hinge's fit (only with
+        ``curve=True``; NaN otherwise) [s]: half the
         width of the corners whose residual sum of squares, with the hinge's
         slope fitted again, is within CURVE_CHI2 noise variances of the least,
         over its root (inf when that reaches the fit's window); half a sample
@@ -620,8 +622,10 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
-    ses = (_hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
-           _hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags))
+    ses = (math.nan, math.nan)
+    if curve:  # the ends' uncertainties go with the curve's (what the conditioning's checks read)
+        ses = (_hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
+               _hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags))
     by_curve = (math.nan, math.nan)
     # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
     # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
@@ -667,7 +671,7 @@ def _hinge_se(y, ts: float, window, jump: bool) -> float:
         return math.nan
     u = np.arange(wl, wr + 1, dtype=float)
     yw = np.asarray(y[wl:wr + 1], dtype=float)
-    grid = np.arange(float(wl), float(wr) + 0.5 * CURVE_STEP, CURVE_STEP)
+    grid = np.arange(float(wl), float(wr) + 0.5 * HINGE_SE_STEP, HINGE_SE_STEP)
     g = np.maximum(u[None, :] - grid[:, None], 0.0)
     gy, gg = np.maximum(g @ yw, 0.0), np.sum(g * g, axis=1)
     sse = float(yw @ yw) - np.where(gg > 0, gy * gy / np.where(gg > 0, gg, 1.0), 0.0)
@@ -676,8 +680,8 @@ def _hinge_se(y, ts: float, window, jump: bool) -> float:
     if inside[0] == 0 or inside[-1] == grid.size - 1:
         return math.inf
     i, j = int(inside[0]), int(inside[-1])
-    lo = grid[i] - CURVE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
-    hi = grid[j] + CURVE_STEP * float(level - sse[j]) / float(sse[j + 1] - sse[j])
+    lo = grid[i] - HINGE_SE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
+    hi = grid[j] + HINGE_SE_STEP * float(level - sse[j]) / float(sse[j + 1] - sse[j])
     return 0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2)
 
 
