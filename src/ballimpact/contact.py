@@ -409,7 +409,8 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split:
     (FOOT_RESIDUAL_SIGMA sigma)**2, i.e. while the hinge predicts it within
     FOOT_RESIDUAL_SIGMA standard errors (the steep rise after a cloth ramp
     departs from the ramp). Applied to the reversed trace it gives the end.
-    A list ``window`` receives the first and last sample of the hinge's fit.
+    A list ``window`` receives the first and last sample of the hinge's fit and the first sample above
+    FOOT_SIGMA noise deviations (the hinge's corner is not after it).
     """
     quiet = np.flatnonzero(xs[:peak_index + 1] <= FOOT_SIGMA * sigma)
     if not quiet.size:
@@ -427,7 +428,7 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
                  window=None) -> float:
     """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise;
     ``split``: the start from the hinge's first straight segment where the rise bends (:func:`_first_segment`);
-    a list ``window`` receives the first and last sample of the fit that gave it."""
+    a list ``window`` receives the first and last sample of the fit that gave it and i0."""
     u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
@@ -458,7 +459,7 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
         sse2 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts, b)
         if sse2 - sse1 > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
             if window is not None:
-                window[:] = [wl, i0]
+                window[:] = [wl, i0, i0]
             return ts1
     sse = _hinge_sse(u[wl:wr + 1], xs[wl:wr + 1], ts, b)
     while wr < last:
@@ -469,7 +470,7 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
             break
         wr, ts, b, sse = nxt, ts_n, b_n, sse_n
     if window is not None:
-        window[:] = [wl, wr]
+        window[:] = [wl, wr, i0]
     return _first_segment(u, xs, wl, wr, i0, ts, sse, sigma, window) if split else ts
 
 
@@ -500,7 +501,7 @@ def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigm
             best, k_best, ts_best = sse_k, k, ts_k
     if k_best is not None and sse - best > (KINK_SIGMA * sigma) ** 2:
         if window is not None:
-            window[:] = [wl, k_best]
+            window[:] = [wl, k_best, i0]
         return ts_best
     return ts
 
@@ -659,30 +660,37 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
 
 def _hinge_se(y, ts: float, window, jump: bool) -> float:
     """Standard uncertainty [samples] of the corner ts of the hinge ``b * max(u - ts, 0)`` fitted to y[wl:wr + 1]
-    (``window`` = (wl, wr, noise), y read from the end concerned): the half-width of the corners whose residual sum
-    of squares, b fitted again (b >= 0), is within CURVE_CHI2 noise variances of the least, over its root; inf when
-    that reaches the window's edge, half a sample at a jump, NaN without a window."""
+    (``window`` = (wl, wr, i0, noise), y read from the end concerned): the half-width of the corners between wl and
+    i0 (the first sample above FOOT_SIGMA noise deviations holds force: no corner after it, as in the fit) whose
+    residual sum of squares, b fitted again (b >= 0), is within CURVE_CHI2 noise variances of the least, over its
+    root, or a uniform's over those within one noise variance where larger (a residual flat across them); inf when
+    that reaches wl (the quiet samples do not bound it), half a sample at a jump, NaN without a
+    window."""
     if jump:
         return 0.5
     if window is None:
         return math.nan
-    wl, wr, noise = window
-    if wr - wl < 2 or not noise > 0:
+    wl, wr, i0, noise = window
+    if wr - wl < 2 or i0 - wl < 1 or not noise > 0:
         return math.nan
     u = np.arange(wl, wr + 1, dtype=float)
     yw = np.asarray(y[wl:wr + 1], dtype=float)
-    grid = np.arange(float(wl), float(wr) + 0.5 * HINGE_SE_STEP, HINGE_SE_STEP)
+    grid = np.arange(float(wl), float(min(i0, wr)) + 0.5 * HINGE_SE_STEP, HINGE_SE_STEP)
     g = np.maximum(u[None, :] - grid[:, None], 0.0)
     gy, gg = np.maximum(g @ yw, 0.0), np.sum(g * g, axis=1)
     sse = float(yw @ yw) - np.where(gg > 0, gy * gy / np.where(gg > 0, gg, 1.0), 0.0)
     level = float(np.min(sse)) + CURVE_CHI2 * noise * noise
     inside = np.flatnonzero(sse <= level)
-    if inside[0] == 0 or inside[-1] == grid.size - 1:
+    if inside[0] == 0:
         return math.inf
     i, j = int(inside[0]), int(inside[-1])
     lo = grid[i] - HINGE_SE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
-    hi = grid[j] + HINGE_SE_STEP * float(level - sse[j]) / float(sse[j + 1] - sse[j])
-    return 0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2)
+    hi = grid[j] if j == grid.size - 1 else grid[j] + HINGE_SE_STEP * float(level - sse[j]) / float(
+        sse[j + 1] - sse[j])
+    # at least a uniform's over the corners within one noise variance: a residual flat across them (a corner
+    # anywhere between two samples)
+    flat = grid[sse <= float(np.min(sse)) + noise * noise]
+    return max(0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2), float(flat[-1] - flat[0]) / math.sqrt(12.0))
 
 
 def _lone_samples(xs, sigma: float, threshold: float | None = None) -> np.ndarray:
@@ -763,7 +771,7 @@ def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
 def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
     """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
     ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
-    from that end) and the noise it was fitted with."""
+    from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with."""
     n = xs.size
     lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
     hi = EDGE_BAND[1] * peak
@@ -794,8 +802,8 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
                 if u_ring is not None:
                     u_end, jump_end, w_end, sigma_end = u_ring, jump_ring, w_ring, ring
     if windows is not None:
-        windows.update(start=(*w_start, sigma) if len(w_start) == 2 else None,
-                       end=(*w_end, sigma_end) if len(w_end) == 2 else None)
+        windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
+                       end=(*w_end, sigma_end) if len(w_end) == 3 else None)
     if jump_start and u_start is not None:
         flags.append("start_jump")
     if jump_end and u_end is not None:
