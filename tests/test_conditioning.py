@@ -1223,15 +1223,13 @@ def _half_sine_with_foot(foot_fraction, foot_samples, fs=50e3, tc=4e-3, peak=2.0
     (0.003, 10),  # a flat foot of 3 noise deviations over 10 samples: was ok with TC -4.7 %, now named
     (0.003, 20),  # the same over 20 samples: was ok with TC -9.1 %
     (0.005, 10),  # 5 noise deviations over 10 samples: was ok with TC -1.4 %
-    pytest.param(0.01, 10, marks=pytest.mark.xfail(strict=True, reason=(
-        "issue 9: a foot of 1 % of the peak over 10 samples: the hinge puts the start 5 samples before the foot's, "
-        "ok, TC about +2.4 %"))),
+    (0.01, 10),  # 1 % of the peak over 10 samples: was ok with TC +2.4 %, now named (the hinge's start not pinned)
 ])
 def test_a_foot_before_the_rise_is_measured_or_named(foot_fraction, foot_samples):
     """A foot before the force's rise (a cloth that carries a little load first; the zoo's model force has none)
     is part of the contact: either TC comes out within 1 % of the true one, from the foot's start, or the impact
-    shows a problem (the check of the corrected signal before the start, FOOT_CHECK_SIGMA). Known to fail where
-    the hinge puts the start before a higher foot's (strict xfail: a fix turns it into an XPASS failure)."""
+    shows a problem (the check of the corrected signal before the start, FOOT_CHECK_SIGMA, or the hinge's start
+    uncertainty, END_SE_MAX_FRACTION)."""
     v, fs, start_s, tc_s = _half_sine_with_foot(foot_fraction, foot_samples)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -1597,3 +1595,28 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
         xc = x[1:int(np.flatnonzero(sensed > 0.01 * true_peak)[-1]) + 1]
         if _peak_between_samples(xc, fs, noise) == []:
             assert abs(force_top(np.arange(xc.size) / fs, xc, noise)[0] / true_peak - 1.0) <= 0.05, phase
+
+
+@pytest.mark.parametrize("start_se, end_se, flags, named", [
+    (0.001, 0.001, (), False),  # TC known to +-0.28 % (twice the root sum of squares): no problem
+    (0.002, 0.004, (), False),  # +-0.89 %
+    (0.001, 0.0048, (), False),  # +-0.98 %
+    (0.001, 0.006, (), True),  # +-1.2 %: not determined to 1 %
+    (0.001, math.inf, (), True),  # the hinge's window allows any corner
+    (0.001, 0.006, ("end_jump",), False),  # a jump's half sample is CONTACT_JUMP_UNRESOLVED's to judge
+    (0.001, math.nan, (), False),  # no fit
+])
+def test_hinge_problems_name_tc_not_known_to_one_percent(start_se, end_se, flags, named):
+    """``_hinge_problems``: twice the root sum of squares of the ends' standard uncertainties above 1 % of TC (here
+    TC is 1 s, so the uncertainties are fractions of it) names the end with the larger one."""
+    from ballimpact.conditioning import _hinge_problems
+    from ballimpact.contact import ContactResult
+
+    c = ContactResult(found=True, start_s=1.0, end_s=2.0, edge_start_s=1.0, edge_end_s=2.0, start_index=1,
+                      end_index=2, peak_index=1, peak_V=1.0, n_impacts=1, noise_rms_V=1e-3, threshold_V=8e-3,
+                      clipped=False, flags=flags, start_se_s=start_se, end_se_s=end_se)
+    problems = _hinge_problems(c)
+    assert bool(problems) == named, problems
+    if problems:
+        assert problems[0].kind == ProblemKind.CONTACT_END_UNDETERMINED
+        assert problems[0].message.startswith("contact end not determined to 1 %"), problems[0].message

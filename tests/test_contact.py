@@ -601,9 +601,10 @@ def test_end_from_curve_rejects_bad_arguments(kwargs, match):
 def test_end_from_curve_pins_a_fast_rigs_faint_fade(fs):
     """A punctured ball's last samples at 150-200 kHz, noise 0.1 % of the peak (zoo traces 1:636, 3:796): the
     force falls by less than CURVE_MIN_SLOPE noise deviations per sample, yet over the time of a sample at
-    CURVE_RATE_HZ it stands out and the curve pins its end. Over 40 noise draws the uncertainty is finite in 90 %,
-    within 0.25 % of TC in most draws, and the end is within 3 of its standard uncertainties of the model's end (within 2
-    in at least 85 % of draws), within 0.5 % of TC wherever twice the uncertainty is within it."""
+    CURVE_RATE_HZ it stands out and the curve pins its end. Over 40 noise draws the uncertainty is finite in 85 %
+    (its three-sigma interval, CURVE_CHI2, inside the search), within 0.25 % of TC in two thirds of the draws, and the
+    end is within 3 of its standard uncertainties of the model's end (within 2 in at least 85 % of draws), within
+    0.5 % of TC wherever twice the uncertainty is within it."""
     from ballimpact.contact import CURVE_MIN_SLOPE, end_from_curve
 
     noise = 1.0e-3
@@ -625,8 +626,8 @@ def test_end_from_curve_pins_a_fast_rigs_faint_fade(fs):
             kept += 1
             assert abs(got - end_s) < 0.005 * tc, (seed, (got - end_s) / tc)
     z = np.abs(np.array(z))
-    assert z.size >= 36 and np.max(z) < 3.0 and np.mean(z < 2.0) >= 0.85, np.round(z, 2)
-    assert kept >= 30
+    assert z.size >= 34 and np.max(z) < 3.0 and np.mean(z < 2.0) >= 0.85, np.round(z, 2)
+    assert kept >= 27
 
 
 def test_curve_end_after_an_end_taken_for_a_jump():
@@ -642,3 +643,52 @@ def test_curve_end_after_an_end_taken_for_a_jump():
     assert "end_jump" in c.flags and (end_s - c.end_s) * fs > 0.4
     assert 0 < c.curve_end_se_s * fs < 0.1
     assert abs(c.curve_end_s - end_s) < 3.0 * c.curve_end_se_s
+
+
+def test_end_from_curve_uncertainty_sees_a_second_end_in_the_noise():
+    """A punctured ball's steep fall at 50 kHz with a few samples on it, noise 0.2 % of the peak (zoo trace 1:707's
+    class): in some draws a low sample on the fall makes the residual no parabola in the end, with a second end
+    within a few noise variances; the one-sigma interval is narrow there while the end is not known. Over 300 seeded
+    draws the model's end is within 3 standard uncertainties (the three-sigma interval over three) in every one."""
+    from ballimpact.contact import end_from_curve
+
+    fs, noise = 50e3, 2.0e-3
+    ball = ("punctured", (1.0, 1.0, 1.0, 1.0, 1.0), 20.0)
+    z = []
+    for seed in range(300):
+        end_s = (1000.0 + 0.37 + 0.0031 * seed) / fs
+        v, _ = _model_end(fs, end_s, *ball, noise, seed)
+        c = detect_contact(v, fs, noise_rms_V=noise)
+        got, se = end_from_curve(v, fs, c.start_s, c.end_s, noise)
+        assert se > 0, (seed, se)
+        if se < math.inf:
+            z.append(abs(got - end_s) / se)
+    z = np.array(z)
+    assert z.size >= 20 and np.max(z) <= 3.0, (z.size, np.round(np.sort(z)[-5:], 2))
+
+
+def test_hinge_end_uncertainty_is_honest_on_a_linear_fade():
+    """A force whose end is a straight fade of one noise deviation per sample (a 20-sample ramp from 20 noise
+    deviations, after a flat top), at 200 seeded sub-sample placements: the hinge's end is within 3 of its standard
+    uncertainties (``end_se_s``, the three-sigma interval over three) of the true end in at least 98 % of the draws
+    where it is finite (``curve=True``), and that uncertainty is of the order of the ends' scatter (a fade with about a noise
+    deviation per sample leaves its end known to a sample or so, not to a tenth of one)."""
+    fs, noise = 50e3, 1.0e-3
+    errs, ses = [], []
+    for seed in range(200):
+        rng = np.random.default_rng([5, seed])
+        end_u = 400.0 + rng.uniform(0.0, 1.0)
+        u = np.arange(600, dtype=float)
+        force = np.clip((end_u - u) * noise, 0.0, 20 * noise)  # flat top, then one noise deviation per sample
+        force[:200] = 0.0
+        force[200:205] = np.linspace(0.0, 20 * noise, 5)  # a steep rise
+        v = force + rng.normal(0.0, noise, u.size)
+        c = detect_contact(v, fs, noise_rms_V=noise, curve=True)
+        assert c.found and c.end_se_s > 0
+        if math.isfinite(c.end_se_s):
+            errs.append(c.end_s * fs - end_u)
+            ses.append(c.end_se_s * fs)
+    errs, ses = np.array(errs), np.array(ses)
+    assert errs.size >= 100, errs.size
+    assert np.mean(np.abs(errs) <= 3.0 * ses) >= 0.98, np.round(np.sort(np.abs(errs) / ses)[-5:], 2)
+    assert 0.5 < float(np.median(ses)) / float(np.std(errs)) < 2.0, (np.median(ses), np.std(errs))

@@ -638,3 +638,54 @@ def test_zoo_spike_top_between_samples(name, seed, fields, what, tmp_path):
     assert trace.truth.peak_is_spike, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
+
+
+#: Zoo rigs rendered with other noise (``zoo.render`` with the generator [99, seed, index, draw], as
+#: bench/fade_ends.py re-draws them), ok but wrong on main at ffc2770: a punctured ball's steep fall at 50 kHz, one
+#: low sample on it, and the force's curve ending 0.92 % of TC early with a one-sigma uncertainty of 0.19 %; its
+#: three-sigma interval sees the other end now, and the end is not determined (name, seed, index, draw, what).
+ZOO_CURVE_SECOND_END = [
+    ("punctured-curve-end-early-50kHz", 1, 707, 1, "zoo rig 1:707, noise draw 1: TC -1.09 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, draw, what", [pytest.param(*c, id=c[0]) for c in ZOO_CURVE_SECOND_END])
+def test_zoo_curve_end_with_a_second_end_not_taken(name, seed, index, draw, what, tmp_path):
+    rig = zoo.trace_for(seed, index).rig
+    trace = zoo.render(rig, np.random.default_rng([99, seed, index, draw]), name)
+    assert trace.truth.measurable and rig.plate_hz is None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert result.status == "excluded" and "contact end not determined to 1 %" in result.reason, result.reason
+
+
+def _ideal_plate_map():
+    """bench/ideal_plate_map.py, loaded as a module (its rigs: the zoo's benign rig with an ideal plate)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "bench" / "ideal_plate_map.py"
+    spec = importlib.util.spec_from_file_location("ideal_plate_map", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+#: Traces of bench/ideal_plate_map.py (seed 1), ok but wrong on main at ffc2770: an ideal plate at 31-46 kHz,
+#: noise 0.3-0.4 % of the peak, a force that fades into the noise with about a noise deviation per sample; the line
+#: through its last samples met zero 3 samples late and the refit from higher samples moved it by less than 0.5 % of
+#: TC. The hinge's uncertainty of the end shows TC not known to 1 % now (name, seed, index, what).
+ZOO_FADE_NOT_PINNED = [
+    ("ideal-plate-fade-45.7kHz", 1, 30, "punctured ball, 45.7 kHz, noise 0.38 % of the peak: TC +1.70 %"),
+    ("ideal-plate-fade-31.8kHz", 1, 385, "pressurised ball, 31.8 kHz, noise 0.39 % of the peak: TC +1.83 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_FADE_NOT_PINNED])
+def test_zoo_ideal_plate_fade_not_pinned_is_excluded(name, seed, index, what, tmp_path):
+    trace = _ideal_plate_map().trace_for(seed, index)
+    assert trace.truth.measurable and trace.rig.plate_hz is None, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert result.status == "excluded" and "the force fades into the noise there, and" in result.reason, \
+        result.reason

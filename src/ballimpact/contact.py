@@ -75,7 +75,8 @@ CURVE_SEARCH = 3.0  # its zero is looked for within this many samples of the hin
 CURVE_STEP = 0.05  # ... on a grid this fine, the least's neighbours refined by a parabola [samples]
 CURVE_MIN_SLOPE = 3.0  # ... pinned only where the force's slope there is this many noise deviations per sample [-]
 CURVE_RATE_HZ = 50.0e3  # faster: the search and the slope per CURVE_RATE_HZ sample (noise averaged over it) [Hz]
-CURVE_CHI2 = 4.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
+CURVE_CHI2 = 9.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
+HINGE_SE_STEP = 0.1  # the hinge's corner profiled on a grid this fine for the ends' uncertainties [samples]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the end [s]
 RING_WINDOW_S = 1.0e-3  # ... and lasts this long [s]
@@ -144,6 +145,15 @@ class ContactResult:
         The end from the force's curve before it (only with ``curve=True``,
         not at a jump nor with ringing after the contact; NaN otherwise) and
         its standard uncertainty [s]: see :func:`end_from_curve`.
+    start_se_s, end_se_s : float
+        Standard uncertainty of each end from its hinge's fit (only with
+        ``curve=True``; NaN otherwise) [s]: half the
+        width of the corners whose residual sum of squares, with the hinge's
+        slope fitted again, is within CURVE_CHI2 noise variances of the least,
+        over its root (inf when that reaches the fit's window); half a sample
+        at a jump; NaN without a fit. A force that fades into the noise with a
+        slope of about a noise deviation per sample leaves its end known to a
+        few samples only.
     """
 
     found: bool
@@ -165,6 +175,8 @@ class ContactResult:
     end_spread_s: float = math.nan
     curve_end_s: float = math.nan
     curve_end_se_s: float = math.nan
+    start_se_s: float = math.nan
+    end_se_s: float = math.nan
 
     @property
     def contact_time_s(self) -> float:
@@ -377,7 +389,7 @@ def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
     return min(max(zero, j_lo - max(n_band, 2), 0.0), float(j_lo + 1)), fallback
 
 
-def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split: bool = True):
+def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split: bool = True, window=None):
     """Where the force leaves zero before the peak [samples] and whether it jumps there; (None, False) when never zero.
 
     A jump: the force is at zero on one sample and on the next already higher
@@ -397,12 +409,14 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split:
     (FOOT_RESIDUAL_SIGMA sigma)**2, i.e. while the hinge predicts it within
     FOOT_RESIDUAL_SIGMA standard errors (the steep rise after a cloth ramp
     departs from the ramp). Applied to the reversed trace it gives the end.
+    A list ``window`` receives the first and last sample of the hinge's fit and the first sample above
+    FOOT_SIGMA noise deviations (the hinge's corner is not after it).
     """
     quiet = np.flatnonzero(xs[:peak_index + 1] <= FOOT_SIGMA * sigma)
     if not quiet.size:
         return None, False
     i0 = int(quiet[-1]) + 1
-    ts = _hinge_start(xs, peak_index, sigma, fs, i0, split)
+    ts = _hinge_start(xs, peak_index, sigma, fs, i0, split, window)
     if i0 + 1 <= peak_index and abs(ts - (i0 - 1)) < 0.5:
         step, rise = xs[i0] - xs[i0 - 1], xs[i0 + 1] - xs[i0]
         if step - rise > JUMP_SIGMA * math.sqrt(5.0) * sigma:
@@ -410,9 +424,11 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split:
     return ts, False
 
 
-def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: int, split: bool = True) -> float:
+def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: int, split: bool = True,
+                 window=None) -> float:
     """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise;
-    ``split``: the start from the hinge's first straight segment where the rise bends (:func:`_first_segment`)."""
+    ``split``: the start from the hinge's first straight segment where the rise bends (:func:`_first_segment`);
+    a list ``window`` receives the first and last sample of the fit that gave it and i0."""
     u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
@@ -442,6 +458,8 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
         sse1 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts1, b1)
         sse2 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts, b)
         if sse2 - sse1 > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
+            if window is not None:
+                window[:] = [wl, i0, i0]
             return ts1
     sse = _hinge_sse(u[wl:wr + 1], xs[wl:wr + 1], ts, b)
     while wr < last:
@@ -451,10 +469,12 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
         if sse_n - sse > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
             break
         wr, ts, b, sse = nxt, ts_n, b_n, sse_n
-    return _first_segment(u, xs, wl, wr, i0, ts, sse, sigma) if split else ts
+    if window is not None:
+        window[:] = [wl, wr, i0]
+    return _first_segment(u, xs, wl, wr, i0, ts, sse, sigma, window) if split else ts
 
 
-def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigma: float) -> float:
+def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigma: float, window=None) -> float:
     """The hinge's start again from its first straight segment when the rise bends [samples].
 
     The growth of the hinge window stops at the first sample the hinge predicts
@@ -480,6 +500,8 @@ def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigm
         if sse_k < best and b_k > slope:  # the rise flattens after the split: a drop from a low plateau
             best, k_best, ts_best = sse_k, k, ts_k
     if k_best is not None and sse - best > (KINK_SIGMA * sigma) ** 2:
+        if window is not None:
+            window[:] = [wl, k_best, i0]
         return ts_best
     return ts
 
@@ -591,7 +613,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     if n_impacts > 1:
         flags.append("multiple_impacts")
 
-    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags)
+    windows: dict = {}
+    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows)
     spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end) if spread else (math.nan, math.nan)
     # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
     # just before (after) the contact that the merging of runs joined to it is no force on the ball.
@@ -600,6 +623,10 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     u_end = max(min(u_end, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
+    ses = (math.nan, math.nan)
+    if curve:  # the ends' uncertainties go with the curve's (what the conditioning's checks read)
+        ses = (_hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
+               _hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags))
     by_curve = (math.nan, math.nan)
     # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
     # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
@@ -626,7 +653,44 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         end_spread_s=spreads[1],
         curve_end_s=t0_s + by_curve[0] / fs,
         curve_end_se_s=by_curve[1] / fs,
+        start_se_s=ses[0] / fs,
+        end_se_s=ses[1] / fs,
     )
+
+
+def _hinge_se(y, ts: float, window, jump: bool) -> float:
+    """Standard uncertainty [samples] of the corner ts of the hinge ``b * max(u - ts, 0)`` fitted to y[wl:wr + 1]
+    (``window`` = (wl, wr, i0, noise), y read from the end concerned): the half-width of the corners between wl and
+    i0 (the first sample above FOOT_SIGMA noise deviations holds force: no corner after it, as in the fit) whose
+    residual sum of squares, b fitted again (b >= 0), is within CURVE_CHI2 noise variances of the least, over its
+    root, or a uniform's over those within one noise variance where larger (a residual flat across them); inf when
+    that reaches wl (the quiet samples do not bound it), half a sample at a jump, NaN without a
+    window."""
+    if jump:
+        return 0.5
+    if window is None:
+        return math.nan
+    wl, wr, i0, noise = window
+    if wr - wl < 2 or i0 - wl < 1 or not noise > 0:
+        return math.nan
+    u = np.arange(wl, wr + 1, dtype=float)
+    yw = np.asarray(y[wl:wr + 1], dtype=float)
+    grid = np.arange(float(wl), float(min(i0, wr)) + 0.5 * HINGE_SE_STEP, HINGE_SE_STEP)
+    g = np.maximum(u[None, :] - grid[:, None], 0.0)
+    gy, gg = np.maximum(g @ yw, 0.0), np.sum(g * g, axis=1)
+    sse = float(yw @ yw) - np.where(gg > 0, gy * gy / np.where(gg > 0, gg, 1.0), 0.0)
+    level = float(np.min(sse)) + CURVE_CHI2 * noise * noise
+    inside = np.flatnonzero(sse <= level)
+    if inside[0] == 0:
+        return math.inf
+    i, j = int(inside[0]), int(inside[-1])
+    lo = grid[i] - HINGE_SE_STEP * float(level - sse[i]) / float(sse[i - 1] - sse[i])
+    hi = grid[j] if j == grid.size - 1 else grid[j] + HINGE_SE_STEP * float(level - sse[j]) / float(
+        sse[j + 1] - sse[j])
+    # at least a uniform's over the corners within one noise variance: a residual flat across them (a corner
+    # anywhere between two samples)
+    flat = grid[sse <= float(np.min(sse)) + noise * noise]
+    return max(0.5 * float(hi - lo) / math.sqrt(CURVE_CHI2), float(flat[-1] - flat[0]) / math.sqrt(12.0))
 
 
 def _lone_samples(xs, sigma: float, threshold: float | None = None) -> np.ndarray:
@@ -704,8 +768,10 @@ def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
     return [(int(starts[j]), float(run_max[j] / peak)) for j in np.flatnonzero(counted)]
 
 
-def _contact_ends(xs, peak_index, peak, sigma, fs, flags):
-    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen."""
+def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
+    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
+    ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
+    from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with."""
     n = xs.size
     lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
     hi = EDGE_BAND[1] * peak
@@ -717,8 +783,10 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags):
     if fallback_start or fallback_end:
         flags.append("edge_fallback")
     # feet: hinge fits where the force leaves (returns to) zero
-    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs)
-    u_end, jump_end = _foot_start(rev, n - 1 - peak_index, sigma, fs)
+    w_start, w_end = [], []
+    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start)
+    u_end, jump_end = _foot_start(rev, n - 1 - peak_index, sigma, fs, window=w_end)
+    sigma_end = sigma
     if u_end is not None:
         # Plate ringing that outlasts the contact would pass for force: measure
         # the disturbance just after the end and, when it is well above the
@@ -729,9 +797,13 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags):
             ring = float(np.sqrt(np.mean(xs[a:b] ** 2)))
             if ring > RING_SIGMA * sigma:
                 flags.append("ringing_after_contact")
-                u_ring, jump_ring = _foot_start(rev, n - 1 - peak_index, ring, fs)
+                w_ring = []
+                u_ring, jump_ring = _foot_start(rev, n - 1 - peak_index, ring, fs, window=w_ring)
                 if u_ring is not None:
-                    u_end, jump_end = u_ring, jump_ring
+                    u_end, jump_end, w_end, sigma_end = u_ring, jump_ring, w_ring, ring
+    if windows is not None:
+        windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
+                       end=(*w_end, sigma_end) if len(w_end) == 3 else None)
     if jump_start and u_start is not None:
         flags.append("start_jump")
     if jump_end and u_end is not None:
@@ -783,8 +855,14 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
     CURVE_SEARCH samples of ``end_s`` (above CURVE_RATE_HZ, within the time of
     CURVE_SEARCH samples at CURVE_RATE_HZ: a faster rig's end is not known to
     fewer of its samples); its standard uncertainty is the
-    half-width of the ends whose residual sum of squares is within one noise
-    variance of the least (chi-square with one degree of freedom). The same
+    half-width of the ends whose residual sum of squares is within CURVE_CHI2
+    (9) noise variances of the least (chi-square with one degree of freedom),
+    over 3: the three-sigma interval over three. Where the residual is not a
+    parabola in the end (a steep fall with a few samples on it, one of them
+    low in the noise, decides between two ends) the one-sigma interval is
+    narrow while the end is not known; the wider interval sees the other end
+    (zoo trace 1:707 at 50 kHz, 20 noise draws: one end 0.92 % of TC early
+    passed with a one-sigma uncertainty of 0.19 %). The same
     fit with a cubic over CURVE_FITS[1][1] of TC tells how much the end
     depends on the curve's model; that difference is added in quadrature.
 

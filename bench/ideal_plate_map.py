@@ -1,0 +1,104 @@
+"""Where an ideal plate's TC passes wrong: the model's forces on a benign rig with no resonance (issue 9).
+
+    python bench/ideal_plate_map.py --n 400 --seed 1           # fs 20-60 kHz
+    python bench/ideal_plate_map.py --n 400 --seed 1 --show-ok  # also every ok trace's end errors
+
+Apart from the zoo's seeds: each rig is tests/zoo.py's benign rig with an ideal plate (no resonance), a ball of
+Table 2 (the four in turn, parameters within the zoo's +-20 %) at 10-35 m/s, a sample rate of 20-60 kHz
+(log-uniform), white noise of 0.1-0.5 % of the peak and a random sample phase; it is rendered and judged as the
+zoo's traces are (``zoo.run_trace``), and conditioned again (``condition_voltage``) for the contact's ends.
+Prints the categories per sample-rate band, and for the ok-but-wrong traces
+(and with --show-ok every ok trace with |TC err| above 0.5 %) which end is off, in per cent of the true TC, and
+the end's flags (``end_curve``: the end from the force's curve; ``end_jump``: located to half a sample).
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import sys
+import warnings
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+import numpy as np  # noqa: E402
+
+import zoo  # noqa: E402
+
+from ballimpact.conditioning import condition_voltage  # noqa: E402
+
+BALLS = ("pressureless", "pressurised", "punctured", "oversize")
+RATE_BANDS_KHZ = (20.0, 30.0, 40.0, 50.0, 60.0)
+
+
+def rig_for(seed: int, index: int):
+    """The rig of one map trace and the generator to render it with."""
+    rng = np.random.default_rng([seed, index, 10])
+    fs = zoo._loguniform(rng, 20e3, 60e3)
+    vin = float(rng.uniform(10.0, 35.0))
+    noise_fraction = float(rng.uniform(0.001, 0.005))
+    scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
+             float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
+    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], scale=scale, vin_m_s=vin, mode="plate", sample_rate_hz=fs,
+                  plate_hz=None, noise_V=noise_fraction * zoo._BENIGN["peak_volts"])
+    return zoo.Rig(**fields), rng
+
+
+def trace_for(seed: int, index: int) -> zoo.ZooTrace:
+    """One map trace, rendered."""
+    rig, rng = rig_for(seed, index)
+    return zoo.render(rig, rng, f"ideal {seed}:{index}")
+
+
+def run_one(args):
+    seed, index = args
+    trace = trace_for(seed, index)
+    result, j = zoo.run_trace(trace)
+    t = trace.truth
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rig = trace.rig
+        c = condition_voltage(trace.voltage_V, trace.sample_rate_hz, polarity=rig.polarity, mains_hz=rig.mains_hz,
+                              tau_s=rig.tau_s).contact  # as process_impact conditions it (tau and mains given)
+    start_err = end_err = np.nan
+    flags = ()
+    if c.found:
+        start_err = 100 * (c.start_s - t.start_s) / t.tc_s
+        end_err = 100 * (c.end_s - t.end_s) / t.tc_s
+        flags = c.flags
+    return (index, trace.rig, j.category, 100 * j.errors["tc"], start_err, end_err, flags, j.reason)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=400, help="number of rigs")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--show-ok", action="store_true", help="also the ok traces with |TC err| > 0.5 %")
+    a = ap.parse_args(argv)
+    jobs = [(a.seed, i) for i in range(a.n)]
+    with mp.Pool(a.workers) as pool:
+        rows = pool.map(run_one, jobs, chunksize=4)
+    cats = Counter(r[2] for r in rows)
+    print(f"{a.n} rigs (seed {a.seed}, ideal plate, fs 20-60 kHz): "
+          + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    table = Counter()
+    for r in rows:
+        khz = r[1].sample_rate_hz / 1e3
+        band = next(f"{lo:g}-{hi:g}" for lo, hi in zip(RATE_BANDS_KHZ, RATE_BANDS_KHZ[1:]) if khz < hi)
+        table[(band, r[2])] += 1
+    for band in sorted({b for b, _ in table}, key=lambda b: float(b.split("-")[0])):
+        print(f"  fs {band:>5} kHz: " + ", ".join(f"{c} {table[(band, c)]}" for c in zoo.CATEGORIES
+                                                 if table[(band, c)]))
+    for index, rig, cat, tc, se, ee, flags, reason in rows:
+        if cat == "ok_wrong" or (a.show_ok and cat.startswith("ok") and abs(tc) > 0.5):
+            print(f"  {cat} {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
+                  f"noise {100 * rig.noise_V / rig.peak_volts:.2f} % of the peak: TC {tc:+.2f} % (start {se:+.2f} %, "
+                  f"end {ee:+.2f} %), flags {' '.join(f for f in flags if f.startswith(('end', 'start', 'cloth')))}")
+
+
+if __name__ == "__main__":
+    main()
