@@ -197,7 +197,6 @@ PLATE_EXACT_END_REACH = 6  # an exact undone force's ends fitted this many sampl
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
-PLATE_REFINED_SPIKE = 0.015  # a refined resonance lowers a peak on the pre-buckling ramp by more of it than the identified one: not known [-]
 PLATE_PEAK_SIGMA = 3.0  # the exact undone force's largest sample this many of its noise deviations ... [-]
 PLATE_LOWPASS_SPIKE = 0.04  # ... above the low-passed peak: lost; the check must see a loss of this fraction [-]
 PEAK_FIT_S = 0.2e-3  # the exact undone force read at each sample from a quadratic fit over this long around it [s]
@@ -883,9 +882,8 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
                     "contact and the 2 ms after it")
         hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
         if isinstance(hit, str):  # the undone force still rings or fails a check: refine the resonance, try again
-            first, plate = plate, refine_plate_resonance(x[ra:rb], fs, plate)
+            plate = refine_plate_resonance(x[ra:rb], fs, plate)
             hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
-            hit = (_refined_spike_loss(x, fs, hit, first, t0_s) or hit) if not isinstance(hit, str) else hit
         if isinstance(hit, str):
             return (f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}) "
                     f"not undone: {hit}")
@@ -2082,47 +2080,6 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                     f"contact start not determined to 1 %: {seen}; the plate rings near half the sample rate (or "
                     "above it, seen through its alias: not undone) (sample faster)")]
-
-
-def _refined_spike_loss(x, fs, hit, first: PlateResonance, t0_s) -> str | None:
-    """Why an undone force accepted with a refined resonance has no known peak, in words; None when it has one.
-
-    ``hit`` is what :func:`_undone_candidates` accepted with the refined
-    resonance (force, contact, resonance, cutoff [Hz]), ``first`` the
-    resonance identified before the refinement. The refinement
-    (:func:`ballimpact.plate.refine_plate_resonance`) minimises what the
-    undone force holds near fn, the force's own content there included: the
-    ball's drop at buckling (BUCKLING_TIME_S into the contact) is such
-    content, and a refinement that takes it for ringing flattens the
-    pre-buckling spike with a plate that is off (overshoot_map trace 5:210:
-    identified at 10.6 kHz, damping ratio 0.14, the truth 10.5 kHz and 0.15;
-    refined to 11.5 kHz and 0.072, its spike 7.5 % low). So where the
-    accepted force's largest sample lies on the pre-buckling ramp (up to
-    BUCKLING_TIME_S and PEAK_FIT_RAMP_SAMPLES after the start), the force
-    undone with the identified resonance (through the same low-pass) must
-    not peak above it by more than PLATE_REFINED_SPIKE: which plate is right
-    decides the spike's height, and it is not known. Both peaks are the
-    largest samples inside the accepted contact, before its ends are
-    restored. A refinement that raises the spike, or lowers a peak after
-    buckling (the force's smooth top), is not refused here.
-    """
-    y, c, plate, cutoff = hit
-    s_u, e_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
-    i0, i1 = max(int(math.ceil(s_u)), 0), min(int(math.floor(e_u)) + 1, x.size)
-    ramp = int(math.floor(s_u + BUCKLING_TIME_S * fs)) + PEAK_FIT_RAMP_SAMPLES + 1
-    if i1 <= i0 or not c.peak_index < ramp:
-        return None
-    peaks = []
-    for p in (plate, first):
-        u = undo_plate_resonance(x, fs, p.frequency_hz, p.damping_ratio)
-        u = u if math.isinf(cutoff) else lowpass_zero_phase(u, fs, cutoff)
-        peaks.append(float(np.max(u[i0:i1])))
-    refined, identified = peaks
-    if not refined > 0 or not identified > (1.0 + PLATE_REFINED_SPIKE) * refined:
-        return None
-    return (f"refined from {first.frequency_hz / 1e3:.3g} kHz (damping ratio {first.damping_ratio:.2g}), the "
-            f"resonance lowers the peak on the pre-buckling ramp by {100 * (1 - refined / identified):.2g} % "
-            "(the refinement may take the ball's drop at buckling for ringing): the peak is not known")
 
 
 def _negative_force(x, fs, noise, peak, end_u):
