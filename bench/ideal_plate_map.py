@@ -38,12 +38,8 @@ def rig_for(seed: int, index: int):
     """The rig of one map trace and the generator to render it with."""
     rng = np.random.default_rng([seed, index, 10])
     fs = zoo._loguniform(rng, 20e3, 60e3)
-    vin = float(rng.uniform(10.0, 35.0))
-    noise_fraction = float(rng.uniform(0.001, 0.005))
-    scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
-             float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
-    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], scale=scale, vin_m_s=vin, mode="plate", sample_rate_hz=fs,
-                  plate_hz=None, noise_V=noise_fraction * zoo._BENIGN["peak_volts"])
+    shot = zoo.map_shot(rng)
+    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], mode="plate", sample_rate_hz=fs, plate_hz=None, **shot)
     return zoo.Rig(**fields), rng
 
 

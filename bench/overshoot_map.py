@@ -44,12 +44,9 @@ def rig_for(seed: int, index: int, few: bool):
         fs = zoo._loguniform(rng, 20e3, 200e3)
         fn = zoo._loguniform(rng, 3e3, min(30e3, 0.45 * fs))
     zeta = zoo._loguniform(rng, 0.02, 0.3)
-    vin = float(rng.uniform(10.0, 35.0))
-    noise_fraction = float(rng.uniform(0.001, 0.005))
-    scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
-             float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
-    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], scale=scale, vin_m_s=vin, mode="plate", sample_rate_hz=fs,
-                  plate_hz=fn, plate_zeta=zeta, noise_V=noise_fraction * zoo._BENIGN["peak_volts"])
+    shot = zoo.map_shot(rng)
+    fields = dict(zoo._BENIGN, ball=BALLS[index % 4], mode="plate", sample_rate_hz=fs, plate_hz=fn, plate_zeta=zeta,
+                  **shot)
     return zoo.Rig(**fields), rng
 
 

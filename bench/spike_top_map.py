@@ -38,17 +38,13 @@ def rig_for(seed: int, index: int):
     rng = np.random.default_rng([seed, index])
     while True:
         fs = zoo._loguniform(rng, 20e3, 60e3)
-        vin = float(rng.uniform(10.0, 35.0))
-        noise_fraction = float(rng.uniform(0.001, 0.005))
-        scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
-                 float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
+        shot = zoo.map_shot(rng)
         plate = index % 2 == 1 and 0.45 * fs > 10e3
-        fields = dict(zoo._BENIGN, ball=BALLS[(index // 2) % 2], scale=scale, vin_m_s=vin,
-                      mode="plate" if plate else "benign", sample_rate_hz=fs,
-                      noise_V=noise_fraction * zoo._BENIGN["peak_volts"])
+        fields = dict(zoo._BENIGN, ball=BALLS[(index // 2) % 2], mode="plate" if plate else "benign",
+                      sample_rate_hz=fs, **shot)
         if plate:
             fields.update(plate_hz=zoo._loguniform(rng, 10e3, 0.45 * fs), plate_zeta=zoo._loguniform(rng, 0.1, 0.3))
-        sim = zoo.model_force(fields["ball"], scale, vin)[2]
+        sim = zoo.model_force(fields["ball"], shot["scale"], shot["vin_m_s"])[2]
         if float(sim.time_to_peak_s) < zoo.BUCKLING_TIME_S + 0.5 * zoo.TIME_STEP_S:
             return zoo.Rig(**fields), rng
 

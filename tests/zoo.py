@@ -263,6 +263,17 @@ def _loguniform(rng, lo, hi):
     return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
 
 
+def map_shot(rng: np.random.Generator) -> dict:
+    """Rig fields of one shot for the maps of bench/ (rigs apart from the zoo's seeds): an inbound speed of
+    10-35 m/s, the ball's Table 2 parameters scaled by 0.95-1.05 or 0.8-1.2 each, and white noise of 0.1-0.5 % of
+    the benign rig's peak (drawn in that order: speed, noise, scales)."""
+    vin = float(rng.uniform(10.0, 35.0))
+    noise_fraction = float(rng.uniform(0.001, 0.005))
+    scale = (float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.8, 1.2)),
+             float(rng.uniform(0.95, 1.05)), float(rng.uniform(0.8, 1.2)))
+    return dict(scale=scale, vin_m_s=vin, noise_V=noise_fraction * _BENIGN["peak_volts"])
+
+
 def _draw(rng, factor):
     """Full-range draw of one factor: a dict of Rig fields."""
     if factor == "sample_rate":
