@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import importlib.util
-
 import pytest
 from numpy.testing import assert_allclose
 
-from workflow_helpers import REPO
+from workflow_helpers import bench_module
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location("bench_run", REPO / "bench" / "run.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return bench_module("run")
 
 
 @pytest.mark.parametrize(("ns", "t0", "per"), [((2, 4, 8), 12.0, 3.5), ((1, 3), 0.0, 7.25)])

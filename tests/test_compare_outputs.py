@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 
 import numpy as np
@@ -10,14 +9,11 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from workflow_helpers import REPO
+from workflow_helpers import bench_module
 
 
 def _compare():
-    spec = importlib.util.spec_from_file_location("compare_outputs", REPO / "bench" / "compare_outputs.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return bench_module("compare_outputs")
 
 
 @pytest.fixture()

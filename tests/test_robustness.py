@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 
 import zoo
 from ballimpact.problems import ProblemKind
+from workflow_helpers import bench_module
 
 #: Rig overrides that leave only the factor of interest: no spikes, no other fault.
 CLEAN = dict(truncate="", clip_factor=0.0, spikes=(), second=None)
@@ -683,18 +684,6 @@ def test_zoo_curve_end_with_a_second_end_not_taken(name, seed, index, draw, what
     assert result.status == "excluded" and "contact end not determined to 1 %" in result.reason, result.reason
 
 
-def _ideal_plate_map():
-    """bench/ideal_plate_map.py, loaded as a module (its rigs: the zoo's benign rig with an ideal plate)."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "bench" / "ideal_plate_map.py"
-    spec = importlib.util.spec_from_file_location("ideal_plate_map", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 #: Traces of bench/ideal_plate_map.py (seed 1), ok but wrong on main at ffc2770: an ideal plate at 31-46 kHz,
 #: noise 0.3-0.4 % of the peak, a force that fades into the noise with about a noise deviation per sample; the line
 #: through its last samples met zero 3 samples late and the refit from higher samples moved it by less than 0.5 % of
@@ -707,7 +696,7 @@ ZOO_FADE_NOT_PINNED = [
 
 @pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_FADE_NOT_PINNED])
 def test_zoo_ideal_plate_fade_not_pinned_is_excluded(name, seed, index, what, tmp_path):
-    trace = _ideal_plate_map().trace_for(seed, index)
+    trace = bench_module("ideal_plate_map").trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import importlib.util
 import os
 import subprocess
 import sys
@@ -13,6 +15,17 @@ REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 SNAKEMAKE = BIN / "snakemake"
 BALLIMPACT = BIN / "ballimpact"
+
+
+
+@functools.cache
+def bench_module(name: str):
+    """The script bench/<name>.py, loaded as a module (once per test session)."""
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", REPO / "bench" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
 
 FINAL_FIGURES = FIGURE_STEMS  # the PNG stems of every session, from the figure registry
 IMPACTS_CSV_COLUMNS = [  # docs/outputs.md, in order
