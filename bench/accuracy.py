@@ -10,6 +10,7 @@ excluded with the expected reason.
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import json
 from pathlib import Path

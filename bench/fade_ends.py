@@ -19,6 +19,7 @@ how many draws the conditioning found no problem at all.
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import sys
 import warnings

@@ -14,6 +14,7 @@ the end's flags (``end_curve``: the end from the force's curve; ``end_jump``: lo
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import multiprocessing as mp
 import sys

@@ -12,6 +12,7 @@ Prints the categories per samples-per-period and damping band and the ok-but-wro
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import math
 import multiprocessing as mp

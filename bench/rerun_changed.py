@@ -12,6 +12,7 @@ counts per seed before and after on those traces, and every trace whose category
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import csv
 import math

@@ -20,6 +20,7 @@ bench/out/robustness-s<SEED>-n<N>.{md,csv} (per trace).
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import math
 import multiprocessing as mp

@@ -14,6 +14,7 @@ lift it (the test of its ramp that failed), and the excluded measurable traces w
 
 from __future__ import annotations
 
+import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import argparse
 import math
 import multiprocessing as mp

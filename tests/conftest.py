@@ -6,6 +6,12 @@ import hashlib
 import os
 from pathlib import Path
 
+# One BLAS thread, set before numpy is first imported: the suite processes thousands of traces in this one
+# process, whose small matrices OpenBLAS's threads slow down (bench/single_thread.py has the measured figures;
+# Snakemake does the same for each job).
+for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
 import pandas as pd
 import pytest
 from hypothesis import settings

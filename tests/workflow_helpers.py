@@ -21,6 +21,8 @@ BALLIMPACT = BIN / "ballimpact"
 @functools.cache
 def bench_module(name: str):
     """The script bench/<name>.py, loaded as a module (once per test session)."""
+    if str(REPO / "bench") not in sys.path:  # the scripts import their siblings (single_thread) as a run would
+        sys.path.insert(0, str(REPO / "bench"))
     spec = importlib.util.spec_from_file_location(f"bench_{name}", REPO / "bench" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
