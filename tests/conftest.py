@@ -6,17 +6,15 @@ import hashlib
 import os
 from pathlib import Path
 
-# One BLAS thread, set before numpy is first imported: the suite processes thousands of traces in this one
-# process, whose small matrices OpenBLAS's threads slow down (bench/single_thread.py has the measured figures;
-# Snakemake does the same for each job).
-for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+from ballimpact.threads import one_blas_thread
 
-import pandas as pd
-import pytest
-from hypothesis import settings
+one_blas_thread()  # before numpy is first imported: the suite processes thousands of traces in this process
 
-from ballimpact.synth import SensorChain, SynthConfig, write_session
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
+
+from ballimpact.synth import SensorChain, SynthConfig, write_session  # noqa: E402
 
 # Property tests run on a fixed, derandomised set of examples, so that a run of `make test`
 # passes or fails the same way every time. HYPOTHESIS_PROFILE=hunt turns them back into a
