@@ -13,7 +13,6 @@ from numpy.testing import assert_allclose
 from tracekit import DIRTY, make_trace
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact import contact
 from ballimpact.contact import contact_samples, detect_clipping, detect_contact, robust_noise
 
 RATES_HZ = [66964.3, 50000.0]
@@ -305,18 +304,10 @@ def test_triangular_force_edges_and_ends_at_its_zero_crossings(ta, tp, tb):
     t = np.arange(400) / fs
     x = np.clip(np.minimum((t - ta) / (tp - ta), (tb - t) / (tb - tp)), 0.0, None)
     c = detect_contact(3.0 * x, fs)
-    first = math.ceil(ta * fs) / fs  # the first sample with force
-    if x[int(round(first * fs))] < contact.STEP_FRACTION:
-        assert c.found and c.flags == ()
-        assert_allclose([c.start_s, c.edge_start_s], ta, atol=1e-9)
-        assert_allclose(c.contact_time_s, tb - ta, atol=1e-9)
-    else:
-        # the first sample out of the noise already above 3 % of the peak (the second triangle: 3.1 %): a step
-        # from zero anywhere between ta and it fits the samples as well as the ramp, and the start is the middle
-        assert c.found and c.flags == ("start_step",)
-        assert_allclose(c.start_s, 0.5 * (ta + first), atol=1e-9)
-        assert_allclose(c.edge_start_s, 0.5 * (ta + first), atol=1e-9)  # the edge is not before the start
+    assert c.found and c.flags == ()
+    assert_allclose([c.start_s, c.edge_start_s], ta, atol=1e-9)
     assert_allclose([c.end_s, c.edge_end_s], tb, atol=1e-9)
+    assert_allclose(c.contact_time_s, tb - ta, atol=1e-9)
 
 
 def test_steep_edge_line_through_the_two_samples_around_the_band():
@@ -499,11 +490,7 @@ def test_end_after_a_low_plateau_is_the_foot_of_its_drop(phase):
     c = detect_contact(v, fs, noise_rms_V=1.0e-3)
     assert c.found and c.n_impacts == 1
     assert abs(c.end_s - end_s) * fs < 0.3
-    # the rise from zero to the peak over 30 samples puts its first sample at up to 3.3 % of the peak: where that is
-    # above STEP_FRACTION the start is the middle of the interval a step could be in (within half a sample)
-    step = "start_step" in c.flags
-    assert_allclose(c.start_s, start_s, atol=(0.5 if step else 0.05) / fs)
-    assert_allclose(c.end_s - start_s, end_s - start_s, rtol=0.002)
+    assert_allclose(c.contact_time_s, end_s - start_s, rtol=0.002)
 
 
 # ------------------------------------------------- the end from the force's curve (issue 9)
@@ -726,7 +713,7 @@ def test_a_step_from_zero_puts_the_start_in_the_middle_of_its_interval():
     ta), its uncertainty at least the interval's uniform deviation."""
     fs, ta, step = 1000.0, 0.1005, 0.04
     t, f = _stepped_triangle(fs, ta, step)
-    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True)
+    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True, step=True)
     slope = (1.0 - step) / 9.6 * fs  # [1/s]
     line_zero = ta - step / slope
     first = math.ceil(ta * fs) / fs
@@ -742,6 +729,6 @@ def test_a_ramp_whose_first_sample_is_low_keeps_the_hinge_start():
     step; the hinge's corner is the ramp's zero exactly."""
     fs, ta = 1000.0, 0.1008
     t, f = _stepped_triangle(fs, ta, 0.0, rise_samples=10.0)
-    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True)
+    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True, step=True)
     assert "start_step" not in c.flags and "start_jump" not in c.flags, c.flags
     assert_allclose(c.start_s, ta, atol=1e-9)

@@ -729,7 +729,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         messages.append(msg)
     problems = it.problems + it.tau_problems
     contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
-                                                curve=True), fs, t0_s)
+                                                curve=True, step=True), fs, t0_s)
     at_ends = _spikes_at_ends(spikes, contact, fs, t0_s)
     problems.extend(at_ends)
     if contact.found:
@@ -1481,7 +1481,10 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False)
     out.extend(_negative_force(x, fs, noise, peak, e_u))
     out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, noise, peak))
     xc = x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1]
-    out.extend(_peak_between_samples(xc, fs, noise, lifted=front))
+    # with the sample before the contact: a start inside the interval before the first sample (a jump's, a step's)
+    # leaves it out of xc, and a largest sample that is the contact's first must still be judged against it
+    out.extend(_peak_between_samples(x[max(int(math.ceil(s_u)) - 1, 0):int(math.floor(e_u)) + 1], fs, noise,
+                                     lifted=front))
     out.extend(_second_hump(xc, fs, noise, peak))
     out.extend(_peak_on_step_response(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     out.extend(_peak_on_front_ringing(x, fs, noise, peak, s_u, e_u) if front else [])

@@ -572,7 +572,7 @@ def _main_run(above: np.ndarray, peak_index: int, merge_gap: int):
 
 def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise_rms_V: float | None = None,
                    raw_voltage_V=None, adc_range_V=None, adc_bits: int = 16, spread: bool = False,
-                   curve: bool = False) -> ContactResult:
+                   curve: bool = False, step: bool = False) -> ContactResult:
     """Find the contact in a conditioned plate voltage.
 
     The voltage must have its offset, hum and decay removed and the polarity
@@ -607,6 +607,12 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     curve : bool
         Also find the end from the force's curve before it
         (:func:`end_from_curve`; ``curve_end_s``, ``curve_end_se_s``).
+    step : bool
+        A start whose first sample out of the noise already holds
+        STEP_FRACTION of the peak is the middle of the interval a step from
+        zero may be in (flag ``start_step``; see ``_foot_start``): the model's
+        force steps up at 2 mm of compression. False (default): the hinge's
+        corner, as for a ramp.
 
     Returns
     -------
@@ -653,8 +659,8 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         flags.append("multiple_impacts")
 
     windows: dict = {}
-    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows)
-    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end) if spread else (math.nan, math.nan)
+    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows, step)
+    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_end, step) if spread else (math.nan, math.nan)
     # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
     # just before (after) the contact that the merging of runs joined to it is no force on the ball.
     run_a, run_b = _unbroken_run(xs, peak_index, sigma, thr, run_a, run_b)
@@ -809,7 +815,7 @@ def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
     return [(int(starts[j]), float(run_max[j] / peak)) for j in np.flatnonzero(counted)]
 
 
-def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
+def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None, step=False):
     """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
     ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
     from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with."""
@@ -825,7 +831,7 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
         flags.append("edge_fallback")
     # feet: hinge fits where the force leaves (returns to) zero
     w_start, w_end, step_start = [], [], []
-    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start, step=step_start)
+    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start, step=step_start if step else None)
     u_end, jump_end = _foot_start(rev, n - 1 - peak_index, sigma, fs, window=w_end)
     sigma_end = sigma
     if u_end is not None:
@@ -867,13 +873,13 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None):
     return u_start, u_end, u_edge_start, u_edge_end
 
 
-def _spreads(xs, peak_index, sigma, fs, u_start, u_end) -> tuple[float, float]:
+def _spreads(xs, peak_index, sigma, fs, u_start, u_end, step=False) -> tuple[float, float]:
     """How far each end moves when fitted from the samples above SPREAD_FACTOR times the thresholds [s]."""
     n = xs.size
     spreads = [math.nan, math.nan]
     # one line through each foot, never split where it bends: the spread then also measures how far the end
     # depends on the model of the foot (a bent tail may be the plate's lag, not the ball's force)
-    u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs, split=False, step=[])
+    u2, _ = _foot_start(xs, peak_index, SPREAD_FACTOR * sigma, fs, split=False, step=[] if step else None)
     e2, _ = _foot_start(xs[::-1], n - 1 - peak_index, SPREAD_FACTOR * sigma, fs, split=False)
     if u2 is not None:
         spreads[0] = (u2 - u_start) / fs
