@@ -1640,3 +1640,20 @@ def test_a_spike_replaced_at_a_contact_end_leaves_that_end_undetermined(where, o
     else:
         assert [p.kind for p in said] == [ProblemKind.CONTACT_END_UNDETERMINED]
         assert said[0].message.startswith(f"contact {where} not determined"), said[0].message
+
+
+@pytest.mark.parametrize("flags, curve_se, said", [
+    ((), math.nan, "the line through its last samples meets zero within +-12 us only"),
+    (("end_curve",), 0.006, "the force's curve before it meets zero within +-12 us only"),
+])
+def test_hinge_problems_say_which_fit_gave_the_end(flags, curve_se, said):
+    """``_hinge_problems`` names the fit that gave the end: an end from the force's curve (``end_curve``) is not "the
+    line through its last samples" (TC 1 ms: an end uncertain by 6 us, +-12 us at twice it, is 1.2 % of TC)."""
+    from ballimpact.conditioning import _hinge_problems
+    from ballimpact.contact import ContactResult
+
+    c = ContactResult(found=True, start_s=1.0, end_s=1.001, edge_start_s=1.0, edge_end_s=1.001, start_index=1,
+                      end_index=2, peak_index=1, peak_V=1.0, n_impacts=1, noise_rms_V=1e-3, threshold_V=8e-3,
+                      clipped=False, flags=flags, start_se_s=1e-7, end_se_s=6e-6, curve_end_se_s=curve_se * 1e-3)
+    problems = _hinge_problems(c)
+    assert len(problems) == 1 and said in problems[0].message, problems

@@ -692,3 +692,43 @@ def test_hinge_end_uncertainty_is_honest_on_a_linear_fade():
     assert errs.size >= 100, errs.size
     assert np.mean(np.abs(errs) <= 3.0 * ses) >= 0.98, np.round(np.sort(np.abs(errs) / ses)[-5:], 2)
     assert 0.5 < float(np.median(ses)) / float(np.std(errs)) < 2.0, (np.median(ses), np.std(errs))
+
+
+def _stepped_triangle(fs, ta, step, rise_samples=9.6, fall_s=0.030):
+    """A noise-free force that steps from 0 to ``step`` of its peak at ta, rises linearly to the peak (1) over
+    rise_samples and falls linearly to zero over fall_s [s]: (time [s], force [-])."""
+    tp = ta + rise_samples / fs
+    t = np.arange(int(round((tp + fall_s + 0.1) * fs))) / fs
+    rise = step + (1.0 - step) * (t - ta) / (tp - ta)
+    f = np.where((t >= ta) & (t <= tp), rise, np.clip((tp + fall_s - t) / fall_s, 0.0, None))
+    return t, np.where(t < ta, 0.0, f)
+
+
+def test_a_step_from_zero_puts_the_start_in_the_middle_of_its_interval():
+    """The model's force steps up from zero at 2 mm of compression (section 3.2.4): a step of 4 % of the peak at
+    ta, half a sample before the first sample, then a ramp of 10 % of the peak per sample (too small a step beside
+    the rise for a ``start_jump``). The line through the ramp meets zero at ta - step / slope (0.4 samples early:
+    the bias of bench/ideal_plate_map.py's starts); the step may be anywhere between it and the first sample, whose
+    4 % + 5 % of the peak is above STEP_FRACTION, so the start is the middle of that interval (0.05 samples after
+    ta), its uncertainty at least the interval's uniform deviation."""
+    fs, ta, step = 1000.0, 0.1005, 0.04
+    t, f = _stepped_triangle(fs, ta, step)
+    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True, step=True)
+    slope = (1.0 - step) / 9.6 * fs  # [1/s]
+    line_zero = ta - step / slope
+    first = math.ceil(ta * fs) / fs
+    assert "start_step" in c.flags and "start_jump" not in c.flags, c.flags
+    assert_allclose(c.start_s, 0.5 * (line_zero + first), atol=1e-9)
+    assert abs(c.start_s - ta) * fs <= 0.5
+    assert c.start_se_s >= (first - line_zero) / math.sqrt(12.0) - 1e-12
+    assert_allclose(c.end_s, ta + 9.6 / fs + 0.030, atol=1e-9)
+
+
+def test_a_ramp_whose_first_sample_is_low_keeps_the_hinge_start():
+    """The same ramp without the step, its first sample at 2 % of the peak (below STEP_FRACTION): a foot, not a
+    step; the hinge's corner is the ramp's zero exactly."""
+    fs, ta = 1000.0, 0.1008
+    t, f = _stepped_triangle(fs, ta, 0.0, rise_samples=10.0)
+    c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True, step=True)
+    assert "start_step" not in c.flags and "start_jump" not in c.flags, c.flags
+    assert_allclose(c.start_s, ta, atol=1e-9)

@@ -135,7 +135,8 @@ SPREAD_MAX_FRACTION = 0.005  # an end that moves by more of TC when fitted from 
 CURVE_MIN_RATE_HZ = 33.0e3  # ... unless the force's curve pins it, at this sample rate or above [Hz]
 CURVE_LATE_FRACTION = 2.5e-3  # the force's curve meets zero later than the end by more of TC: a convex fade [-]
 JUMP_MAX_FRACTION = 0.007  # a force jump locates its contact end to half a sample; at most this fraction of TC [-]
-END_SE_MAX_FRACTION = 0.01  # twice the hinges' standard uncertainty of TC (both ends) at most this fraction of it [-]
+END_SE_MAX_FRACTION = 0.01  # END_SE_COVERAGE times the ends' standard uncertainty of TC at most this fraction of it [-]
+END_SE_COVERAGE = 2.0  # ... the coverage factor of a 95 % interval of a normal error [-]
 TURN_FRACTION = 0.02  # a turning point of the contact force is left by more than this fraction of the peak ... [-]
 TURN_SIGMA = 8.0  # ... and this many noise deviations [-]
 TURN_MIN_OSCILLATION = 3  # fewest turning points of an oscillation [-]
@@ -728,7 +729,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         messages.append(msg)
     problems = it.problems + it.tau_problems
     contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
-                                                curve=True), fs, t0_s)
+                                                curve=True, step=True), fs, t0_s)
     at_ends = _spikes_at_ends(spikes, contact, fs, t0_s)
     problems.extend(at_ends)
     if contact.found:
@@ -1434,28 +1435,33 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
 
 
 def _hinge_problems(contact: ContactResult) -> list:
-    """TC not known to 1 % from its ends' fits: twice the root sum of squares of the ends' standard uncertainties
-    (``contact.start_se_s`` / ``end_se_s``, each the hinge's three-sigma interval over three; an end from the force's
-    curve, ``end_curve``, its own; a jump's half sample is judged by CONTACT_JUMP_UNRESOLVED) above
-    END_SE_MAX_FRACTION of TC. A force that fades into the noise with about a noise deviation per sample leaves its
-    end known to a few samples: on ideal plates at 20-60 kHz with noise of 0.1-0.5 % of the peak
-    (bench/ideal_plate_map.py), the line through the last samples met zero up to 1.8 % of TC late, and was ok."""
+    """TC not known to 1 % from its ends' fits: END_SE_COVERAGE times the root sum of squares of the ends' standard
+    uncertainties (``contact.start_se_s`` / ``end_se_s``, each the hinge's three-sigma interval over three, with a
+    step's uniform at a ``start_step``; an end from the force's curve, ``end_curve``, its own; a jump's half sample is
+    judged by CONTACT_JUMP_UNRESOLVED) above END_SE_MAX_FRACTION of TC. A force that fades into the noise with about a
+    noise deviation per sample leaves its end known to a few samples: on ideal plates at 20-60 kHz with noise of
+    0.1-0.5 % of the peak (bench/ideal_plate_map.py), the line through the last samples met zero up to 1.8 % of TC
+    late, and was ok."""
     tc = contact.contact_time_s
     ses = {"start": 0.0 if "start_jump" in contact.flags else contact.start_se_s,
            "end": contact.curve_end_se_s if "end_curve" in contact.flags
            else 0.0 if "end_jump" in contact.flags else contact.end_se_s}
     if any(math.isnan(v) for v in ses.values()) or not tc > 0:
         return []  # no fit to judge (the other checks judge such an end)
-    spread = 2.0 * math.hypot(ses["start"], ses["end"])
+    spread = END_SE_COVERAGE * math.hypot(ses["start"], ses["end"])
     if spread <= END_SE_MAX_FRACTION * tc:
         return []
     worst = max(ses, key=lambda k: ses[k])
     edge = "first" if worst == "start" else "last"
+    curve = worst == "end" and "end_curve" in contact.flags
+    what = "the force's curve before it" if curve else f"the line through its {edge} samples"
     if math.isinf(ses[worst]):
-        seen = f"no line through its {edge} samples pins where it meets zero (any corner in the hinge's window fits)"
+        seen = ("the force's curve before it does not pin where it meets zero" if curve else
+                f"no line through its {edge} samples pins where it meets zero (any corner in the hinge's window fits)")
     else:
-        seen = (f"the line through its {edge} samples meets zero within +-{2e6 * ses[worst]:.3g} us only (twice "
-                f"its standard uncertainty; TC known to +-{100 * spread / tc:.2g} % with the other end's)")
+        seen = (f"{what} meets zero within +-{END_SE_COVERAGE * 1e6 * ses[worst]:.3g} us only "
+                f"({END_SE_COVERAGE:g} times its standard uncertainty; TC known to +-{100 * spread / tc:.2g} % with "
+                "the other end's)")
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                     f"contact {worst} not determined to 1 %: the force fades into the noise there, and {seen}")]
 
@@ -1475,7 +1481,10 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False)
     out.extend(_negative_force(x, fs, noise, peak, e_u))
     out.extend(_peak_on_ringing(x[int(math.ceil(s_u)):int(math.floor(e_u)) + 1], fs, noise, peak))
     xc = x[max(int(math.ceil(s_u)), 0):int(math.floor(e_u)) + 1]
-    out.extend(_peak_between_samples(xc, fs, noise, lifted=front))
+    # with the sample before the contact: a start inside the interval before the first sample (a jump's, a step's)
+    # leaves it out of xc, and a largest sample that is the contact's first must still be judged against it
+    out.extend(_peak_between_samples(x[max(int(math.ceil(s_u)) - 1, 0):int(math.floor(e_u)) + 1], fs, noise,
+                                     lifted=front))
     out.extend(_second_hump(xc, fs, noise, peak))
     out.extend(_peak_on_step_response(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     out.extend(_peak_on_front_ringing(x, fs, noise, peak, s_u, e_u) if front else [])
