@@ -288,7 +288,9 @@ ZOO_STILL_WRONG: list = [
     for c in ZOO_STILL_WRONG])
 def test_zoo_case_still_wrong(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable, name
+    # 2:710's largest sample is 94 % of the peak: marginal, not measurable, and judged as ok and wrong all the same
+    # (this line once asked for measurable only, so the strict xfail held whatever the processing did)
+    assert trace.truth.measurable or trace.truth.marginal, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
 
