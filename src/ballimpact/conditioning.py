@@ -1094,8 +1094,10 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         # is charged to TC
         fn, zeta = plate.frequency_hz, plate.damping_ratio
         reach = 2 if not math.isinf(cutoff) else PLATE_EXACT_END_REACH
-        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m, reach_samples=reach),
-                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m, reach_samples=reach))
+        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m, reach_samples=reach,
+                            noise_rms=fit.noise),
+                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m, reach_samples=reach,
+                            noise_rms=fit.noise))
                 for m in PLATE_LOWPASS_END_INSIDE]
         if any(e is None for pair in ends for e in pair):
             return (f"the {what}'s ends fit no line or jump from zero through the plate and the kernel "
@@ -1137,7 +1139,7 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         for f in (f_start, f_end):
             level = max(noise, f.residual)
             spread.append(max(0.5 if f.jump > PLATE_END_JUMP_SIGMA * level else
-                              (max(level / f.slope, 0.5) if f.slope > 0 else math.inf), f.uncertainty))
+                              (max(level / f.slope, 0.5) if f.slope > 0 else math.inf), f.uncertainty, f.noise_se))
         uncertainty = 2.0 * math.hypot(*spread) + bias
     else:
         uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)
