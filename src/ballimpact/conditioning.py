@@ -887,7 +887,11 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     PLATE_LOWPASS_END_INSIDE samples inside; TC's uncertainty is twice each
     end's (noise, or the fit's residual, over its slope; half a sample at a
     jump of PLATE_END_JUMP_SIGMA residuals; at least what the fit's profile
-    allows) in quadrature, plus how far TC moves with the window and with
+    allows, and at least the end's standard uncertainty from the sensed noise
+    as the inverse and the kernel colour it, ``undone_end``'s ``noise_se``:
+    that noise is correlated over several samples and moves a whole stretch
+    of an end together, python bench/overshoot_map.py --n 400 --seed 5 trace
+    5:350) in quadrature, plus how far TC moves with the window and with
     the plate PLATE_FN_UNCERTAINTY off in fn; the fitted TC must be 0 to 2 W
     (+-1 sample) shorter than the contact found on the low-passed force.
     The force's ends are then restored from their fits (the impulse the
@@ -1133,8 +1137,9 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
                     end_index=int(math.floor(fe_u)), peak_index=int(math.ceil(cs_u)) + int(np.argmax(inside)),
                     peak_V=float(np.max(inside)))
         # each end to its noise over its slope (a jump well out of the noise: to half a sample), the noise
-        # there the fit's residual when that is larger (what the undoing left, or a force no line fits), and
-        # at least as far as the fit's residual lets the end move (its profile)
+        # there the fit's residual when that is larger (what the undoing left, or a force no line fits),
+        # at least as far as the fit's residual lets the end move (its profile), and at least the end's
+        # standard uncertainty from the sensed noise as the chain colours it (correlated over several samples)
         spread = []
         for f in (f_start, f_end):
             level = max(noise, f.residual)

@@ -630,7 +630,7 @@ def _end_noise_se(jac: np.ndarray, sse: float, autocorrelation: np.ndarray, nois
     what lies below its cutoff), which no residual over the window shows
     (a whole stretch of samples moves together). The ordinary least squares'
     covariance is then the sandwich ``A^-1 J^T C J A^-1`` (A = J^T J,
-    linearised at the fit; Seber & Wild 1989, section 2.1.4), and its
+    linearised at the fit: ordinary least squares in correlated noise), and its
     first diagonal element the end's variance. The noise variance is raised by
     the residual sum of squares ``sse`` over what that noise alone leaves
     (``noise_rms^2 tr((I - P) R)``, P the fit's hat matrix) where larger: a
