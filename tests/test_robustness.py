@@ -725,13 +725,13 @@ def test_zoo_plates_overshoot_taken_for_a_spike_is_excluded(name, seed, override
     assert result.status == "excluded" and "single-sample spike was replaced" in result.reason, result.reason
 
 
-#: A trace of ``python bench/overshoot_map.py --n 400 --seed 5`` (5:350), ok but wrong on main at 06ea391: a punctured
-#: ball at 52.1 kHz on a 12.2 kHz plate (damping 0.05), its undone force too noisy, low-passed at 13 kHz; the end fitted
-#: through the plate's undoing and the kernel lands 2.0 samples early (TC -1.04 %), while its uncertainty (noise over the
-#: slope, floored at half a sample, and the fit's residual profile) allowed half a sample: the noise the inverse
-#: amplified and the kernel kept is correlated over several samples, and a whole stretch of the end moved together. The
-#: end's standard uncertainty from that coloured noise (``plate.undone_end``'s ``noise_se``, 0.70 samples) refuses it
-#: now (name, seed, index, what).
+#: A trace of ``python bench/overshoot_map.py --n 400 --seed 5`` (5:350), ok but wrong on main at 06ea391: a
+#: punctured ball at 52.1 kHz on a 12.2 kHz plate (damping 0.05), its undone force too noisy, low-passed at 13 kHz;
+#: the end fitted through the plate's undoing and the kernel lands 2.0 samples early (TC -1.04 %), while its
+#: uncertainty (noise over the slope, floored at half a sample, and the fit's residual profile) allowed half a
+#: sample: the noise the inverse amplified and the kernel kept is correlated over several samples, and a whole
+#: stretch of the end moved together. The end's standard uncertainty from that coloured noise
+#: (``plate.undone_end``'s ``noise_se``, 0.70 samples) refuses it now (name, seed, index, what).
 MAP_UNDONE_END_COLOURED_NOISE = [
     ("plate-12.2kHz-lowpassed-end-2-samples-early", 5, 350, "ok but wrong on 06ea391: TC -1.04 %"),
 ]
