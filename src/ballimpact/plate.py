@@ -437,7 +437,7 @@ class UndoneEnd(NamedTuple):
     uncertainty: float  #: standard uncertainty of the end from the fit's profile [samples]
     first: int  #: first sample of the fit's window [-]
     correction: np.ndarray  #: the fitted force less what the chain made of it, over the window [unit of the force]
-    noise_se: float = math.nan  #: the end's standard uncertainty from the chain's coloured noise [samples] (NaN: not asked)
+    noise_se: float = math.nan  #: its standard uncertainty from the chain's coloured noise [samples] (NaN: not asked)
 
 
 def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.ndarray, step: float, span: int):
