@@ -896,11 +896,13 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     force jumps from zero (section 3.2.4: the damping term at first contact),
     is known to half a sample at best (to its noise, or the fit's residual,
     over its slope where the fit sees no jump of PLATE_END_JUMP_SIGMA
-    residuals); the end, where the ball's force falls to zero continuously,
-    is located by the fit of the line and the parabola to it over several
-    samples, to no interval between two: no half-sample floor there (which
-    refused ends known to a few tenths of a sample); the fitted TC must be 0 to 2 W
-    (+-1 sample) shorter than the contact found on the low-passed force.
+    residuals; without that floor an aliased plate's start, zoo trace 0:434,
+    came out 0.7 samples early where the fit's noise said 0.14); the end,
+    where the ball's force falls to zero continuously, is located by the fit
+    of the line and the parabola to it over several samples, to no interval
+    between two: no half-sample floor there (which refused ends known to a
+    few tenths of a sample). The fitted TC must be 0 to 2 W (+-1 sample)
+    shorter than the contact found on the low-passed force.
     The force's ends are then restored from their fits (the impulse the
     kernel spread outside them is back). Nor may the low-pass hide a peak:
     the exact undone force's largest sample inside the contact at most
