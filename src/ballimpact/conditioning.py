@@ -885,12 +885,25 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     W, so the ends are fitted through the plate's undoing and the kernel
     (:func:`ballimpact.plate.undone_end`: a jump, a line and a parabola at
     the start, a line and a parabola at the end), with windows of
-    PLATE_LOWPASS_END_INSIDE samples inside; TC's uncertainty is twice each
-    end's (noise, or the fit's residual, over its slope; half a sample at a
-    jump of PLATE_END_JUMP_SIGMA residuals; at least what the fit's profile
-    allows) in quadrature, plus how far TC moves with the window and with
-    the plate PLATE_FN_UNCERTAINTY off in fn; the fitted TC must be 0 to 2 W
-    (+-1 sample) shorter than the contact found on the low-passed force.
+    PLATE_LOWPASS_END_INSIDE samples inside; TC's uncertainty is twice the
+    ends' in quadrature, plus how far TC moves with the window and with the
+    plate PLATE_FN_UNCERTAINTY off in fn. Each end's is at least what the
+    fit's profile allows and at least its standard uncertainty from the
+    sensed noise as the inverse and the kernel colour it (``undone_end``'s
+    ``noise_se``, raised by the fit's residual where that is more than the
+    noise leaves): that noise is correlated over several samples and moves a
+    whole stretch of an end together (python bench/overshoot_map.py --n 400
+    --seed 5 trace 5:350 came out two samples early). The start, where the
+    force jumps from zero (section 3.2.4: the damping term at first contact),
+    is known to half a sample at best (to its noise, or the fit's residual,
+    over its slope where the fit sees no jump of PLATE_END_JUMP_SIGMA
+    residuals; without that floor an aliased plate's start, zoo trace 0:434,
+    came out 0.7 samples early where the fit's noise said 0.14); the end,
+    where the ball's force falls to zero continuously, is located by the fit
+    of the line and the parabola to it over several samples, to no interval
+    between two: no half-sample floor there (which refused ends known to a
+    few tenths of a sample). The fitted TC must be 0 to 2 W (+-1 sample)
+    shorter than the contact found on the low-passed force.
     The force's ends are then restored from their fits (the impulse the
     kernel spread outside them is back). Nor may the low-pass hide a peak:
     the exact undone force's largest sample inside the contact at most
@@ -1095,8 +1108,10 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         # is charged to TC
         fn, zeta = plate.frequency_hz, plate.damping_ratio
         reach = 2 if not math.isinf(cutoff) else PLATE_EXACT_END_REACH
-        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m, reach_samples=reach),
-                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m, reach_samples=reach))
+        ends = [(undone_end(y, fs, fn, zeta, cutoff, cs_u, "start", inside_samples=m, reach_samples=reach,
+                            noise_rms=fit.noise),
+                 undone_end(y, fs, fn, zeta, cutoff, ce_u, "end", inside_samples=m, reach_samples=reach,
+                            noise_rms=fit.noise))
                 for m in PLATE_LOWPASS_END_INSIDE]
         if any(e is None for pair in ends for e in pair):
             return (f"the {what}'s ends fit no line or jump from zero through the plate and the kernel "
@@ -1131,14 +1146,16 @@ def _undone_contact(y, x, fs, fit: _BaselineFit, s_u, t0_s, cutoff=math.inf, pla
         c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs, start_index=int(math.ceil(fs_u)),
                     end_index=int(math.floor(fe_u)), peak_index=int(math.ceil(cs_u)) + int(np.argmax(inside)),
                     peak_V=float(np.max(inside)))
-        # each end to its noise over its slope (a jump well out of the noise: to half a sample), the noise
-        # there the fit's residual when that is larger (what the undoing left, or a force no line fits), and
-        # at least as far as the fit's residual lets the end move (its profile)
-        spread = []
-        for f in (f_start, f_end):
-            level = max(noise, f.residual)
-            spread.append(max(0.5 if f.jump > PLATE_END_JUMP_SIGMA * level else
-                              (max(level / f.slope, 0.5) if f.slope > 0 else math.inf), f.uncertainty))
+        # each end at least as far as the fit's residual lets it move (its profile) and at least its standard
+        # uncertainty from the sensed noise as the chain colours it (correlated over several samples); the start
+        # (the force jumps from zero there) to half a sample at best, to its noise over its slope (the noise there
+        # the fit's residual when that is larger: what the undoing left, or a force no line fits) where the fit
+        # sees no jump well out of the noise; the end (a line and a parabola falling to zero, no jump) as the
+        # fit locates it
+        spread = [max(0.5 if f_start.jump > PLATE_END_JUMP_SIGMA * max(noise, f_start.residual) else
+                      (max(max(noise, f_start.residual) / f_start.slope, 0.5) if f_start.slope > 0 else math.inf),
+                      f_start.uncertainty, f_start.noise_se),
+                  max(f_end.uncertainty, f_end.noise_se) if f_end.slope > 0 else math.inf]
         uncertainty = 2.0 * math.hypot(*spread) + bias
     else:
         uncertainty = 2.0 * _end_uncertainty(y, fs, noise, c, cs_u, ce_u)

@@ -69,6 +69,8 @@ REFINE_TOLERANCE = 2.0e-3  # ... and the step in log(fn) at which it stops [-]
 REFINE_MAX_EVALUATIONS = 80  # ... or after this many undone forces [-]
 END_TERMS = 3  # an end fitted as a jump, a line and (3) a parabola from it [-]
 END_GRID_SAMPLES = 0.05  # an end fitted through the plate's undoing and the low-pass is found on this grid [samples]
+NOISE_RESPONSE_HALF = 64  # the inverse's impulse response kept this far each side for the noise's covariance: its zeros
+#                           (about -0.27 and -1.3 to -3.7) leave less than 1e-7 of it there [samples]
 
 
 @dataclass(frozen=True)
@@ -435,6 +437,7 @@ class UndoneEnd(NamedTuple):
     uncertainty: float  #: standard uncertainty of the end from the fit's profile [samples]
     first: int  #: first sample of the fit's window [-]
     correction: np.ndarray  #: the fitted force less what the chain made of it, over the window [unit of the force]
+    noise_se: float = math.nan  #: its standard uncertainty from the chain's coloured noise [samples] (NaN: not asked)
 
 
 def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.ndarray, step: float, span: int):
@@ -464,7 +467,8 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
 
 
 def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, cutoff_hz: float,
-               index: float, side: str, *, inside_samples: int = 4, reach_samples: int = 2):
+               index: float, side: str, *, inside_samples: int = 4, reach_samples: int = 2,
+               noise_rms: float | None = None):
     """Where a force that starts (or ends) as a line, seen through the plate, its undoing and a low-pass, starts (ends).
 
     Near a contact's start the force is zero before ts and about
@@ -507,6 +511,11 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         beyond ``index`` on each side [samples], at least 1: more where the
         end found on the force may be several samples off (a foot in the
         amplified noise of an exact undone force).
+    noise_rms : float, optional
+        Standard deviation of the sensed trace's white noise, in the unit of
+        ``force`` [V]. When given, the end's standard uncertainty from that
+        noise as the chain colours it is returned too (``noise_se``; see
+        :func:`_end_noise_se`).
 
     Returns
     -------
@@ -595,7 +604,71 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     u = (n - end) * sign
     model = np.where(u >= 0, a + b * u + q * u * u, 0.0)
     correction = model - design[i_best] @ coef[i_best]
-    return UndoneEnd(float(end), float(b), float(a), math.sqrt(resid2), float(spread), int(lo), correction)
+    noise_se = math.nan
+    if noise_rms is not None:
+        # the model's change with the end, its linear terms held: central differences on the grid (the best end is
+        # inside the candidates, so both neighbours are on it)
+        d_end = (design[i_best + 1] - design[i_best - 1]) @ coef[i_best] / (2.0 * END_GRID_SAMPLES)
+        noise_se = _end_noise_se(np.column_stack([d_end, design[i_best]]), sse,
+                                 _undone_noise_autocorrelation(float(frequency_hz), float(damping_ratio), fs,
+                                                               float(cutoff_hz)), float(noise_rms))
+    return UndoneEnd(float(end), float(b), float(a), math.sqrt(resid2), float(spread), int(lo), correction,
+                     float(noise_se))
+
+
+def _end_noise_se(jac: np.ndarray, sse: float, autocorrelation: np.ndarray, noise_rms: float) -> float:
+    """Standard uncertainty of an end fitted by least squares in noise the plate's undoing has coloured [samples].
+
+    ``jac`` [n, 1 + terms] holds the fitted force's derivative with respect
+    to the end [unit of the force per sample] and the fit's linear columns
+    [-, samples, samples^2] over the window's n samples. The undone (and
+    low-passed) force's noise is the sensed white noise ``noise_rms`` passed
+    through the chain, so its covariance is ``noise_rms^2 R`` with R the
+    Toeplitz matrix of the chain's impulse response's ``autocorrelation``
+    (lag 0 first): strongly correlated (the inverse amplifies the noise near
+    and above the resonance by up to ``(fs / 2 fn)^2``, the low-pass keeps
+    what lies below its cutoff), which no residual over the window shows
+    (a whole stretch of samples moves together). The ordinary least squares'
+    covariance is then the sandwich ``A^-1 J^T C J A^-1`` (A = J^T J,
+    linearised at the fit: ordinary least squares in correlated noise), and its
+    first diagonal element the end's variance. The noise variance is raised by
+    the residual sum of squares ``sse`` over what that noise alone leaves
+    (``noise_rms^2 tr((I - P) R)``, P the fit's hat matrix) where larger: a
+    force the model does not fit. Zoo-like rigs: ``python
+    bench/overshoot_map.py --n 400 --seed 5`` trace 5:350, whose end the fit
+    put 2.0 samples early while its residual allowed half a sample.
+    """
+    n = jac.shape[0]
+    if autocorrelation.size < n:
+        autocorrelation = np.concatenate([autocorrelation, np.zeros(n - autocorrelation.size)])
+    lag = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
+    cov = autocorrelation[lag]  # [n, n], in units of the sensed noise's variance
+    gram = jac.T @ jac
+    scale = np.sqrt(np.diag(gram))
+    if not np.all(scale > 0) or not np.all(np.isfinite(scale)):
+        return math.inf
+    jn = jac / scale  # columns of unit norm: the solve is well conditioned whatever the terms' units
+    try:
+        inv = np.linalg.inv(jn.T @ jn)
+    except np.linalg.LinAlgError:
+        return math.inf
+    meat = jn.T @ cov @ jn
+    sandwich = inv @ meat @ inv
+    expected = float(np.trace(cov) - np.trace(inv @ meat))  # tr((I - P) R): the residual noise alone leaves
+    variance = noise_rms * noise_rms * max(1.0, sse / (noise_rms * noise_rms * expected)) \
+        if noise_rms > 0 and expected > 0 else sse / max(expected, 1e-300)
+    se2 = variance * float(sandwich[0, 0]) / float(scale[0] ** 2)
+    return math.sqrt(se2) if se2 >= 0 and math.isfinite(se2) else math.inf
+
+
+@functools.lru_cache(maxsize=16)
+def _undone_noise_autocorrelation(frequency_hz: float, damping_ratio: float, fs: float, cutoff_hz: float) -> np.ndarray:
+    """Autocorrelation of the impulse response of the plate's inverse and the low-pass, lag 0 first [-]: the
+    undone force's noise covariance over the sensed white noise's variance, at each lag [samples]."""
+    half = NOISE_RESPONSE_HALF + (0 if math.isinf(cutoff_hz) else int(math.ceil(0.5 * fs / cutoff_hz)))
+    h = undone_impulse_response(fs, frequency_hz, damping_ratio, half, cutoff_hz)
+    full = np.correlate(h, h, mode="full")
+    return full[h.size - 1:].copy()
 
 
 @functools.lru_cache(maxsize=16)
