@@ -785,8 +785,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     it = _iterate(v, fs, candidates, rough, pre_guard_s * fs, post_guard_s * fs, tau_s, kappa_given, scale)
     contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
                                                 curve=True), fs, t0_s)
-    at_ends, keep = _spikes_at_ends(v_spiky, spikes, _kept, contact, it.x, it.fit.noise, fs, t0_s, scale)
-    near_ends = _low_spikes_at_ends(v_spiky, spikes, contact, fs, t0_s) if _kept is None else ()
+    d2_spiky = _second_differences(v_spiky)  # as remove_spikes saw the record, with its noise
+    at_ends, keep = _spikes_at_ends(v_spiky, d2_spiky, spikes, _kept, contact, it.x, it.fit.noise, fs, t0_s, scale)
+    near_ends = _low_spikes_at_ends(v_spiky, d2_spiky, spikes, contact, fs, t0_s) if _kept is None else ()
     if keep or near_ends:  # the force's own samples at its jump kept, lower spikes at the ends replaced: again
         return condition_voltage(voltage_V, sample_rate_hz, polarity=polarity, mains_hz=mains_hz,
                                  n_harmonics=n_harmonics, t0_s=t0_s, tau_s=tau_s, pre_guard_s=pre_guard_s,
@@ -817,7 +818,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                    it.mains, mains_source, it.contact_integral)
 
 
-def _spikes_at_ends(v_spiky, spikes, kept, contact: ContactResult, x, noise, fs, t0_s, scale):
+def _spikes_at_ends(v_spiky, d2_spiky, spikes, kept, contact: ContactResult, x, noise, fs, t0_s, scale):
     """Single-sample spikes within SPIKE_END_SAMPLES of a contact end: replaced, kept or the end not determined.
 
     :func:`remove_spikes` replaces a sample that stands alone above its
@@ -854,6 +855,8 @@ def _spikes_at_ends(v_spiky, spikes, kept, contact: ContactResult, x, noise, fs,
     ----------
     v_spiky : numpy.ndarray
         Voltage before spike removal, in units of ``scale`` [-].
+    d2_spiky : tuple
+        Its second differences and their noise (:func:`_second_differences`) [-].
     spikes : array_like of int
         Samples replaced [-].
     kept : tuple of int or None
@@ -877,7 +880,7 @@ def _spikes_at_ends(v_spiky, spikes, kept, contact: ContactResult, x, noise, fs,
         return [], ()
     first, kept = kept is None, (() if kept is None else kept)
     ends = {"start": (contact.start_s - t0_s) * fs, "end": (contact.end_s - t0_s) * fs}
-    s_d2 = _second_differences(v_spiky)[1]
+    s_d2 = d2_spiky[1]
     jumps = {}
     for where, u in ends.items():
         for k in (int(k) for k in spikes if abs(int(k) - u) <= SPIKE_END_SAMPLES):
@@ -917,7 +920,7 @@ def _spikes_at_ends(v_spiky, spikes, kept, contact: ContactResult, x, noise, fs,
     return [], ()
 
 
-def _low_spikes_at_ends(v_spiky, spikes, contact: ContactResult, fs, t0_s) -> tuple:
+def _low_spikes_at_ends(v_spiky, d2_spiky, spikes, contact: ContactResult, fs, t0_s) -> tuple:
     """Spikes below SPIKE_SIGMA near a contact end that bend the end's fit: samples to replace too [-].
 
     The end is a line through the force's last samples meeting zero (the
@@ -940,16 +943,16 @@ def _low_spikes_at_ends(v_spiky, spikes, contact: ContactResult, fs, t0_s) -> tu
     if not contact.found:
         return ()
     v = np.asarray(v_spiky, dtype=float)
-    d2, s = _second_differences(v)
+    d2, s = d2_spiky
     if not (s > 0):
         return ()
     w = max(int(math.ceil(SPIKE_END_WINDOW_S * fs)), int(SPIKE_END_SAMPLES))
     out = []
     for u in ((contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs):
         a, b = max(int(math.floor(u)) - w, 3), min(int(math.ceil(u)) + w + 1, v.size - 3)
-        for k in range(a, b):
+        for k in (a + np.flatnonzero(np.abs(d2[a:b]) > SPIKE_END_SIGMA * s)).tolist() if b > a else ():
             h = d2[k]
-            if abs(h) <= SPIKE_END_SIGMA * s or k in out or np.isin(k, spikes):
+            if k in out or np.isin(k, spikes):
                 continue
             tol = SPIKE_SHAPE_TOLERANCE * abs(h) + SPIKE_END_SHAPE_SIGMA * s
             if (abs(d2[k - 1] + 0.5 * h) < tol and abs(d2[k + 1] + 0.5 * h) < tol and abs(d2[k - 2]) < tol
