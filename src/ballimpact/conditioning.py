@@ -2271,20 +2271,23 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
         return lift if ok else None
 
     lift, spike = evident(ideal, plate, 10), ""
-    if lift is None:  # an electrical spike on the ringing after the peak (not through the plate) hides it
+    if lift is None and plate.rss > FRONT_SIGNIFICANCE * noise * noise:
+        # neither fit explains the front: an electrical spike on the ringing after the peak (added after the plate,
+        # where remove_spikes cannot tell it from the ringing's swings) may hide the plate; fitted with one
         others = list(range(i + 1, last + 1))
         ideal = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, resonance=False, drop=True,
                           rise_max=OVERSHOOT_RISE_MAX, spike=others)
+        if ideal is None or not ideal.rss > FRONT_SIGNIFICANCE * noise * noise:
+            return []
         plate = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, drop=True, rise_max=OVERSHOOT_RISE_MAX,
                           spike=others)
-        if ideal is None or plate is None or not ideal.rss > FRONT_SIGNIFICANCE * noise * noise \
-                or not abs(plate.spike) > EVENT_SIGMA * noise:
+        if plate is None or not abs(plate.spike) > EVENT_SIGMA * noise:
             return []
         lift = evident(ideal, plate, 11)
-        if lift is None:
-            return []
         spike = (f", less a single-sample spike of {plate.spike / noise:.3g} noise deviations "
                  f"{plate.spike_index - s_u:+.2g} samples from the start (an electrical one, not through the plate)")
+    if lift is None:
+        return []
     seen = (f"the contact's front (to {last - i} samples after it) is a jump and a ramp through a plate of about "
             f"{plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}, "
             f"{fs / plate.frequency_hz:.2g} samples per period), with {ideal.rss / max(plate.rss, 1e-300):.2g} times "
