@@ -2281,8 +2281,9 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
             return []
         plate = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, drop=True, rise_max=OVERSHOOT_RISE_MAX,
                           spike=others)
-        if plate is None or not abs(plate.spike) > EVENT_SIGMA * noise:
-            return []
+        if plate is None or not abs(plate.spike) > EVENT_SIGMA * noise \
+                or not plate.rss <= FRONT_SIGNIFICANCE * noise * noise:
+            return []  # no spike out of the noise, or one that does not leave the plate's fit at the noise
         lift = evident(ideal, plate, 11)
         spike = (f", less a single-sample spike of {plate.spike / noise:.3g} noise deviations "
                  f"{plate.spike_index - s_u:+.2g} samples from the start (an electrical one, not through the plate)")
