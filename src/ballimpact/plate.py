@@ -942,13 +942,17 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     spike : sequence of int, optional
         Samples (inside the window) where a single-sample electrical spike
         may be: the fit also takes a free value added to one of them (not
-        through the plate: the spike is the amplifier's, after the plate),
-        the one where the starting grid's best fit leaves the least residual
-        (``spike_index``, ``spike``; a few times the cost of the fit). A spike on
-        the plate's ringing, which :func:`ballimpact.conditioning.remove_spikes`
-        cannot tell from the ringing's own swings, otherwise raises the
-        residual of the fit through the plate as much as the ideal one's
-        (``python bench/spike_ends_map.py --n 400 --seed 2`` trace 2:349).
+        through the plate: the spike is the amplifier's, after the plate):
+        each candidate is fitted from the fit without a spike and from the
+        starting grid's best with it, and the least residual of all is the
+        fit (``spike_index``, ``spike``; about twice as many fits as
+        candidates: with a free spike, spurious fits at a bound of the grid
+        beat its rows near the true plate, and the fit from them stays
+        there). A spike on the plate's ringing, which
+        :func:`ballimpact.conditioning.remove_spikes` cannot tell from the
+        ringing's own swings, otherwise raises the residual of the fit
+        through the plate as much as the ideal one's (``python
+        bench/spike_ends_map.py --n 400 --seed 2`` trace 2:349).
 
     Returns
     -------
