@@ -669,6 +669,34 @@ def test_fit_front_with_the_drop_through_an_ideal_plate_fits_the_force_to_its_no
                      refine=False).rss >= ideal.rss
 
 
+@pytest.mark.parametrize("fn_hz, zeta, fs, at, spike", [(18.5e3, 0.10, 51.7e3, 3, 40.0)])
+def test_fit_front_with_a_spike_finds_the_plate_under_an_electrical_spike_on_its_ringing(fn_hz, zeta, fs, at, spike):
+    """The model's front and its drop (as above) through a plate of 2.6-3.3 samples a period, noise 1e-3 of the peak
+    and an electrical spike of 40-80 noise deviations added to one sample of the ringing after the first overshoot
+    (after the plate: python bench/spike_ends_map.py --n 400 --seed 2 trace 2:349, 18.5 kHz at 51.7 kHz, a spike
+    of 38 deviations three samples after the contact start): fitted with a free spike on any sample after the
+    largest, the fit finds the spike's sample and value and the plate's resonance as without the spike; without the
+    free spike its residual is many times the noise's."""
+    from ballimpact.plate import fit_front
+
+    start, jump, slope, drop_at, drop = 3.37, 600.0, 60.0, 2.7, -150.0
+    kt, kf = _drop_knots(fs, start, jump, slope, drop_at, drop, -20.0, -0.8, 20.0)
+    n = np.arange(0, 18)
+    x = sensed_force(kt, kf, n / fs, fn_hz, zeta) + np.random.default_rng(7).normal(0.0, 1.0, n.size)
+    i = int(np.argmax(x))
+    x[i + at] += spike
+    fit = fit_front(x, fs, 0, n[-1], start=start + 0.6, drop=True, rise_max=1.0, spike=range(i + 1, n[-1] + 1))
+    assert fit.spike_index == i + at
+    assert_allclose(fit.spike, spike, atol=4.0)  # the noise's deviation is 1
+    assert_allclose(fit.frequency_hz, fn_hz, rtol=0.03)
+    assert_allclose(fit.force(n), piecewise_force(kt, kf, n / fs), atol=0.01 * kf.max())
+    assert fit.rss < 3.0 * n.size
+    plain = fit_front(x, fs, 0, n[-1], start=start + 0.6, drop=True, rise_max=1.0)
+    assert plain.spike_index == -1 and plain.rss > 30.0 * fit.rss
+    # no candidate inside the window: the fit without a spike
+    assert fit_front(x, fs, 0, n[-1], start=start + 0.6, drop=True, rise_max=1.0, spike=[40]) == plain
+
+
 def test_fit_front_rejects_a_negative_rise_max():
     from ballimpact.plate import fit_front
 

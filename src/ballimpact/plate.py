@@ -805,6 +805,8 @@ class FrontFit(NamedTuple):
     drop: float = 0.0  #: that jump, rising over ``rise`` too (negative: a drop) [unit of the force]
     drop_slope: float = 0.0  #: the change of the ramp's slope from it [unit of the force per sample]
     drop_curvature: float = 0.0  #: ... and of the parabola's coefficient [unit of the force per sample^2]
+    spike_index: int = -1  #: the sample a single-sample electrical spike was fitted on (-1: none) [-]
+    spike: float = 0.0  #: that spike, added to the sensed force (not through the plate) [unit of the force]
 
     def force(self, index) -> np.ndarray:
         """The fitted applied force (not the sensed one) at fractional sample indices [unit of the force]."""
@@ -890,7 +892,7 @@ def front_responses(u, wn, zeta, rise):
 
 
 def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True,
-              drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True):
+              drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True, spike=None):
     """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
 
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
@@ -937,6 +939,20 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     refine : bool
         Refine the starting grid's best fit by least squares; False returns
         the grid's best (a residual no smaller than the refined one's; fast).
+    spike : sequence of int, optional
+        Samples (inside the window) where a single-sample electrical spike
+        may be: the fit also takes a free value added to one of them (not
+        through the plate: the spike is the amplifier's, after the plate):
+        each candidate is fitted from the fit without a spike and from the
+        starting grid's best with it, and the least residual of all is the
+        fit (``spike_index``, ``spike``; about twice as many fits as
+        candidates: with a free spike, spurious fits at a bound of the grid
+        beat its rows near the true plate, and the fit from them stays
+        there). A spike on the plate's ringing, which
+        :func:`ballimpact.conditioning.remove_spikes` cannot tell from the
+        ringing's own swings, otherwise raises the residual of the fit
+        through the plate as much as the ideal one's (``python
+        bench/spike_ends_map.py --n 400 --seed 2`` trace 2:349).
 
     Returns
     -------
@@ -946,6 +962,8 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         FRONT_MAX_FREQUENCY of fs. With ``drop``, its ``drop_*`` fields hold
         the drop and the changes after it (``curvature`` is 0: no parabola
         before the drop).
+        With ``spike``, ``spike_index`` and ``spike`` hold the spike's sample
+        and value (-1 and 0 when no candidate is inside the window).
 
     Raises
     ------
@@ -986,10 +1004,11 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
             return unconstrained(design)
         gram = np.swapaxes(design, -1, -2) @ design
         rhs = (np.swapaxes(design, -1, -2) @ y)[..., None]
-        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(5)
+        m = design.shape[-1]  # 5, or 6 with a spike's column
+        ridge = 1e-12 * (np.trace(gram, axis1=-2, axis2=-1)[..., None, None] + 1e-300) * np.eye(m)
         best_rss, best_coef = None, None
         for off in itertools.product((False, True), repeat=3):  # each sign-constrained column free or held at 0
-            keep = np.array([not off[0], not off[1], not off[2], True, True], dtype=float)
+            keep = np.array([not off[0], not off[1], not off[2]] + [True] * (m - 3), dtype=float)
             coef = np.linalg.solve(gram * np.outer(keep, keep) + ridge, rhs * keep[:, None])[..., 0]
             rss = float(y @ y) - 2.0 * np.sum(coef * rhs[..., 0], axis=-1) \
                 + np.einsum("...i,...ij,...j->...", coef, gram, coef)
@@ -1018,25 +1037,29 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         if grid.size == 0:
             return None
 
-    def design_of(rows):  # the responses of each row of (wn, zeta, ts, rise[, tb]) [rows, n, 3 or 5]
-        cols = front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
-        if not drop:
-            return cols
-        later = front_responses(n[None, :] - rows[:, 4:5], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
-        # no parabola before the drop, and the ramp up to it rises by at most the jump: J = a + b L, a >= 0, b >= 0
-        span = np.maximum(rows[:, 4:5] - rows[:, 2:3], 0.0)[..., None]  # L, from the start to the drop [samples]
-        return np.concatenate([cols[..., :1], cols[..., 1:2] + span * cols[..., :1], later], axis=-1)
+    spike_col = None  # the spike's column (a unit at its sample), once chosen
 
-    p0 = grid[int(np.argmin(solve(design_of(grid))[0]))]
-    if not refine:
-        return _front_fit(p0, solve(design_of(p0[None, :])), drop, fs, y.size)
+    def design_of(rows):  # the responses of each row of (wn, zeta, ts, rise[, tb]) [rows, n, 3 or 5, +1 w. spike]
+        cols = front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+        if drop:
+            later = front_responses(n[None, :] - rows[:, 4:5], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+            # no parabola before the drop, and the ramp up to it rises by at most the jump: J = a + b L, a, b >= 0
+            span = np.maximum(rows[:, 4:5] - rows[:, 2:3], 0.0)[..., None]  # L, from the start to the drop [samples]
+            cols = np.concatenate([cols[..., :1], cols[..., 1:2] + span * cols[..., :1], later], axis=-1)
+        if spike_col is None:
+            return cols
+        return np.concatenate([cols, np.broadcast_to(spike_col, cols.shape[:-1])[..., None]], axis=-1)
+
+    candidates = sorted({int(k) - first for k in (spike or ()) if first <= int(k) <= last})
+    if spike is not None and not candidates:  # no candidate inside the window: the fit without a spike
+        return fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine)
 
     # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
     if resonance:
         lo, hi = np.array([0.8 * w_lo, 0.005, t_lo, 0.0]), np.array([w_hi, FRONT_DROP_MAX_DAMPING if drop else 0.9, t_hi, rise_max])
-        full = np.atleast_2d
+        full, free = np.atleast_2d, slice(None)
     else:
-        lo, hi, p0 = np.array([t_lo, 0.0]), np.array([t_hi, rise_max]), p0[2:]
+        lo, hi, free = np.array([t_lo, 0.0]), np.array([t_hi, rise_max]), slice(2, None)
 
         def full(q):
             q = np.atleast_2d(q)
@@ -1053,20 +1076,48 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         r = residuals(np.vstack([q, q + np.diag(step)]))
         return ((r[1:] - r[0]) / step[:, None]).T
 
-    q = least_squares(lambda v: residuals(v)[0], np.clip(p0, lo, hi), jac=jacobian, bounds=(lo, hi), x_scale="jac",
-                      max_nfev=FRONT_MAX_EVALUATIONS).x
-    p = full(q)[0]
-    return _front_fit(p, solve(design_of(p[None, :])), drop, fs, y.size)
+    def fitted(p0):  # the parameters from p0 (refined when asked) and their linear least squares
+        if refine:
+            q = least_squares(lambda v: residuals(v)[0], np.clip(p0[free], lo, hi), jac=jacobian, bounds=(lo, hi),
+                              x_scale="jac", max_nfev=FRONT_MAX_EVALUATIONS).x
+            p0 = full(q)[0]
+        return p0, solve(design_of(p0[None, :]))
+
+    if not candidates:
+        p, solved = fitted(grid[int(np.argmin(solve(design_of(grid))[0]))])
+        return _front_fit(p, solved, drop, fs, y.size)
+    # a free spike makes spurious fits on the grid (at a bound) beat the grid's rows near the true plate: each
+    # candidate is also fitted from the fit without a spike, and the least residual of all is the fit
+    plain = fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine)
+    if plain is None:
+        return None
+    starts = [np.array([2.0 * math.pi * plain.frequency_hz / fs, plain.damping_ratio, plain.start, plain.rise]
+                       + ([plain.drop_start] if drop else []))]
+    best = None
+    for unit in np.eye(y.size)[candidates]:
+        spike_col = unit
+        for p0 in starts + [grid[int(np.argmin(solve(design_of(grid))[0]))]]:
+            p, solved = fitted(p0)
+            if best is None or solved[0][0] < best[0]:
+                best = (float(solved[0][0]), p, solved, unit)
+    spike_col = best[3]
+    return _front_fit(best[1], best[2], drop, fs, y.size, first, spike_col)
 
 
-def _front_fit(p, solved, drop: bool, fs: float, n: int) -> FrontFit:
-    """The FrontFit of parameters p (wn, zeta, ts, rise[, tb]) and their linear least squares (rss, coef, resid)."""
+def _front_fit(p, solved, drop: bool, fs: float, n: int, first: int = 0, spike_col=None) -> FrontFit:
+    """The FrontFit of parameters p (wn, zeta, ts, rise[, tb]) and their linear least squares (rss, coef, resid);
+    with ``spike_col`` (the spike's unit column, the window's first sample ``first``), the spike's sample and value
+    from the last coefficient."""
     rss, coef = float(solved[0][0]), solved[1][0]
+    spiked = ()
+    if spike_col is not None:
+        spiked, coef = (first + int(np.argmax(spike_col)), float(coef[-1])), coef[:-1]
     if drop:  # (J - b L, b, D, the slope's and the parabola's change at the drop): no parabola before it
         span = max(float(p[4] - p[2]), 0.0)
         coef, extra = (np.array([coef[0] + coef[1] * span, coef[1], 0.0]),
                        (float(p[4]), float(coef[2]), float(coef[3]), float(coef[4])))
     else:
         extra = ()
-    return FrontFit(float(p[0] * fs / (2.0 * math.pi)), float(p[1]), float(p[2]), float(p[3]), float(coef[0]),
-                    float(coef[1]), float(coef[2]), float(rss), int(n), *extra)
+    fit = FrontFit(float(p[0] * fs / (2.0 * math.pi)), float(p[1]), float(p[2]), float(p[3]), float(coef[0]),
+                   float(coef[1]), float(coef[2]), float(rss), int(n), *extra)
+    return fit._replace(spike_index=spiked[0], spike=spiked[1]) if spiked else fit
