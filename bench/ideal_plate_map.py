@@ -82,14 +82,9 @@ def main(argv=None):
     cats = Counter(r[2] for r in rows)
     print(f"{a.n} rigs (seed {a.seed}, ideal plate, fs 20-60 kHz): "
           + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
-    table = Counter()
-    for r in rows:
-        khz = r[1].sample_rate_hz / 1e3
-        band = next(f"{lo:g}-{hi:g}" for lo, hi in zip(RATE_BANDS_KHZ, RATE_BANDS_KHZ[1:]) if khz < hi)
-        table[(band, r[2])] += 1
-    for band in sorted({b for b, _ in table}, key=lambda b: float(b.split("-")[0])):
-        print(f"  fs {band:>5} kHz: " + ", ".join(f"{c} {table[(band, c)]}" for c in zoo.CATEGORIES
-                                                 if table[(band, c)]))
+    for band, counts in zoo.band_counts([r[1].sample_rate_hz / 1e3 for r in rows], [r[2] for r in rows],
+                                        RATE_BANDS_KHZ):
+        print(f"  fs {band:>5} kHz: {counts}")
     for index, rig, cat, tc, se, ee, flags, reason in rows:
         if cat == "ok_wrong" or (a.show_ok and cat.startswith("ok") and abs(tc) > 0.5):
             print(f"  {cat} {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz, "

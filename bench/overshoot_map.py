@@ -60,13 +60,6 @@ def run_one(args):
             result.plate_resonance_hz)
 
 
-def _band(value, edges):
-    for lo, hi in zip(edges, edges[1:]):
-        if lo <= value < hi:
-            return f"{lo:g}-{hi:g}"
-    return f">= {edges[-1]:g}"
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=600, help="number of rigs")
@@ -82,10 +75,8 @@ def main(argv=None):
           + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
     for name, key, edges in (("samples per period", lambda r: r[1].sample_rate_hz / r[1].plate_hz, RATIO_BANDS),
                              ("damping ratio", lambda r: r[1].plate_zeta, ZETA_BANDS)):
-        table = Counter((_band(key(r), edges), r[2]) for r in rows)
-        for band in sorted({b for b, _ in table}, key=lambda b: float(b.split("-")[0].lstrip(">= "))):
-            print(f"  {name} {band:>9}: " + ", ".join(f"{c} {table[(band, c)]}" for c in zoo.CATEGORIES
-                                                     if table[(band, c)]))
+        for band, counts in zoo.band_counts([key(r) for r in rows], [r[2] for r in rows], edges):
+            print(f"  {name} {band:>9}: {counts}")
     for index, rig, cat, tc, peak, spike, undone in rows:
         if cat == "ok_wrong":
             print(f"  ok but wrong {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz,"

@@ -82,13 +82,6 @@ def run_one(args):
     return (index, rig, j.category, j.reason, {k: 100 * v for k, v in j.errors.items()}, why)
 
 
-def _band(value, edges):
-    for lo, hi in zip(edges, edges[1:]):
-        if lo <= value < hi:
-            return f"{lo / 1e3:g}-{hi / 1e3:g} kHz"
-    return f">= {edges[-1] / 1e3:g} kHz"
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=400, help="number of rigs")
@@ -100,9 +93,9 @@ def main(argv=None):
         rows = pool.map(run_one, jobs, chunksize=4)
     cats = Counter(r[2] for r in rows)
     print(f"{a.n} rigs (seed {a.seed}, spike peaks, 20-60 kHz): " + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
-    table = Counter((_band(r[1].sample_rate_hz, RATE_BANDS), r[2]) for r in rows)
-    for band in sorted({b for b, _ in table}, key=lambda b: float(b.split("-")[0].lstrip(">= "))):
-        print(f"  {band:>10}: " + ", ".join(f"{c} {table[(band, c)]}" for c in zoo.CATEGORIES if table[(band, c)]))
+    for band, counts in zoo.band_counts([r[1].sample_rate_hz for r in rows], [r[2] for r in rows], RATE_BANDS,
+                                        scale=1e3, unit=" kHz"):
+        print(f"  {band:>10}: {counts}")
     reasons = Counter(r[3].split(":")[0] for r in rows if r[2].startswith("excluded"))
     print("exclusions: " + "; ".join(f"{k} {v}" for k, v in reasons.most_common()))
     far = [r for r in rows if r[2] == "ok_wrong" or r[2] == "ok_right" and abs(r[4]["peak"]) > 5.0]

@@ -231,3 +231,11 @@ def test_judge(result, truth, category, wrong):
     assert j.category == category
     assert j.wrong == wrong
     assert j.reason == result.reason
+
+
+def test_band_counts_labels_each_band_and_counts_its_categories():
+    values = [0.5, 1.0, 1.5, 2.5, 3.0, 9.0, 2.0]
+    categories = ["ok_right", "ok_right", "ok_wrong", "ok_right", "excluded_measurable", "ok_right", "ok_right"]
+    rows = zoo.band_counts(values, categories, (1.0, 2.0, 3.0), scale=0.5, unit=" x")
+    assert rows == [("< 2 x", "ok_right 1"), ("2-4 x", "ok_right 1, ok_wrong 1"), ("4-6 x", "ok_right 2"),
+                    (">= 6 x", "ok_right 1, excluded_measurable 1")]

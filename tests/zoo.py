@@ -66,6 +66,7 @@ trace of a (seed, index) pair, as the benchmark and the regression tests use.
 from __future__ import annotations
 
 import math
+from collections import Counter
 import shutil
 import tempfile
 import warnings
@@ -261,6 +262,23 @@ class ZooTrace:
 
 def _loguniform(rng, lo, hi):
     return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
+def band_counts(values, categories, edges, scale: float = 1.0, unit: str = "") -> list[tuple[str, str]]:
+    """The categories counted per band of ``values``, for the tables of the maps of bench/: [(band, "category n,
+    ..."), ...] in the bands' order, bands without traces left out, categories in CATEGORIES' order. A value in
+    [edges[i], edges[i + 1]) is in the band "lo-hi", below the first edge in "< first", at or above the last in
+    ">= last" (the edges divided by ``scale``, ``unit`` appended)."""
+    def label(i):
+        if i == 0:
+            return f"< {edges[0] / scale:g}{unit}"
+        if i == len(edges):
+            return f">= {edges[-1] / scale:g}{unit}"
+        return f"{edges[i - 1] / scale:g}-{edges[i] / scale:g}{unit}"
+
+    table = Counter((int(np.searchsorted(edges, v, side="right")), c) for v, c in zip(values, categories))
+    return [(label(i), ", ".join(f"{c} {table[(i, c)]}" for c in CATEGORIES if table[(i, c)]))
+            for i in sorted({i for i, _ in table})]
 
 
 def map_shot(rng: np.random.Generator) -> dict:
