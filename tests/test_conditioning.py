@@ -1684,3 +1684,51 @@ def test_hinge_problems_say_which_fit_gave_the_end(flags, curve_se, said):
                       clipped=False, flags=flags, start_se_s=1e-7, end_se_s=6e-6, curve_end_se_s=curve_se * 1e-3)
     problems = _hinge_problems(c)
     assert len(problems) == 1 and said in problems[0].message, problems
+
+
+# ------------------------------------------------------------------ a low-pass in the sensor chain (issue 9)
+
+
+def _lowpassed_jump_trace(fs, fn_hz=None, zeta=0.71, jump=0.4, duration_s=4.0e-3, phase=0.3, noise_fraction=1e-3):
+    """A force that jumps from zero to ``jump`` of its scale, humps as a half-sine and fades linearly to zero,
+    through a unit-gain second-order low-pass of ``fn_hz`` and damping ``zeta`` (an amplifier's filter; None:
+    none), integrated exactly on a grid of about 1 us that holds every sample (scipy's lsim, the force linear
+    between its points), sampled at ``fs`` with white noise of ``noise_fraction`` of the scale: (voltage [V], TC [s])."""
+    from scipy import signal
+
+    m = int(math.ceil(1e6 / fs))
+    n = int(round(0.04 * fs))
+    t = np.arange(n * m) / (fs * m)
+    start = (int(0.02 * fs) + phase) / fs
+    u = (t - start) / duration_s
+    force = np.where((u > 0) & (u < 1), jump * (1.0 - u) + np.sin(np.pi * u), 0.0)
+    if fn_hz is not None:
+        wn = 2.0 * math.pi * fn_hz
+        force = signal.lsim(([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn]), force, t)[1]
+    v = 2.0 * force[::m] + np.random.default_rng(int(fs) + int(100 * phase)).normal(0.0, 2.0 * noise_fraction, n)
+    return v, duration_s
+
+
+@pytest.mark.parametrize("fs, fn_hz, zeta", [(100e3, 4e3, 0.71), (50e3, 3e3, 0.87), (200e3, 6e3, 0.5)])
+def test_jump_spread_by_a_low_pass_is_a_problem(fs, fn_hz, zeta):
+    # a second-order Butterworth (0.71), a Bessel (0.87) and a less damped filter: each delays the force by
+    # 2 zeta / wn (56, 92 and 27 us: 1.4, 2.3 and 0.66 % of TC), and the contact's end comes late by about that
+    v, tc = _lowpassed_jump_trace(fs, fn_hz, zeta)
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    delay = 2.0 * zeta / (2.0 * math.pi * fn_hz)
+    assert c.contact.contact_time_s - tc > 0.6 * delay, (c.contact.contact_time_s - tc, delay)
+    found = [p for p in c.problems if "as through a low-pass" in p.message]
+    assert len(found) == 1 and found[0].kind is ProblemKind.CONTACT_END_UNDETERMINED, c.problems
+    said = float(re.search(r"delays the contact's end by about (\S+) us", found[0].message).group(1)) * 1e-6
+    assert 0.5 * delay < said < 2.0 * delay, (said, delay)
+
+
+@pytest.mark.parametrize("fs", [25e3, 50e3, 100e3, 200e3])
+@pytest.mark.parametrize("jump", [0.0, 0.4])
+def test_force_through_no_low_pass_shows_none(fs, jump):
+    # the same force through an ideal chain, wherever its start falls between two samples, and a force that
+    # starts without a jump (its rise spread by the force itself, not by a filter)
+    for phase in (0.1, 0.5, 0.9):
+        v, _ = _lowpassed_jump_trace(fs, None, jump=jump, phase=phase)
+        c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+        assert not any("low-pass" in p.message for p in c.problems), (phase, [p.message for p in c.problems])

@@ -575,6 +575,25 @@ def test_fit_front_finds_the_plate_and_the_force_under_its_ringing(fn_hz, zeta, 
     assert ideal.frequency_hz == math.inf and ideal.rss > 100.0 * fit.rss
 
 
+@pytest.mark.parametrize("fn_hz, zeta, seed", [(8.0e3, 0.95, 0), (12.0e3, 0.71, 1)])
+def test_fit_front_with_a_damping_range_finds_a_low_pass(fn_hz, zeta, seed):
+    from ballimpact.plate import fit_front
+
+    # the model's front through a heavily damped response (an amplifier's filter: no ringing), at 150 kHz
+    fs, start, jump, slope, curvature, rise = 150e3, 3.37, 400.0, 35.0, -0.6, 1.5
+    kt, kf = _front_knots(fs, start, jump, rise, slope, curvature, 60.0)
+    n = np.arange(0, 40)
+    x = sensed_force(kt, kf, n / fs, fn_hz, zeta) + np.random.default_rng(seed).normal(0.0, 1.0, n.size)
+    fit = fit_front(x, fs, 0, n[-1], start=start + 1.0, damping=(0.25, 0.98))
+    assert 0.25 <= fit.damping_ratio <= 0.98
+    # its delay 2 zeta / wn, which the force's end gets and its start does not (conditioning._front_lowpass)
+    assert_allclose(fit.damping_ratio / fit.frequency_hz, zeta / fn_hz, rtol=0.1)
+    assert_allclose(fit.start, start, atol=0.3)
+    assert fit.rss < 2.0 * n.size  # the noise's variance is 1
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 1.0, resonance=False, rise_max=1.0)
+    assert ideal.rss > 100.0 * fit.rss
+
+
 def test_fit_front_through_an_ideal_plate_fits_the_force_to_its_noise():
     from ballimpact.plate import fit_front
 
@@ -591,6 +610,8 @@ def test_fit_front_through_an_ideal_plate_fits_the_force_to_its_noise():
     (dict(sample_rate_hz=0.0), "sample_rate_hz must be positive"),
     (dict(start=math.nan), "start must be finite"),
     (dict(force=np.full(40, np.nan)), "non-finite"),
+    (dict(damping=(0.5, 0.3)), "damping must be"),
+    (dict(damping=(0.2, 1.0)), "damping must be"),
 ])
 def test_fit_front_rejects_bad_arguments(kwargs, match):
     from ballimpact.plate import fit_front

@@ -177,6 +177,16 @@ OVERSHOOT_AFTER_SAMPLES = 10  # fewer samples up to it: fitted on this many afte
 OVERSHOOT_MAX_DAMPING = 0.35  # ... through a plate damped at most this much (more: a smoother, no ringing) [-]
 OVERSHOOT_MIN_PERIOD = 2.5  # a plate fitted with fewer samples per period may be an alias: not evidence [samples]
 OVERSHOOT_RISE_MAX = 1.0  # ... the jumps rising over at most this many samples (the model's: 10 us) [samples]
+LOWPASS_RISE_S = 0.15e-3  # the force's rise from the contact start to this long after it (before buckling) ... [s]
+LOWPASS_STEP_S = 10.0e-6  # ... and its largest rise in this long (the model's jump: its 0.01 ms step) and a sample:
+LOWPASS_CONCENTRATION = 0.5  # ... less than this fraction of the rise, a jump spread: its front is fitted ... [-]
+LOWPASS_WINDOW_S = 0.6e-3  # ... from the contact start to this long after it ... [s]
+LOWPASS_MAX_SAMPLES = 40  # ... on every q-th sample, q the least that leaves at most this many in it [samples]
+LOWPASS_DAMPING = (0.3, 0.98)  # the low-pass fitted: a second-order response of these damping ratios (one at the
+#: lower bound is a plate that rings, for the plate's checks) ...
+LOWPASS_DELAY_FRACTION = 2.0e-3  # ... whose delay 2 zeta / wn is more than this fraction of TC ... [-]
+LOWPASS_DELAY_SAMPLES = 1.0  # ... and more than this many samples (less: no trace in the samples) ... [samples]
+LOWPASS_RESIDUAL = 4.0  # ... that leaves at most this many noise variances per sample (it explains the front) [-]
 FAST_RING_GAP_SAMPLES = 2  # the front's ringing is read from this long after buckling (BUCKLING_TIME_S in) ... [samples]
 FAST_RING_WINDOW_S = 0.3e-3  # ... over this long (at least FAST_RING_MIN_SAMPLES), less a cubic (the force) ... [s]
 FAST_RING_MIN_SAMPLES = 12  # ... [samples]
@@ -813,6 +823,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                             + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
             return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, at_ends, t0_s, scale,
                            spikes, it.mains, mains_source, it.contact_integral, plate)
+    if contact.found and not problems:  # last, on a trace nothing else excludes: its fits cost a few ms
+        problems = _front_lowpass(it.x, fs, it.fit.noise, float(contact.peak_V), (contact.start_s - t0_s) * fs,
+                                  (contact.end_s - t0_s) * fs, contact.contact_time_s)
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
                    it.mains, mains_source, it.contact_integral)
 
@@ -2323,6 +2336,87 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     return [Problem(ProblemKind.PEAK_ON_RINGING,
                     f"peak force on plate ringing: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the contact "
                     f"start, is the plate's first overshoot of the force's jump: {seen}; the peak is not the ball's")]
+
+
+def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
+    """The force's jump at the contact start spread by a low-pass in the chain: the end comes late, TC long.
+
+    The model's force jumps from zero (section 3.2.4 in Goodwill & Haake
+    2004: the cloth carries no load below 2 mm of compression, then kB =
+    kCONST) to 30-57 % of its peak within its 0.01 ms step. A low-pass in the
+    sensor chain (a charge amplifier's filter: a second-order Butterworth has
+    damping 0.71, a Bessel 0.87; or a plate on damped mounts) spreads that
+    jump over its rise and delays the rest of the force by its group delay,
+    2 zeta / wn. The contact's start is found at the foot of the spread jump,
+    its end where the delayed and rounded fade meets zero, about twice the
+    delay late: TC comes out long, and nothing rings to show it (``python
+    bench/lowpass_map.py --n 400 --seed 1``: 50 of 400 ok but wrong, up to
+    TC +4.2 %, on 39210b7).
+
+    So when the force's largest rise in LOWPASS_STEP_S (at least a sample)
+    within LOWPASS_RISE_S of the start is less than LOWPASS_CONCENTRATION of
+    its whole rise there (a jump through an ideal plate puts 0.36 or more of
+    it into that step on bench/ideal_plate_map.py's rigs), the samples from
+    FRONT_PRE_SAMPLES before the start to LOWPASS_WINDOW_S after it (every
+    q-th, at most LOWPASS_MAX_SAMPLES) are fitted with the model's front and
+    its drop at buckling (:func:`ballimpact.plate.fit_front` with ``drop``),
+    once through a second-order response (fn up to 0.45 of the rate fitted,
+    damping within LOWPASS_DAMPING) and once through an ideal plate (the jump
+    rising over at most OVERSHOOT_RISE_MAX samples). The low-pass is seen,
+    and TC is not known to 1 %, when its fit
+
+    * beats the ideal one by more than FRONT_SIGNIFICANCE residual variances
+      (the larger of the noise's and its own, per sample),
+    * explains the front: it leaves at most LOWPASS_RESIDUAL noise variances
+      per sample (an ideal plate's front that the model's shape misses by
+      more than the noise is fitted better through a smoother, and left
+      11-870 variances on zoo traces 2:850, 1:1149 and 0:196),
+    * is damped: its damping ratio is off the lower bound (a plate damped
+      less rings, and the plate's checks see it), and
+    * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
+
+    A force that starts smoothly (no jump) through an ideal plate is no
+    evidence: the ideal plate's ramp and parabola fit it as well. A low-pass
+    whose delay is under a sample or two (at 20-40 kHz, near half the rate)
+    leaves little trace in the samples and is not always seen (the README,
+    "Robustness"). Not in the paper.
+    """
+    k0 = int(math.ceil(s_u))
+    k1 = int(math.floor(e_u))
+    if not (peak > 0 and tc > 0) or k1 - k0 < MIN_CONTACT_SAMPLES or k1 >= x.size:
+        return []
+    seg = x[max(k0 - 1, 0):k0 + min(max(int(round(LOWPASS_RISE_S * fs)), 3), k1 - k0) + 1]
+    m = max(1, int(math.ceil(LOWPASS_STEP_S * fs)))
+    rise = float(np.max(seg) - seg[0])
+    if not rise > FRONT_JUMP_FRACTION * peak or float(np.max(seg[m:] - seg[:-m])) >= LOWPASS_CONCENTRATION * rise:
+        return []  # no rise to judge, or a jump within a step: no low-pass worth a sample
+    w = min(max(int(round(LOWPASS_WINDOW_S * fs)), 3), k1 - k0)
+    q = max(1, int(math.ceil(w / LOWPASS_MAX_SAMPLES)))  # every q-th sample: a slow front needs no more
+    first = k0 - FRONT_PRE_SAMPLES * q
+    if first < 0:
+        return []
+    xs, fq, start = x[first:k0 + w + 1:q], fs / q, (s_u - first) / q
+    ideal = fit_front(xs, fq, 0, xs.size - 1, start, resonance=False, drop=True, rise_max=OVERSHOOT_RISE_MAX)
+    lowpass = fit_front(xs, fq, 0, xs.size - 1, start, drop=True, rise_max=OVERSHOOT_RISE_MAX,
+                        damping=LOWPASS_DAMPING)
+    if ideal is None or lowpass is None:
+        return []
+    variance = max(noise * noise, lowpass.rss / max(lowpass.n_samples - 10, 1))
+    gain = (ideal.rss - lowpass.rss) / variance if variance > 0 else math.inf
+    delay = 2.0 * lowpass.damping_ratio / (2.0 * math.pi * lowpass.frequency_hz)  # [s]
+    damped = lowpass.damping_ratio > 1.05 * LOWPASS_DAMPING[0]
+    explained = lowpass.rss <= LOWPASS_RESIDUAL * lowpass.n_samples * noise * noise
+    if not (gain > FRONT_SIGNIFICANCE and damped and explained
+            and delay > max(LOWPASS_DELAY_FRACTION * tc, LOWPASS_DELAY_SAMPLES / fs)):
+        return []
+    return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                    f"contact end not determined to 1 %: the force's jump at the contact start is spread over "
+                    f"several samples, as through a low-pass (an amplifier's filter or a damped plate): the front "
+                    f"fits a jump through a second-order response of about {lowpass.frequency_hz / 1e3:.3g} kHz "
+                    f"(damping ratio {lowpass.damping_ratio:.2g}) with {ideal.rss / max(lowpass.rss, 1e-300):.3g} "
+                    f"times less residual than through an ideal plate; such a low-pass delays the contact's end by "
+                    f"about {delay * 1e6:.3g} us ({100 * delay / tc:.2g} % of TC) more than its start (record without "
+                    "the filter)")]
 
 
 def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):

@@ -892,7 +892,8 @@ def front_responses(u, wn, zeta, rise):
 
 
 def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True,
-              drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True, spike=None):
+              drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True, spike=None,
+              damping=None):
     """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
 
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
@@ -978,6 +979,13 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         raise ValueError(f"start must be finite, got {start!r}")
     if not (rise_max >= 0 and math.isfinite(rise_max)):
         raise ValueError(f"rise_max must be finite and non-negative, got {rise_max!r}")
+    if damping is None:
+        zeta_grid, zeta_lo, zeta_hi = FRONT_GRID_DAMPING, 0.005, FRONT_DROP_MAX_DAMPING if drop else 0.9
+    else:
+        zeta_lo, zeta_hi = (float(v) for v in damping)
+        if not 0.0 < zeta_lo < zeta_hi < 1.0:
+            raise ValueError(f"damping must be (lowest, highest) with 0 < lowest < highest < 1, got {damping!r}")
+        zeta_grid = tuple(np.geomspace(zeta_lo, zeta_hi, 4))
     x = finite_samples("force", force)
     first, last = int(first), int(last)
     if first < 0 or last >= x.size or last - first + 1 < 8:
@@ -1023,7 +1031,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         return np.sum(resid * resid, axis=-1), best_coef, resid
 
     if resonance:
-        g = np.meshgrid(np.geomspace(w_lo, w_hi, FRONT_GRID_FREQUENCIES), FRONT_GRID_DAMPING,
+        g = np.meshgrid(np.geomspace(w_lo, w_hi, FRONT_GRID_FREQUENCIES), zeta_grid,
                         (k0 - 2.0, k0 - 1.0), (0.5, 1.5), indexing="ij")
         grid = np.stack([v.ravel() for v in g], axis=1)  # wn, zeta, ts, rise
     else:
@@ -1052,11 +1060,12 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
 
     candidates = sorted({int(k) - first for k in (spike or ()) if first <= int(k) <= last})
     if spike is not None and not candidates:  # no candidate inside the window: the fit without a spike
-        return fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine)
+        return fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
+                         damping=damping)
 
     # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
     if resonance:
-        lo, hi = np.array([0.8 * w_lo, 0.005, t_lo, 0.0]), np.array([w_hi, FRONT_DROP_MAX_DAMPING if drop else 0.9, t_hi, rise_max])
+        lo, hi = np.array([0.8 * w_lo, zeta_lo, t_lo, 0.0]), np.array([w_hi, zeta_hi, t_hi, rise_max])
         full, free = np.atleast_2d, slice(None)
     else:
         lo, hi, free = np.array([t_lo, 0.0]), np.array([t_hi, rise_max]), slice(2, None)
@@ -1088,7 +1097,8 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         return _front_fit(p, solved, drop, fs, y.size)
     # a free spike makes spurious fits on the grid (at a bound) beat the grid's rows near the true plate: each
     # candidate is also fitted from the fit without a spike, and the least residual of all is the fit
-    plain = fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine)
+    plain = fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
+                      damping=damping)
     if plain is None:
         return None
     starts = [np.array([2.0 * math.pi * plain.frequency_hz / fs, plain.damping_ratio, plain.start, plain.rise]
