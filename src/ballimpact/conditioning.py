@@ -185,7 +185,7 @@ LOWPASS_MAX_SAMPLES = 40  # ... on every q-th sample, q the least that leaves at
 LOWPASS_DAMPING = (0.3, 0.98)  # the low-pass fitted: a second-order response of these damping ratios (one at the
 #: lower bound is a plate that rings, for the plate's checks) ...
 LOWPASS_DELAY_FRACTION = 2.0e-3  # ... whose delay 2 zeta / wn is more than this fraction of TC ... [-]
-LOWPASS_DELAY_SAMPLES = 1.0  # ... and more than this many samples (less: no trace in the samples) ... [samples]
+LOWPASS_DELAY_SAMPLES = 1.0  # ... and more than this many of the samples fitted (less: no trace in them) ... [samples]
 LOWPASS_RESIDUAL = 4.0  # ... that leaves at most this many noise variances per sample (it explains the front) [-]
 FAST_RING_GAP_SAMPLES = 2  # the front's ringing is read from this long after buckling (BUCKLING_TIME_S in) ... [samples]
 FAST_RING_WINDOW_S = 0.3e-3  # ... over this long (at least FAST_RING_MIN_SAMPLES), less a cubic (the force) ... [s]
@@ -2396,10 +2396,15 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     if first < 0:
         return []
     xs, fq, start = x[first:k0 + w + 1:q], fs / q, (s_u - first) / q
-    ideal = fit_front(xs, fq, 0, xs.size - 1, start, resonance=False, drop=True, rise_max=OVERSHOOT_RISE_MAX)
+    within = BUCKLING_TIME_S * fq + 1.0  # the drop at buckling within 0.2 ms (and a sample) of the first sample
+    for refine in (False, True):  # the grid's ideal fit first: when it leaves too little, the refined one does too
+        ideal = fit_front(xs, fq, 0, xs.size - 1, start, resonance=False, drop=True, rise_max=OVERSHOOT_RISE_MAX,
+                          refine=refine, drop_within=within)
+        if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
+            return []  # the ideal plate leaves too little for a low-pass to explain
     lowpass = fit_front(xs, fq, 0, xs.size - 1, start, drop=True, rise_max=OVERSHOOT_RISE_MAX,
-                        damping=LOWPASS_DAMPING)
-    if ideal is None or lowpass is None:
+                        damping=LOWPASS_DAMPING, drop_within=within)
+    if lowpass is None:
         return []
     variance = max(noise * noise, lowpass.rss / max(lowpass.n_samples - 10, 1))
     gain = (ideal.rss - lowpass.rss) / variance if variance > 0 else math.inf
@@ -2407,7 +2412,7 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     damped = lowpass.damping_ratio > 1.05 * LOWPASS_DAMPING[0]
     explained = lowpass.rss <= LOWPASS_RESIDUAL * lowpass.n_samples * noise * noise
     if not (gain > FRONT_SIGNIFICANCE and damped and explained
-            and delay > max(LOWPASS_DELAY_FRACTION * tc, LOWPASS_DELAY_SAMPLES / fs)):
+            and delay > max(LOWPASS_DELAY_FRACTION * tc, LOWPASS_DELAY_SAMPLES / fq)):
         return []
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                     f"contact end not determined to 1 %: the force's jump at the contact start is spread over "

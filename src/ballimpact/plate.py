@@ -893,7 +893,7 @@ def front_responses(u, wn, zeta, rise):
 
 def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True,
               drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True, spike=None,
-              damping=None):
+              damping=None, drop_within=None):
     """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
 
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
@@ -986,6 +986,8 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         if not 0.0 < zeta_lo < zeta_hi < 1.0:
             raise ValueError(f"damping must be (lowest, highest) with 0 < lowest < highest < 1, got {damping!r}")
         zeta_grid = tuple(np.geomspace(zeta_lo, zeta_hi, 4))
+    if drop_within is not None and not (drop_within > 0 and math.isfinite(drop_within)):
+        raise ValueError(f"drop_within must be positive and finite, got {drop_within!r}")
     x = finite_samples("force", force)
     first, last = int(first), int(last)
     if first < 0 or last >= x.size or last - first + 1 < 8:
@@ -994,6 +996,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     n = np.arange(first, last + 1, dtype=float)
     k0 = float(math.ceil(start))
     t_lo, t_hi = k0 - FRONT_START_SPAN, k0
+    drop_last = float(last) if drop_within is None else min(float(last), k0 + float(drop_within))
     w_hi = 2.0 * math.pi * FRONT_MAX_FREQUENCY
     w_lo = 2.0 * math.pi / max(last - start + 1.0, 1.0)  # at least one period over the window
     if resonance and w_lo >= w_hi:
@@ -1040,7 +1043,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
                         indexing="ij")
         grid = np.stack([np.full(g[0].size, np.inf), np.zeros(g[0].size), g[0].ravel(), g[1].ravel()], axis=1)
     if drop:  # the drop's start on every half sample after the force's first contact sample
-        tb = np.arange(k0 + 0.5, last, 0.5)
+        tb = np.arange(k0 + 0.5, drop_last, 0.5)
         grid = np.column_stack([np.repeat(grid, tb.size, axis=0), np.tile(tb, grid.shape[0])])
         if grid.size == 0:
             return None
@@ -1061,7 +1064,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     candidates = sorted({int(k) - first for k in (spike or ()) if first <= int(k) <= last})
     if spike is not None and not candidates:  # no candidate inside the window: the fit without a spike
         return fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
-                         damping=damping)
+                         damping=damping, drop_within=drop_within)
 
     # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
     if resonance:
@@ -1074,7 +1077,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
             q = np.atleast_2d(q)
             return np.column_stack([np.full(q.shape[0], np.inf), np.zeros(q.shape[0]), q])
     if drop:
-        lo, hi = np.append(lo, k0), np.append(hi, float(last))
+        lo, hi = np.append(lo, k0), np.append(hi, drop_last)
 
     def residuals(rows):  # the residuals of each row of free parameters, all at once [rows, n]
         rows = full(rows)
@@ -1098,7 +1101,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     # a free spike makes spurious fits on the grid (at a bound) beat the grid's rows near the true plate: each
     # candidate is also fitted from the fit without a spike, and the least residual of all is the fit
     plain = fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
-                      damping=damping)
+                      damping=damping, drop_within=drop_within)
     if plain is None:
         return None
     starts = [np.array([2.0 * math.pi * plain.frequency_hz / fs, plain.damping_ratio, plain.start, plain.rise]
