@@ -721,19 +721,21 @@ def test_zoo_ideal_plate_map_case(name, seed, index, what, must_be_ok, tmp_path)
 
 
 #: Traces of bench/lowpass_map.py (seed 1), ok but wrong on main at 39210b7: the model's force through a unit-gain
-#: second-order low-pass (an amplifier's filter, or a plate on damped mounts: no ringing to show it) that spreads the
-#: force's jump over several samples and delays its end by 2 zeta / wn; TC came out long by about that. The front's
-#: fit through a low-pass (``conditioning._front_lowpass``) now names it (name, seed, index, what).
+#: second-order low-pass (an amplifier's filter, or a plate on damped mounts: little or no ringing to show it) that
+#: spreads the force's jump over several samples and delays its end; TC came out long by about twice the delay
+#: 2 zeta / wn. The front's fit through a low-pass (``conditioning._front_lowpass``) now names it (name, seed, index,
+#: what).
 LOWPASS_DELAY = [
-    ("lowpass-2.0kHz-bessel-like-38kHz", 1, 61, "2.0 kHz, damping 0.85, 38 kHz (5.0 samples): TC +4.19 % on main"),
-    ("lowpass-2.7kHz-179kHz", 1, 5, "2.7 kHz, damping 0.49, 179 kHz (10.2 samples): TC +2.04 % on main"),
+    ("lowpass-3.7kHz-110kHz", 1, 30, "3.7 kHz, damping 0.35, 110 kHz (3.3 samples): TC +1.85 % on main"),
+    ("lowpass-5.7kHz-47.5kHz", 1, 140, "5.7 kHz, damping 0.55, 47.5 kHz (1.5 samples): TC +1.63 % on main"),
+    ("lowpass-9.4kHz-bessel-like-75kHz", 1, 47, "9.4 kHz, damping 0.94, 75 kHz (2.4 samples): TC +1.18 % on main"),
 ]
 
 
 @pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in LOWPASS_DELAY])
 def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
     trace = bench_module("lowpass_map").trace_for(seed, index)
-    assert trace.rig.plate_zeta >= 0.3, name
+    assert trace.rig.plate_zeta >= 0.3, name  # 1:140 and 1:47 are marginal (a spike peak, fn < 10 kHz): ok must be right
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
     assert result.status == "excluded" and "as through a low-pass" in result.reason, result.reason

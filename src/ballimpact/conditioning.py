@@ -54,7 +54,9 @@ below zero after the contact (the plate swinging back), a contact end that
 moves when fitted again from higher samples (a tail fading into the noise), a
 force jump from zero that locates an end only to half a sample when that is
 more than 0.7 % of TC, too few samples across the contact, a contact window
-that does not settle.
+that does not settle, and (last, on a trace nothing else excludes) a force's
+jump spread over several samples by a low-pass in the chain, which delays the
+contact's end.
 
 Plate resonance: when the only problems are the plate's (ringing in or after
 the contact, a peak on the ringing, force below zero after it, and the end and
@@ -2355,8 +2357,9 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
 
     So when the force's largest rise in LOWPASS_STEP_S (at least a sample)
     within LOWPASS_RISE_S of the start is less than LOWPASS_CONCENTRATION of
-    its whole rise there (a jump through an ideal plate puts 0.36 or more of
-    it into that step on bench/ideal_plate_map.py's rigs), the samples from
+    its whole rise there (a jump through an ideal plate put 0.36 or more of it
+    into that step on 120 of bench/ideal_plate_map.py's rigs at 20-60 kHz;
+    this only spares the fits on most traces, the fits decide), the samples from
     FRONT_PRE_SAMPLES before the start to LOWPASS_WINDOW_S after it (every
     q-th, at most LOWPASS_MAX_SAMPLES) are fitted with the model's front and
     its drop at buckling (:func:`ballimpact.plate.fit_front` with ``drop``),
@@ -2409,7 +2412,7 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     variance = max(noise * noise, lowpass.rss / max(lowpass.n_samples - 10, 1))
     gain = (ideal.rss - lowpass.rss) / variance if variance > 0 else math.inf
     delay = 2.0 * lowpass.damping_ratio / (2.0 * math.pi * lowpass.frequency_hz)  # [s]
-    damped = lowpass.damping_ratio > 1.05 * LOWPASS_DAMPING[0]
+    damped = lowpass.damping_ratio > 1.05 * LOWPASS_DAMPING[0]  # off the lower bound, not pressed against it
     explained = lowpass.rss <= LOWPASS_RESIDUAL * lowpass.n_samples * noise * noise
     if not (gain > FRONT_SIGNIFICANCE and damped and explained
             and delay > max(LOWPASS_DELAY_FRACTION * tc, LOWPASS_DELAY_SAMPLES / fq)):
@@ -2419,9 +2422,9 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
                     f"several samples, as through a low-pass (an amplifier's filter or a damped plate): the front "
                     f"fits a jump through a second-order response of about {lowpass.frequency_hz / 1e3:.3g} kHz "
                     f"(damping ratio {lowpass.damping_ratio:.2g}) with {ideal.rss / max(lowpass.rss, 1e-300):.3g} "
-                    f"times less residual than through an ideal plate; such a low-pass delays the contact's end by "
-                    f"about {delay * 1e6:.3g} us ({100 * delay / tc:.2g} % of TC) more than its start (record without "
-                    "the filter)")]
+                    f"times less residual than through an ideal plate; such a low-pass delays the force by about "
+                    f"{delay * 1e6:.3g} us ({100 * delay / tc:.2g} % of TC), and the contact's end as much or more "
+                    "than its start (record without the filter)")]
 
 
 def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
