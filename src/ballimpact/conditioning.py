@@ -182,6 +182,7 @@ OVERSHOOT_RISE_MAX = 1.0  # ... the jumps rising over at most this many samples 
 LOWPASS_RISE_S = 0.15e-3  # the force's rise from the contact start to this long after it (before buckling) ... [s]
 LOWPASS_STEP_S = 10.0e-6  # ... and its largest rise in this long (the model's jump: its 0.01 ms step) and a sample:
 LOWPASS_CONCENTRATION = 0.4  # ... less than this fraction of the rise, a jump spread: its front is fitted ... [-]
+LOWPASS_SPEEDUP = 1.5  # ... and its largest rise in twice that, more than this times its first (S-shaped) ... [-]
 LOWPASS_WINDOW_S = 0.6e-3  # ... from the contact start to this long after it ... [s]
 LOWPASS_MAX_SAMPLES = 40  # ... on every q-th sample, q the least that leaves at most this many in it [samples]
 LOWPASS_DAMPING = (0.3, 0.98)  # the low-pass fitted: a second-order response of these damping ratios (one at the
@@ -2381,8 +2382,13 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
       less rings, and the plate's checks see it), and
     * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
 
-    A force that starts smoothly (no jump) through an ideal plate is no
-    evidence: the ideal plate's ramp and parabola fit it as well. A low-pass
+    A force that starts smoothly (no jump) rises steepest at once, and is
+    not fitted: a spread jump rises slowly first, then faster, its steepest
+    rise over two such steps more than LOWPASS_SPEEDUP times its first two
+    (over the 0.6 ms window a
+    smooth start's curve is more than the ideal plate's ramp and parabola
+    fit, and a low-pass's fit took it for one: tests/test_conditioning.py
+    ``test_an_end_that_jumps_is_no_convex_fade``). A low-pass
     whose delay is under a sample or two (at 20-40 kHz, near half the rate)
     leaves little trace in the samples and is not always seen (the README,
     "Robustness"). Not in the paper.
@@ -2394,8 +2400,12 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     seg = x[max(k0 - 1, 0):k0 + min(max(int(round(LOWPASS_RISE_S * fs)), 3), k1 - k0) + 1]
     m = max(1, int(math.ceil(LOWPASS_STEP_S * fs)))
     rise = float(np.max(seg) - seg[0])
-    if not rise > FRONT_JUMP_FRACTION * peak or float(np.max(seg[m:] - seg[:-m])) >= LOWPASS_CONCENTRATION * rise:
+    steepest = float(np.max(seg[m:] - seg[:-m]))
+    if not rise > FRONT_JUMP_FRACTION * peak or steepest >= LOWPASS_CONCENTRATION * rise:
         return []  # no rise to judge, or a jump within a step: no low-pass worth a sample
+    two = min(2 * m, seg.size - 1)  # over two steps: the first sample in the contact may hold part of one
+    if not float(np.max(seg[two:] - seg[:-two])) > LOWPASS_SPEEDUP * float(seg[two] - seg[0]):
+        return []  # steepest at once: a smooth start (no jump to spread), not a low-pass's S-shaped rise
     w = min(max(int(round(LOWPASS_WINDOW_S * fs)), 3), k1 - k0)
     q = max(1, int(math.ceil(w / LOWPASS_MAX_SAMPLES)))  # every q-th sample: a slow front needs no more
     first = k0 - FRONT_PRE_SAMPLES * q
