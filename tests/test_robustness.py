@@ -86,8 +86,9 @@ def _regression_params():
     return params
 
 
-def assert_invariant(trace, result, judgement, *, must_be_ok=False):
-    """ok and right, or excluded with a reason naming what was seen; never ok and wrong."""
+def assert_invariant(trace, result, judgement, *, must_be_ok=False, excluded_with=None):
+    """ok and right, or excluded with a reason naming what was seen; never ok and wrong. With ``excluded_with``,
+    excluded, and that text in the reason."""
     t = trace.truth
     info = (f"{judgement.category}: errors {judgement.errors}, reason {result.reason!r}, "
             f"truth fault {t.fault!r} marginal {t.marginal!r}; {zoo.describe(trace.rig)}")
@@ -98,6 +99,8 @@ def assert_invariant(trace, result, judgement, *, must_be_ok=False):
         assert result.reason, info
         for fault in filter(None, t.fault.split("; ")):
             assert any(w in result.reason for w in FAULT_WORDS[fault]), info
+    if excluded_with is not None:
+        assert result.status == "excluded" and excluded_with in result.reason, result.reason
 
 
 #: Cases whose exclusion is itself the failure the issue reports.
@@ -432,8 +435,7 @@ def test_zoo_peak_on_the_plates_step_response(name, seed, index, what, tmp_path)
     assert trace.truth.measurable or trace.truth.marginal, name
     assert trace.rig.plate_hz is not None and trace.rig.plate_zeta > 0.15, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "the plate's step response" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="the plate's step response")
 
 
 #: Traces of the benchmark excluded on main at commit 10b1d50 for "contact end not determined to 1 %: fitted again
@@ -479,9 +481,7 @@ def test_zoo_peak_on_the_ringing_from_the_jump(name, seed, index, what, tmp_path
     assert trace.truth.measurable and trace.truth.peak_is_spike, name
     assert trace.rig.plate_hz is not None and trace.rig.plate_zeta > 0.15, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "ringing from the jump lifts the largest sample" in result.reason, \
-        result.reason
+    assert_invariant(trace, result, judgement, excluded_with="ringing from the jump lifts the largest sample")
 
 
 #: Traces of the benchmark excluded on main at 6efe980 for "contact end not determined to 1 %: fitted again from
@@ -580,8 +580,7 @@ def test_zoo_alias_first_overshoot_excluded(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz > 0.5 * trace.sample_rate_hz, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "first overshoot of the force's jump" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="first overshoot of the force's jump")
 
 
 #: Traces of the zoo's chain, a rig drawn in "plate" mode (seed) with these overrides (the rigs of
@@ -682,8 +681,7 @@ def test_zoo_curve_end_with_a_second_end_not_taken(name, seed, index, draw, what
     trace = zoo.render(rig, np.random.default_rng([99, seed, index, draw]), name)
     assert trace.truth.measurable and rig.plate_hz is None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "contact end not determined to 1 %" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="contact end not determined to 1 %")
 
 
 #: Traces of bench/ideal_plate_map.py (seed 1), ok but wrong on main at ffc2770: an ideal plate at 31-46 kHz,
@@ -714,10 +712,8 @@ def test_zoo_ideal_plate_map_case(name, seed, index, what, must_be_ok, tmp_path)
     trace = bench_module("ideal_plate_map").trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=must_be_ok)
-    if not must_be_ok:
-        assert result.status == "excluded" and "the force fades into the noise there, and" in result.reason, \
-            result.reason
+    assert_invariant(trace, result, judgement, must_be_ok=must_be_ok,
+                     excluded_with=None if must_be_ok else "the force fades into the noise there, and")
 
 
 #: Traces of bench/lowpass_map.py (seed 1), ok but wrong on main at 39210b7: the model's force through a unit-gain
@@ -737,8 +733,7 @@ def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
     trace = bench_module("lowpass_map").trace_for(seed, index)
     assert trace.rig.plate_zeta >= 0.3, name  # 1:140 and 1:47 are marginal (a spike peak, fn < 10 kHz): ok must be right
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "as through a low-pass" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="as through a low-pass")
 
 
 #: Traces of bench/spike_ends_map.py, ok but wrong on main at 257a046: a pressurised ball at 13.6 m/s, 51.7 kHz, a
@@ -785,8 +780,7 @@ def test_zoo_plates_overshoot_taken_for_a_spike_is_excluded(name, seed, override
     trace = zoo.make_trace(np.random.default_rng(seed), "plate", **overrides)
     assert trace.truth.measurable, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "single-sample spike" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="single-sample spike")
 
 
 #: A trace of ``python bench/overshoot_map.py --n 400 --seed 5`` (5:350), ok but wrong on main at 06ea391: a
@@ -807,8 +801,7 @@ def test_map_undone_end_known_to_its_coloured_noise(name, seed, index, what, tmp
     trace = zoo.render(rig, rng, name)
     assert trace.truth.measurable and rig.plate_hz is not None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert result.status == "excluded" and "not undone" in result.reason, result.reason
+    assert_invariant(trace, result, judgement, excluded_with="not undone")
 
 
 #: Traces of ``python bench/overshoot_map.py --n 400`` excluded on main at 06ea391 although measurable: the undone
