@@ -2403,9 +2403,6 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     steepest = float(np.max(seg[m:] - seg[:-m]))
     if not rise > FRONT_JUMP_FRACTION * peak or steepest >= LOWPASS_CONCENTRATION * rise:
         return []  # no rise to judge, or a jump within a step: no low-pass worth a sample
-    two = min(2 * m, seg.size - 1)  # over two steps: the first sample in the contact may hold part of one
-    if not float(np.max(seg[two:] - seg[:-two])) > LOWPASS_SPEEDUP * float(seg[two] - seg[0]):
-        return []  # steepest at once: a smooth start (no jump to spread), not a low-pass's S-shaped rise
     w = min(max(int(round(LOWPASS_WINDOW_S * fs)), 3), k1 - k0)
     q = max(1, int(math.ceil(w / LOWPASS_MAX_SAMPLES)))  # every q-th sample: a slow front needs no more
     first = k0 - FRONT_PRE_SAMPLES * q
@@ -2415,11 +2412,11 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     within = BUCKLING_TIME_S * fq + 1.0  # the drop at buckling within 0.2 ms (and a sample) of the first sample
     for refine in (False, True):  # the grid's ideal fit first: when it leaves too little, the refined one does too
         ideal = fit_front(xs, fq, 0, xs.size - 1, start, resonance=False, drop=True, rise_max=OVERSHOOT_RISE_MAX,
-                          refine=refine, drop_within=within)
+                          refine=refine, drop_within=within, cubic=True)
         if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
             return []  # the ideal plate leaves too little for a low-pass to explain
     lowpass = fit_front(xs, fq, 0, xs.size - 1, start, drop=True, rise_max=OVERSHOOT_RISE_MAX,
-                        damping=LOWPASS_DAMPING, drop_within=within)
+                        damping=LOWPASS_DAMPING, drop_within=within, cubic=True)
     if lowpass is None:
         return []
     variance = max(noise * noise, lowpass.rss / max(lowpass.n_samples - 10, 1))

@@ -807,6 +807,8 @@ class FrontFit(NamedTuple):
     drop_curvature: float = 0.0  #: ... and of the parabola's coefficient [unit of the force per sample^2]
     spike_index: int = -1  #: the sample a single-sample electrical spike was fitted on (-1: none) [-]
     spike: float = 0.0  #: that spike, added to the sensed force (not through the plate) [unit of the force]
+    cubic: float = 0.0  #: a cubic's coefficient from the start (0 with a drop) [unit of the force per sample^3]
+    drop_cubic: float = 0.0  #: ... and its change at the drop [unit of the force per sample^3]
 
     def force(self, index) -> np.ndarray:
         """The fitted applied force (not the sensed one) at fractional sample indices [unit of the force]."""
@@ -815,14 +817,15 @@ class FrontFit(NamedTuple):
             return np.where(u >= 0, ramp, 0.0)
 
         u = np.asarray(index, dtype=float) - self.start
-        out = np.where(u >= 0, self.jump * jump(u) + self.slope * u + self.curvature * u * u, 0.0)
+        out = np.where(u >= 0, self.jump * jump(u) + u * (self.slope + u * (self.curvature + u * self.cubic)), 0.0)
         if math.isfinite(self.drop_start):
             v = np.asarray(index, dtype=float) - self.drop_start
-            out = out + self.drop * jump(v) + np.where(v >= 0, self.drop_slope * v + self.drop_curvature * v * v, 0.0)
+            out = out + self.drop * jump(v) + np.where(
+                v >= 0, v * (self.drop_slope + v * (self.drop_curvature + v * self.drop_cubic)), 0.0)
         return out
 
 
-def front_responses(u, wn, zeta, rise):
+def front_responses(u, wn, zeta, rise, *, cubic: bool = False):
     """The plate's response to a jump rising linearly over ``rise`` samples, a ramp and a parabola from u = 0.
 
     Analytic (the continuous second-order plate of unit static gain sampled
@@ -831,7 +834,11 @@ def front_responses(u, wn, zeta, rise):
     sin wd u)`` (c = 2 zeta / wn, d = (2 zeta^2 - 1) / wd) and the
     parabola's; the jump rising over ``rise`` samples is the difference of
     two ramp responses over ``rise``. ``wn = inf`` is an ideal plate (the
-    force itself).
+    force itself). With ``cubic``, also the response to u^3: ``u^3 + A u^2 +
+    B u + C - exp(-zeta wn u) (C cos wd u + (zeta wn C + B) / wd sin wd u)``
+    with A = -6 zeta / wn, B = (24 zeta^2 - 6) / wn^2 and C = 24 zeta (1 -
+    2 zeta^2) / wn^3 (the polynomial solves the plate's equation, the
+    oscillation starts it at rest).
 
     Parameters
     ----------
@@ -843,12 +850,15 @@ def front_responses(u, wn, zeta, rise):
         Its damping ratio, 0 to 1 [-].
     rise : array_like
         The samples over which the jump rises [samples], >= 0 (0: a step).
+    cubic : bool
+        Also return the response to the cubic u^3.
 
     Returns
     -------
     numpy.ndarray
-        Shape ``broadcast(...) + (3,)``: the responses to the unit jump, the
-        unit ramp u and the parabola u^2 [-, samples, samples^2], zero before u = 0.
+        Shape ``broadcast(...) + (3,)`` (``(4,)`` with ``cubic``): the
+        responses to the unit jump, the unit ramp u, the parabola u^2 [-,
+        samples, samples^2] (and the cubic u^3 [samples^3]), zero before u = 0.
     """
     u, wn, zeta, rise = (np.asarray(v, dtype=float) for v in (u, wn, zeta, rise))
     shape = np.broadcast_shapes(u.shape, wn.shape, zeta.shape, rise.shape)
@@ -861,6 +871,8 @@ def front_responses(u, wn, zeta, rise):
         c, d = 2.0 * z / w, (2.0 * z * z - 1.0) / wd
         p0, p1 = 2.0 * (4.0 * z * z - 1.0) / (w * w), -4.0 * z / w
         qb = (-sigma * p0 - p1) / wd
+        c2, c1, c0 = -6.0 * z / w, (24.0 * z * z - 6.0) / (w * w), 24.0 * z * (1.0 - 2.0 * z * z) / w ** 3
+        cb = (sigma * c0 + c1) / wd
 
     def responses(v, all_three=True):  # (step, ramp, parabola) responses at v, or the ramp's alone
         v = np.broadcast_to(v, shape)
@@ -883,17 +895,25 @@ def front_responses(u, wn, zeta, rise):
             par = t * t + p1 * t + p0 + decay * (-p0 * cos + qb * sin)
             if any_ideal:
                 step, par = np.where(ideal, 1.0, step), np.where(ideal, t * t, par)
-        return np.where(on, step, 0.0), ramp, np.where(on, par, 0.0)
+        if not cubic:
+            return np.where(on, step, 0.0), ramp, np.where(on, par, 0.0)
+        if all_ideal:
+            cub = t ** 3
+        else:
+            cub = t * (t * (t + c2) + c1) + c0 - decay * (c0 * cos + cb * sin)
+            if any_ideal:
+                cub = np.where(ideal, t ** 3, cub)
+        return np.where(on, step, 0.0), ramp, np.where(on, par, 0.0), np.where(on, cub, 0.0)
 
-    step, ramp, par = responses(u)
+    step, ramp, *higher = responses(u)
     spread = np.broadcast_to(rise > 1e-9, shape)
     jump = np.where(spread, (ramp - responses(u - rise, all_three=False)) / np.where(spread, rise, 1.0), step)
-    return np.stack([jump, ramp, par], axis=-1)
+    return np.stack([jump, ramp, *higher], axis=-1)
 
 
 def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float, *, resonance: bool = True,
               drop: bool = False, rise_max: float = FRONT_RISE_MAX, refine: bool = True, spike=None,
-              damping=None, drop_within=None):
+              damping=None, drop_within=None, cubic: bool = False):
     """The front of a contact (a jump from zero, a ramp, a parabola) through a plate fitted to its samples.
 
     In the model's pre-buckling phase (section 3.2.4 in Goodwill & Haake
@@ -954,6 +974,16 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         ringing's own swings, otherwise raises the residual of the fit
         through the plate as much as the ideal one's (``python
         bench/spike_ends_map.py --n 400 --seed 2`` trace 2:349).
+    damping : (float, float), optional
+        The damping ratios the plate's may take, (lowest, highest) within 0
+        to 1 [-]; by default 0.005 to 0.9 (FRONT_DROP_MAX_DAMPING with ``drop``).
+    drop_within : float, optional
+        With ``drop``, the drop is looked for up to this many samples after the
+        force's first sample [samples]; by default anywhere in the window.
+    cubic : bool
+        Also fit a cubic from the start (with ``drop``, a cubic from the drop,
+        as the parabola): a force that starts smoothly (a half-sine's foot)
+        curves more over a long window than a parabola can follow.
 
     Returns
     -------
@@ -1051,9 +1081,10 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     spike_col = None  # the spike's column (a unit at its sample), once chosen
 
     def design_of(rows):  # the responses of each row of (wn, zeta, ts, rise[, tb]) [rows, n, 3 or 5, +1 w. spike]
-        cols = front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+        cols = front_responses(n[None, :] - rows[:, 2:3], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4],
+                               cubic=cubic and not drop)
         if drop:
-            later = front_responses(n[None, :] - rows[:, 4:5], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4])
+            later = front_responses(n[None, :] - rows[:, 4:5], rows[:, 0:1], rows[:, 1:2], rows[:, 3:4], cubic=cubic)
             # no parabola before the drop, and the ramp up to it rises by at most the jump: J = a + b L, a, b >= 0
             span = np.maximum(rows[:, 4:5] - rows[:, 2:3], 0.0)[..., None]  # L, from the start to the drop [samples]
             cols = np.concatenate([cols[..., :1], cols[..., 1:2] + span * cols[..., :1], later], axis=-1)
@@ -1064,7 +1095,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     candidates = sorted({int(k) - first for k in (spike or ()) if first <= int(k) <= last})
     if spike is not None and not candidates:  # no candidate inside the window: the fit without a spike
         return fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
-                         damping=damping, drop_within=drop_within)
+                         damping=damping, drop_within=drop_within, cubic=cubic)
 
     # the free parameters: (wn, zeta, ts, rise) through a plate, (ts, rise) through an ideal one
     if resonance:
@@ -1097,11 +1128,11 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
 
     if not candidates:
         p, solved = fitted(grid[int(np.argmin(solve(design_of(grid))[0]))])
-        return _front_fit(p, solved, drop, fs, y.size)
+        return _front_fit(p, solved, drop, fs, y.size, cubic=cubic)
     # a free spike makes spurious fits on the grid (at a bound) beat the grid's rows near the true plate: each
     # candidate is also fitted from the fit without a spike, and the least residual of all is the fit
     plain = fit_front(x, fs, first, last, start, resonance=resonance, drop=drop, rise_max=rise_max, refine=refine,
-                      damping=damping, drop_within=drop_within)
+                      damping=damping, drop_within=drop_within, cubic=cubic)
     if plain is None:
         return None
     starts = [np.array([2.0 * math.pi * plain.frequency_hz / fs, plain.damping_ratio, plain.start, plain.rise]
@@ -1114,17 +1145,21 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
             if best is None or solved[0][0] < best[0]:
                 best = (float(solved[0][0]), p, solved, unit)
     spike_col = best[3]
-    return _front_fit(best[1], best[2], drop, fs, y.size, first, spike_col)
+    return _front_fit(best[1], best[2], drop, fs, y.size, first, spike_col, cubic=cubic)
 
 
-def _front_fit(p, solved, drop: bool, fs: float, n: int, first: int = 0, spike_col=None) -> FrontFit:
+def _front_fit(p, solved, drop: bool, fs: float, n: int, first: int = 0, spike_col=None, *,
+               cubic: bool = False) -> FrontFit:
     """The FrontFit of parameters p (wn, zeta, ts, rise[, tb]) and their linear least squares (rss, coef, resid);
     with ``spike_col`` (the spike's unit column, the window's first sample ``first``), the spike's sample and value
-    from the last coefficient."""
+    from the last coefficient; with ``cubic``, the cubic's from the one before."""
     rss, coef = float(solved[0][0]), solved[1][0]
     spiked = ()
     if spike_col is not None:
         spiked, coef = (first + int(np.argmax(spike_col)), float(coef[-1])), coef[:-1]
+    cubed = {}
+    if cubic:
+        cubed, coef = {"drop_cubic" if drop else "cubic": float(coef[-1])}, coef[:-1]
     if drop:  # (J - b L, b, D, the slope's and the parabola's change at the drop): no parabola before it
         span = max(float(p[4] - p[2]), 0.0)
         coef, extra = (np.array([coef[0] + coef[1] * span, coef[1], 0.0]),
@@ -1132,5 +1167,5 @@ def _front_fit(p, solved, drop: bool, fs: float, n: int, first: int = 0, spike_c
     else:
         extra = ()
     fit = FrontFit(float(p[0] * fs / (2.0 * math.pi)), float(p[1]), float(p[2]), float(p[3]), float(coef[0]),
-                   float(coef[1]), float(coef[2]), float(rss), int(n), *extra)
+                   float(coef[1]), float(coef[2]), float(rss), int(n), *extra, **cubed)
     return fit._replace(spike_index=spiked[0], spike=spiked[1]) if spiked else fit
