@@ -575,6 +575,65 @@ def test_fit_front_finds_the_plate_and_the_force_under_its_ringing(fn_hz, zeta, 
     assert ideal.frequency_hz == math.inf and ideal.rss > 100.0 * fit.rss
 
 
+@pytest.mark.parametrize("fn_hz, zeta, fs", [(13.7e3, 0.2, 168e3), (5.0e3, 0.03, 50e3), (12.0e3, 0.71, 150e3),
+                                         (30.0e3, 0.95, 200e3)])
+def test_front_responses_cubic_is_the_plates_output(fn_hz, zeta, fs):
+    from ballimpact.plate import front_responses
+
+    # the textbook ramp responses of the cubic u^3 as a piecewise-linear force (knots every 0.01 sample: its error
+    # on the cubic is at most 3 u * 1.25e-5 per unit), independent of the closed form
+    start = 2.71
+    u = np.arange(0.0, 45.0, 0.01)
+    n = np.arange(0.0, 40.0)
+    sensed = sensed_force((start + u) / fs, u ** 3, n / fs, fn_hz, zeta)
+    cols = front_responses(n - start, 2 * math.pi * fn_hz / fs, zeta, 0.0, cubic=True)
+    assert cols.shape == (n.size, 4)
+    assert_allclose(cols[:, 3], sensed, atol=1e-6 * 40.0 ** 3)
+    assert_allclose(cols[:, :3], front_responses(n - start, 2 * math.pi * fn_hz / fs, zeta, 0.0), atol=0)
+    assert_allclose(front_responses(n - start, math.inf, 0.0, 0.0, cubic=True)[:, 3],
+                    np.where(n >= start, (n - start) ** 3, 0.0), atol=0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_fit_front_with_a_cubic_follows_a_smooth_start(seed):
+    """A half-sine's foot (4 V over 200 samples, 1 mV noise, no jump), 56 samples of it: a jump, a ramp and a
+    parabola miss its curve (more than 20 noise variances a sample left; its cubic term is 0.12 V at the window's
+    end), with a cubic the ideal plate fits it to its noise (its quintic term, 4 mV at the end, mostly taken up by
+    the lower terms), and the cubic found is the sine's, -4 (pi / 200)^3 / 6, to 10 %."""
+    from ballimpact.plate import fit_front
+
+    fs, start = 50e3, 3.3
+    n = np.arange(0, 60)
+    u = np.clip(n - start, 0.0, None)
+    x = 4.0 * np.sin(np.pi * u / 200.0) + np.random.default_rng(seed).normal(0.0, 1e-3, n.size)
+    plain = fit_front(x, fs, 0, n[-1], start=start + 0.7, resonance=False)
+    fit = fit_front(x, fs, 0, n[-1], start=start + 0.7, resonance=False, cubic=True)
+    assert plain.rss > 20.0 * n.size * 1e-6
+    assert fit.rss < 2.0 * n.size * 1e-6
+    assert_allclose(fit.cubic, -4.0 * (math.pi / 200.0) ** 3 / 6.0, rtol=0.1)
+    assert_allclose(fit.force(n), 4.0 * np.sin(np.pi * u / 200.0), atol=3e-3)
+    assert fit.drop_cubic == 0.0 and plain.cubic == 0.0
+
+
+def test_fit_front_with_the_drop_and_a_cubic_fits_its_change_at_the_drop():
+    from ballimpact.plate import fit_front
+
+    # the model's front and drop (_drop_knots) and a cubic from the drop on, through an ideal plate and a low-pass
+    fs, start, drop_at = 100e3, 3.6, 4.3
+    u = np.arange(0.0, 40.0, 0.01)
+    v = u - drop_at
+    f = 600.0 * np.clip(u / 0.25, 0.0, 1.0) + 60.0 * u + np.where(
+        v >= 0, -150.0 * np.clip(v / 0.25, 0.0, 1.0) - 20.0 * v - 0.8 * v * v + 0.05 * v ** 3, 0.0)
+    n = np.arange(0, 36)
+    x = piecewise_force((start + u) / fs, f, n / fs) + np.random.default_rng(6).normal(0.0, 1.0, n.size)
+    ideal = fit_front(x, fs, 0, n[-1], start=start + 0.5, resonance=False, drop=True, rise_max=1.0, cubic=True)
+    assert ideal.rss < 2.0 * n.size
+    assert_allclose(ideal.drop_cubic, 0.05, rtol=0.1)
+    assert ideal.cubic == 0.0
+    assert_allclose(ideal.force(n), piecewise_force((start + u) / fs, f, n / fs), atol=3.0)
+    assert fit_front(x, fs, 0, n[-1], start=start + 0.5, resonance=False, drop=True, rise_max=1.0).rss > 10 * ideal.rss
+
+
 @pytest.mark.parametrize("fn_hz, zeta, seed", [(8.0e3, 0.95, 0), (12.0e3, 0.71, 1)])
 def test_fit_front_with_a_damping_range_finds_a_low_pass(fn_hz, zeta, seed):
     from ballimpact.plate import fit_front

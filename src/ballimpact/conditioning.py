@@ -184,7 +184,7 @@ LOWPASS_STEP_S = 10.0e-6  # ... and its largest rise in this long (the model's j
 LOWPASS_CONCENTRATION = 0.4  # ... less than this fraction of the rise, a jump spread: its front is fitted ... [-]
 LOWPASS_SPEEDUP = 1.5  # ... and its largest rise in twice that, more than this times its first (S-shaped) ... [-]
 LOWPASS_WINDOW_S = 0.6e-3  # ... from the contact start to this long after it ... [s]
-LOWPASS_MAX_SAMPLES = 40  # ... on every q-th sample, q the least that leaves at most this many in it [samples]
+LOWPASS_MAX_SAMPLES = 80  # ... on every q-th sample, q the least that leaves at most this many in it [samples]
 LOWPASS_DAMPING = (0.3, 0.98)  # the low-pass fitted: a second-order response of these damping ratios (one at the
 #: lower bound is a plate that rings, for the plate's checks) ...
 LOWPASS_DELAY_FRACTION = 2.0e-3  # ... whose delay 2 zeta / wn is more than this fraction of TC ... [-]
@@ -2416,7 +2416,7 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
         if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
             return []  # the ideal plate leaves too little for a low-pass to explain
     lowpass = fit_front(xs, fq, 0, xs.size - 1, start, drop=True, rise_max=OVERSHOOT_RISE_MAX,
-                        damping=LOWPASS_DAMPING, drop_within=within, cubic=True)
+                        damping=LOWPASS_DAMPING, drop_within=within)
     if lowpass is None:
         return []
     variance = max(noise * noise, lowpass.rss / max(lowpass.n_samples - 10, 1))
