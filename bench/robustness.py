@@ -24,6 +24,7 @@ import single_thread  # noqa: F401  (first: one BLAS thread per process, before 
 import argparse
 import math
 import multiprocessing as mp
+import re
 import shutil
 import sys
 import tempfile
@@ -120,6 +121,30 @@ def _badness(r):
     return max(vals) if vals else math.inf
 
 
+def _right_if_passed(r):
+    """Whether an excluded trace's numbers were within the invariant's tolerances all the same (NaN: not)."""
+    errors = [r["tc_err_pct"], r["kcal_err_pct"], r["peak_err_pct"]]
+    return all(math.isfinite(e) for e in errors) and _badness(r) <= 1.0
+
+
+def exclusions(records, k):
+    """The measurable traces excluded, by the first reason's head (before its first colon or bracket), and how many of them
+    had numbers within the tolerances all the same (an exclusion the trace did not need)."""
+    heads = defaultdict(lambda: [0, 0])
+    for r in records:
+        if r["category"] == "excluded_measurable":
+            head = heads[re.split(r"[:(]", r["reason"], maxsplit=1)[0].strip()]
+            head[0] += 1
+            head[1] += _right_if_passed(r)
+    if not heads:
+        return ""
+    lines = ["", f"#### excluded measurable, by first reason ({min(k, len(heads))} of {len(heads)})", "",
+             "| first reason | excluded measurable | of them right all the same |", "|---|---|---|"]
+    for head, (n, right) in sorted(heads.items(), key=lambda kv: -kv[1][0])[:k]:
+        lines.append(f"| {head} | {n} | {right} |")
+    return "\n".join(lines)
+
+
 def offenders(records, k):
     lines = []
     for cat in ("crash", "faulty_ok", "ok_wrong", "excluded_measurable"):
@@ -194,17 +219,21 @@ def main(argv=None):
     wall = time.perf_counter() - t0
     n_meas = sum(bool(r["measurable"]) for r in records)
     excl = sum(r["category"] == "excluded_measurable" for r in records)
+    needless = sum(r["category"] == "excluded_measurable" and _right_if_passed(r) for r in records)
     title = (f"{args.label + ': ' if args.label else ''}{n} zoo traces, seed {args.seed} "
              f"(`python bench/robustness.py --n {n} --seed {args.seed}`)")
     summary = (f"ok_wrong {sum(r['category'] == 'ok_wrong' for r in records)}, "
                f"faulty_ok {sum(r['category'] == 'faulty_ok' for r in records)}, "
-               f"excluded measurable {excl} of {n_meas} ({100 * excl / max(n_meas, 1):.1f} %), "
+               f"excluded measurable {excl} of {n_meas} ({100 * excl / max(n_meas, 1):.1f} %; "
+               f"{needless} of them with numbers within the tolerances all the same, so "
+               f"{100 * (excl - needless) / max(n_meas, 1):.1f} % had to go unless processed better), "
                f"crashes {sum(r['category'] == 'crash' for r in records)}; "
                f"{wall:.0f} s wall with {args.workers} workers, process_impact "
                f"{sum(r['process_s'] for r in records) / n * 1e3:.0f} ms per trace on average "
                f"({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU: writing, reading and processing "
                "the trace, less sensitive to other load)")
-    text = markdown(records, title) + "\n\n" + summary + "\n" + offenders(records, args.worst) + "\n"
+    text = (markdown(records, title) + "\n\n" + summary + "\n" + exclusions(records, args.worst)
+            + "\n" + offenders(records, args.worst) + "\n")
     print(text)
     stem = OUT / f"robustness-s{args.seed}-n{n}"
     stem.with_suffix(".md").write_text(text, encoding="utf-8")

@@ -1,4 +1,4 @@
-"""Tests of the benchmarks' extrapolation (bench/run.py): the year-of-sessions figure is a straight line."""
+"""Tests of the benchmarks' arithmetic: bench/run.py's extrapolation, bench/robustness.py's exclusion table."""
 
 from __future__ import annotations
 
@@ -29,3 +29,29 @@ def test_extrapolation_reports_the_misfit_of_a_curve():
 def test_extrapolation_needs_two_sizes(ns):
     with pytest.raises(ValueError, match="at least two distinct sizes"):
         _bench().extrapolate_linear(ns, [10.0] * len(ns), 100)
+
+
+def _excluded(reason, tc, kcal, peak, spike=False, category="excluded_measurable"):
+    return {"category": category, "reason": reason, "tc_err_pct": tc, "kcal_err_pct": kcal, "peak_err_pct": peak,
+            "peak_is_spike": spike}
+
+
+def test_exclusion_table_counts_the_traces_that_were_right_all_the_same():
+    robustness = bench_module("robustness")
+    nan = float("nan")
+    records = [
+        _excluded("peak force between samples: the force rises by 12 % ...", 0.3, -0.2, 4.0, spike=True),  # right
+        _excluded("peak force between samples: the force rises by 14 % ...", 0.3, -0.2, 4.0),  # peak off (3 %)
+        _excluded("peak force between samples: ...; contact end not determined ...", 1.2, 0.0, 0.0),  # TC off
+        _excluded("charge-amplifier undershoot not measurable (0.05 +/- 1.2 mV): ...", -0.9, 0.99, -2.9),  # right
+        _excluded("contact end not determined to 1 %: ...", nan, 0.0, 0.0),  # no TC: not right
+        _excluded("peak force between samples: ...", 0.0, 0.0, 0.0, category="excluded_marginal"),  # not counted
+    ]
+    assert [robustness._right_if_passed(r) for r in records[:5]] == [True, False, False, True, False]
+    table = robustness.exclusions(records, 10).splitlines()
+    assert "| peak force between samples | 3 | 1 |" in table
+    assert "| charge-amplifier undershoot not measurable | 1 | 1 |" in table
+    assert "| contact end not determined to 1 % | 1 | 0 |" in table
+    assert table.index("| peak force between samples | 3 | 1 |") < table.index(
+        "| contact end not determined to 1 % | 1 | 0 |")
+    assert robustness.exclusions(records[5:], 10) == ""
