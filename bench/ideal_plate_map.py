@@ -15,11 +15,8 @@ the end's flags (``end_curve``: the end from the force's curve; ``end_jump``: lo
 from __future__ import annotations
 
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
-import argparse
-import multiprocessing as mp
 import sys
 import warnings
-from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,18 +67,12 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=400, help="number of rigs")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
+    ap = zoo.map_arguments(__doc__)
     ap.add_argument("--show-ok", action="store_true", help="also the ok traces with |TC err| > 0.5 %")
     a = ap.parse_args(argv)
     jobs = [(a.seed, i) for i in range(a.n)]
-    with mp.Pool(a.workers) as pool:
-        rows = pool.map(run_one, jobs, chunksize=4)
-    cats = Counter(r[2] for r in rows)
-    print(f"{a.n} rigs (seed {a.seed}, ideal plate, fs 20-60 kHz): "
-          + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    rows = zoo.map_rows(run_one, jobs, a.workers)
+    print(zoo.category_summary(a.n, a.seed, "ideal plate, fs 20-60 kHz", [r[2] for r in rows]))
     for band, counts in zoo.band_counts([r[1].sample_rate_hz / 1e3 for r in rows], [r[2] for r in rows],
                                         RATE_BANDS_KHZ):
         print(f"  fs {band:>5} kHz: {counts}")

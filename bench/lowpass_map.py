@@ -18,11 +18,8 @@ no failure; an ok must still be right). Prints the categories per band of the re
 from __future__ import annotations
 
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
-import argparse
 import math
-import multiprocessing as mp
 import sys
-from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -68,18 +65,13 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=400, help="number of rigs")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
+    ap = zoo.map_arguments(__doc__)
     ap.add_argument("--show-ok", action="store_true", help="also the ok traces with |TC err| > 0.5 %")
     a = ap.parse_args(argv)
     jobs = [(a.seed, i) for i in range(a.n)]
-    with mp.Pool(a.workers) as pool:
-        rows = pool.map(run_one, jobs, chunksize=4)
-    cats = Counter(r[2] for r in rows)
-    print(f"{a.n} rigs (seed {a.seed}, second-order low-pass 2-40 kHz, damping 0.3-1, fs 20-200 kHz): "
-          + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    rows = zoo.map_rows(run_one, jobs, a.workers)
+    print(zoo.category_summary(a.n, a.seed, "second-order low-pass 2-40 kHz, damping 0.3-1, fs 20-200 kHz",
+                               [r[2] for r in rows]))
     for band, counts in zoo.band_counts([delay_samples(r[1]) for r in rows], [r[2] for r in rows],
                                         DELAY_BANDS_SAMPLES, unit=" samples"):
         print(f"  delay {band:>14}: {counts}")

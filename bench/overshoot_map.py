@@ -13,11 +13,8 @@ Prints the categories per samples-per-period and damping band and the ok-but-wro
 from __future__ import annotations
 
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
-import argparse
 import math
-import multiprocessing as mp
 import sys
-from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,18 +58,12 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=600, help="number of rigs")
-    ap.add_argument("--seed", type=int, default=2)
+    ap = zoo.map_arguments(__doc__, n=600, seed=2)
     ap.add_argument("--all", action="store_true", help="any plate below 0.45 fs (default: 2.2-8 samples a period)")
-    ap.add_argument("--workers", type=int, default=2)
     a = ap.parse_args(argv)
     jobs = [(a.seed, i, not a.all) for i in range(a.n)]
-    with mp.Pool(a.workers) as pool:
-        rows = pool.map(run_one, jobs, chunksize=4)
-    cats = Counter(r[2] for r in rows)
-    print(f"{a.n} rigs (seed {a.seed}, {'any plate' if a.all else '2.2-8 samples a period'}): "
-          + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    rows = zoo.map_rows(run_one, jobs, a.workers)
+    print(zoo.category_summary(a.n, a.seed, "any plate" if a.all else "2.2-8 samples a period", [r[2] for r in rows]))
     for name, key, edges in (("samples per period", lambda r: r[1].sample_rate_hz / r[1].plate_hz, RATIO_BANDS),
                              ("damping ratio", lambda r: r[1].plate_zeta, ZETA_BANDS)):
         for band, counts in zoo.band_counts([key(r) for r in rows], [r[2] for r in rows], edges):

@@ -128,12 +128,13 @@ def _right_if_passed(r):
 
 
 def exclusions(records, k):
-    """The measurable traces excluded, by the first reason's head (before its first colon or bracket), and how many of them
-    had numbers within the tolerances all the same (an exclusion the trace did not need)."""
+    """The measurable traces excluded, by the first reason's head (before its first colon or bracket, numbers as #),
+    and how many of them had numbers within the tolerances all the same (an exclusion the trace did not need)."""
     heads = defaultdict(lambda: [0, 0])
     for r in records:
         if r["category"] == "excluded_measurable":
-            head = heads[re.split(r"[:(]", r["reason"], maxsplit=1)[0].strip()]
+            head = re.split(r"[:(]", r["reason"], maxsplit=1)[0].strip()
+            head = heads[re.sub(r"[-+]?\d+(\.\d+)?", "#", head)]
             head[0] += 1
             head[1] += _right_if_passed(r)
     if not heads:

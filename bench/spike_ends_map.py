@@ -15,11 +15,9 @@ Prints the categories per class (no spike / spike at the start / at the end) and
 from __future__ import annotations
 
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
-import argparse
 import copy
 import csv
 import math
-import multiprocessing as mp
 import sys
 from collections import Counter
 from dataclasses import replace
@@ -72,20 +70,12 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=400, help="number of rigs")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
+    ap = zoo.map_arguments(__doc__)
     ap.add_argument("--csv", help="write one row per trace here")
     a = ap.parse_args(argv)
     jobs = [(a.seed, i) for i in range(a.n)]
-    if a.workers > 1:
-        with mp.Pool(a.workers) as pool:
-            rows = pool.map(run_one, jobs, chunksize=4)
-    else:
-        rows = [run_one(j) for j in jobs]
-    cats = Counter(r[3] for r in rows)
-    print(f"{a.n} rigs (seed {a.seed}): " + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    rows = zoo.map_rows(run_one, jobs, a.workers)
+    print(zoo.category_summary(a.n, a.seed, "", [r[3] for r in rows]))
     for where in ("none", "start", "end"):
         c = Counter(r[3] for r in rows if r[1] == where)
         print(f"  electrical spike {where:>5}: " + ", ".join(f"{k} {c[k]}" for k in zoo.CATEGORIES if c[k]))

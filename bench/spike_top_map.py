@@ -15,9 +15,7 @@ lift it (the test of its ramp that failed), and the excluded measurable traces w
 from __future__ import annotations
 
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
-import argparse
 import math
-import multiprocessing as mp
 import sys
 from collections import Counter
 from pathlib import Path
@@ -83,16 +81,10 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=400, help="number of rigs")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--workers", type=int, default=2)
-    a = ap.parse_args(argv)
+    a = zoo.map_arguments(__doc__).parse_args(argv)
     jobs = [(a.seed, i) for i in range(a.n)]
-    with mp.Pool(a.workers) as pool:
-        rows = pool.map(run_one, jobs, chunksize=4)
-    cats = Counter(r[2] for r in rows)
-    print(f"{a.n} rigs (seed {a.seed}, spike peaks, 20-60 kHz): " + ", ".join(f"{k} {v}" for k, v in sorted(cats.items())))
+    rows = zoo.map_rows(run_one, jobs, a.workers)
+    print(zoo.category_summary(a.n, a.seed, "spike peaks, 20-60 kHz", [r[2] for r in rows]))
     for band, counts in zoo.band_counts([r[1].sample_rate_hz for r in rows], [r[2] for r in rows], RATE_BANDS,
                                         scale=1e3, unit=" kHz"):
         print(f"  {band:>10}: {counts}")

@@ -239,3 +239,24 @@ def test_band_counts_labels_each_band_and_counts_its_categories():
     rows = zoo.band_counts(values, categories, (1.0, 2.0, 3.0), scale=0.5, unit=" x")
     assert rows == [("< 2 x", "ok_right 1"), ("2-4 x", "ok_right 1, ok_wrong 1"), ("4-6 x", "ok_right 2"),
                     (">= 6 x", "ok_right 1, excluded_measurable 1")]
+
+
+def _square(job):
+    return job * job
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_map_rows_keeps_the_jobs_order(workers):
+    assert zoo.map_rows(_square, [3, 1, 2, 5, 4], workers) == [9, 1, 4, 25, 16]
+
+
+def test_map_command_line_and_summary():
+    ap = zoo.map_arguments("A map of something.\n\nMore.", n=600, seed=2)
+    assert ap.description == "A map of something."
+    a = ap.parse_args([])
+    assert (a.n, a.seed, a.workers) == (600, 2, 2)
+    assert ap.parse_args(["--n", "7", "--seed", "3", "--workers", "1"]).n == 7
+    line = zoo.category_summary(5, 3, "ideal plate", ["ok_wrong", "ok_right", "ok_right", "excluded_measurable",
+                                                       "ok_right"])
+    assert line == "5 rigs (seed 3, ideal plate): excluded_measurable 1, ok_right 3, ok_wrong 1"
+    assert zoo.category_summary(1, 1, "", ["ok_right"]) == "1 rigs (seed 1): ok_right 1"

@@ -65,7 +65,9 @@ trace of a (seed, index) pair, as the benchmark and the regression tests use.
 
 from __future__ import annotations
 
+import argparse
 import math
+import multiprocessing as mp
 from collections import Counter
 import shutil
 import tempfile
@@ -279,6 +281,30 @@ def band_counts(values, categories, edges, scale: float = 1.0, unit: str = "") -
     table = Counter((int(np.searchsorted(edges, v, side="right")), c) for v, c in zip(values, categories))
     return [(label(i), ", ".join(f"{c} {table[(i, c)]}" for c in CATEGORIES if table[(i, c)]))
             for i in sorted({i for i, _ in table})]
+
+
+def map_arguments(doc: str, *, n: int = 400, seed: int = 1) -> argparse.ArgumentParser:
+    """The command line the maps of bench/ share (``--n`` rigs, ``--seed``, ``--workers``), its description the
+    first line of ``doc``; a map adds its own options to it."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--n", type=int, default=n, help="number of rigs")
+    ap.add_argument("--seed", type=int, default=seed)
+    ap.add_argument("--workers", type=int, default=2)
+    return ap
+
+
+def map_rows(run_one, jobs, workers: int) -> list:
+    """``run_one`` of each job, in the jobs' order, on ``workers`` processes (in this one when 1)."""
+    if workers > 1:
+        with mp.Pool(workers) as pool:
+            return pool.map(run_one, jobs, chunksize=4)
+    return [run_one(job) for job in jobs]
+
+
+def category_summary(n: int, seed: int, what: str, categories) -> str:
+    """A map's first line: ``"<n> rigs (seed <seed>, <what>): <category> <count>, ..."`` (categories sorted)."""
+    counts = sorted(Counter(categories).items())
+    return f"{n} rigs (seed {seed}{', ' + what if what else ''}): " + ", ".join(f"{k} {v}" for k, v in counts)
 
 
 def map_shot(rng: np.random.Generator) -> dict:
