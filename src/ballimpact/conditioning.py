@@ -2287,11 +2287,10 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     if x[k0 + FRONT_PRE_SAMPLES] < FRONT_JUMP_FRACTION * peak:
         return []
     last = min(i + OVERSHOOT_AFTER_SAMPLES, k1)
-    for refine in (False, True):  # the grid's ideal fit first: when it leaves too little, the refined one does too
-        ideal = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, resonance=False, drop=True,
-                          rise_max=OVERSHOOT_RISE_MAX, refine=refine)
-        if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
-            return []  # the ball's front through an ideal plate leaves too little for a plate to explain
+    ideal = _ideal_front_beyond_noise(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, noise, drop=True,
+                                      rise_max=OVERSHOOT_RISE_MAX)
+    if ideal is None:
+        return []  # the ball's front through an ideal plate leaves too little for a plate to explain
     plate = fit_front(x, fs, k0 - FRONT_PRE_SAMPLES, last, s_u, drop=True, rise_max=OVERSHOOT_RISE_MAX)
     if plate is None:
         return []
@@ -2339,6 +2338,18 @@ def _peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     return [Problem(ProblemKind.PEAK_ON_RINGING,
                     f"peak force on plate ringing: the largest sample, {1e3 * (i - s_u) / fs:.2g} ms after the contact "
                     f"start, is the plate's first overshoot of the force's jump: {seen}; the peak is not the ball's")]
+
+
+def _ideal_front_beyond_noise(x, fs, first, last, start, noise, **options):
+    """The front's fit through an ideal plate (:func:`ballimpact.plate.fit_front` with ``resonance=False`` and
+    ``options``), or None when it leaves at most FRONT_SIGNIFICANCE noise variances: nothing for a plate or a
+    low-pass to explain. The starting grid's fit is tried first (fast): when it leaves that little, the refined
+    one, whose residual is no larger, does too."""
+    for refine in (False, True):
+        ideal = fit_front(x, fs, first, last, start, resonance=False, refine=refine, **options)
+        if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
+            return None
+    return ideal
 
 
 def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
@@ -2410,11 +2421,10 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
         return []
     xs, fq, start = x[first:k0 + w + 1:q], fs / q, (s_u - first) / q
     within = BUCKLING_TIME_S * fq + 1.0  # the drop at buckling within 0.2 ms (and a sample) of the first sample
-    for refine in (False, True):  # the grid's ideal fit first: when it leaves too little, the refined one does too
-        ideal = fit_front(xs, fq, 0, xs.size - 1, start, resonance=False, drop=True, rise_max=OVERSHOOT_RISE_MAX,
-                          refine=refine, drop_within=within, cubic=True)
-        if ideal is None or ideal.rss <= FRONT_SIGNIFICANCE * noise * noise:
-            return []  # the ideal plate leaves too little for a low-pass to explain
+    ideal = _ideal_front_beyond_noise(xs, fq, 0, xs.size - 1, start, noise, drop=True, rise_max=OVERSHOOT_RISE_MAX,
+                                      drop_within=within, cubic=True)
+    if ideal is None:
+        return []  # the ideal plate leaves too little for a low-pass to explain
     lowpass = fit_front(xs, fq, 0, xs.size - 1, start, drop=True, rise_max=OVERSHOOT_RISE_MAX,
                         damping=LOWPASS_DAMPING, drop_within=within)
     if lowpass is None:
