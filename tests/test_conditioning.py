@@ -1742,3 +1742,82 @@ def test_force_through_no_low_pass_shows_none(fs, jump):
         assert not any("low-pass" in p.message for p in c.problems), (phase, [p.message for p in c.problems])
         assert _front_lowpass(c.voltage_V, fs, c.noise_rms_V, float(c.contact.peak_V), c.contact.start_s * fs,
                               c.contact.end_s * fs, c.contact.contact_time_s) == [], phase
+
+
+# ------------------------------------------------------------------ a coarse ADC (issue 9)
+
+
+def _coarse_adc_trace(fs, bits, noise_V, seed, peak_V=0.5):
+    """A force that jumps to a fifth of ``peak_V``, humps as a half-sine and fades linearly to zero over 4 ms
+    (continuous at its end), 20 ms into a 60 ms record, with white noise of ``noise_V``, recorded by an ADC of
+    ``bits`` over +-10 V: (recorded voltage [V], its step [V], TC [s])."""
+    step = 20.0 / 2**bits
+    t = np.arange(int(0.06 * fs)) / fs
+    u = (t - (int(0.02 * fs) + 0.3) / fs) / 4.0e-3
+    force = np.where((u > 0) & (u < 1), 0.2 * (1.0 - u) + 0.8 * np.sin(np.pi * u), 0.0)
+    v = peak_V * force + 0.013 + np.random.default_rng(seed).normal(0.0, noise_V, t.size)
+    return -10.0 + np.round((v + 10.0) / step) * step, step, 4.0e-3
+
+
+@pytest.mark.parametrize("fs, seed", [(50e3, 0), (100e3, 1), (137e3, 2), (33e3, 3)])
+def test_a_coarse_adc_is_judged_by_its_step(fs, seed):
+    # 12 bits (a step of 4.9 mV) under 0.08 mV of noise: the quiet record moves in whole steps and holds almost no
+    # noise; its noise is taken as the step's error, step / sqrt(12), and the contact is right or excluded
+    v, step, tc = _coarse_adc_trace(fs, 12, 8e-5, seed)
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    assert c.noise_rms_V >= step / math.sqrt(12.0) * (1.0 - 1e-9)
+    if not c.problems:
+        assert_allclose(c.contact.contact_time_s, tc, rtol=0.01)
+
+
+def test_a_fine_adc_leaves_the_noise_as_measured():
+    # 16 bits (0.31 mV) under 1 mV of noise: the noise dithers the step, and is measured as it is
+    v, step, _ = _coarse_adc_trace(50e3, 16, 1e-3, 4, peak_V=3.0)
+    c = condition_voltage(v, 50e3, mains_hz=None, tau_s=math.inf)
+    assert_allclose(c.noise_rms_V, math.sqrt(1e-6 + step * step / 12.0), rtol=0.1)
+
+
+def _staircase_trace(fs, bits, noise_V, seed, tail_s, level_V=5e-3):
+    """A half-sine of 0.5 V over 4 ms that, where it has fallen to ``level_V``, fades linearly to zero over
+    ``tail_s`` instead (0: it ends as the half-sine does), 20 ms into a 60 ms record, white noise of ``noise_V``,
+    recorded by an ADC of ``bits`` over +-10 V: recorded voltage [V]."""
+    step = 20.0 / 2**bits
+    t = np.arange(int(0.06 * fs)) / fs
+    u = (t - (int(0.02 * fs) + 0.4) / fs) / 4.0e-3
+    force = np.where((u > 0) & (u < 1), 0.5 * np.sin(np.pi * u), 0.0)
+    if tail_s > 0:
+        cut = 1.0 - math.asin(level_V / 0.5) / math.pi
+        tail = np.clip(1.0 - (u - cut) * 4.0e-3 / tail_s, 0.0, 1.0)
+        force = np.where(u >= cut, level_V * tail, force)
+    v = force + 0.011 + np.random.default_rng(seed).normal(0.0, noise_V, t.size)
+    return -10.0 + np.round((v + 10.0) / step) * step
+
+
+def _staircase_check(v, fs):
+    from ballimpact.conditioning import _adc_step_problems
+    from ballimpact.contact import quantization_step
+
+    c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
+    scale = float(np.max(np.abs(v)))
+    return c, _adc_step_problems(c.voltage_V / scale, fs, c.noise_rms_V / scale, quantization_step(v) / scale,
+                                 c.contact, 0.0, scale)
+
+
+@pytest.mark.parametrize("fs, seed", [(50e3, 0), (120e3, 1)])
+def test_an_end_read_off_a_staircase_is_a_problem(fs, seed):
+    # a slow fade at the end (from 5 mV, about one 12-bit step, to zero over 0.3 ms: 7 % of TC to cross a step)
+    # under 0.1 mV of noise: the end is read off the ADC's staircase
+    v = _staircase_trace(fs, 12, 1e-4, seed, 0.3e-3)
+    c, found = _staircase_check(v, fs)
+    assert c.problems
+    assert [p.kind for p in found] == [ProblemKind.CONTACT_END_UNDETERMINED]
+    assert "contact end not determined to 1 %" in found[0].message and "staircase" in found[0].message
+
+
+@pytest.mark.parametrize("bits, noise, tail_s", [(16, 1e-3, 0.3e-3), (12, 1e-4, 0.0), (12, 4e-3, 0.3e-3)])
+def test_a_dithered_step_or_a_steep_end_is_no_staircase(bits, noise, tail_s):
+    # the same fade under noise that dithers the step (16 bits under 1 mV; 12 bits under 4 mV), or no slow fade: the
+    # half-sine's own end crosses a 12-bit step in about 12 us (0.3 % of TC)
+    v = _staircase_trace(50e3, bits, noise, 3, tail_s)
+    _, found = _staircase_check(v, 50e3)
+    assert found == []

@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 from tracekit import DIRTY, make_trace
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import contact_samples, detect_clipping, detect_contact, robust_noise
+from ballimpact.contact import contact_samples, detect_clipping, detect_contact, quantization_step, robust_noise
 
 RATES_HZ = [66964.3, 50000.0]
 
@@ -130,6 +130,33 @@ def test_robust_noise_ignores_outliers():
     x = rng.normal(0, 0.002, 20000)
     x[:200] = 5.0
     assert_allclose(robust_noise(x), 0.002, rtol=0.05)
+
+
+@pytest.mark.parametrize("bits", [12, 14, 16])
+@pytest.mark.parametrize("noise", [5e-5, 2e-3])
+def test_quantization_step_is_the_adcs(bits, noise):
+    # a half-sine of 0.8 V with white noise, recorded by an ADC of ``bits`` over +-10 V (codes from -10 V)
+    step = 20.0 / 2**bits
+    t = np.arange(20000) / 50e3
+    v = 0.8 * np.sin(np.pi * np.clip((t - 0.1) / 0.004, 0.0, 1.0)) + 0.02
+    v = v + np.random.default_rng(bits).normal(0.0, noise, t.size)
+    recorded = -10.0 + np.round((v + 10.0) / step) * step
+    assert_allclose(quantization_step(recorded), step, rtol=1e-9)
+    # written as text with 7 decimals, as a CSV trace may be: the step to its rounding
+    assert_allclose(quantization_step(np.array([float(f"{x:.7f}") for x in recorded])), step, rtol=1e-3)
+    # off any grid (a float simulation): none
+    assert quantization_step(v) == 0.0
+
+
+def test_quantization_step_of_a_few_values_or_an_interpolated_sample():
+    step = 20.0 / 2**12
+    assert quantization_step(np.array([0.0, step, 3 * step] * 50)) == 0.0  # two distinct steps: too few to tell
+    codes = np.random.default_rng(3).integers(-200, 200, 5000) * step
+    assert_allclose(quantization_step(codes), step, rtol=1e-12)
+    # a sample off the grid (an interpolated one) hides it: no step, as for a float trace (condition_voltage reads
+    # the step on the samples as recorded, before any is replaced)
+    codes[100] = 0.37 * step
+    assert quantization_step(codes) == 0.0
 
 
 def test_non_finite_voltage_rejected():

@@ -739,6 +739,26 @@ def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
     assert_invariant(trace, result, judgement, excluded_with="as through a low-pass")
 
 
+#: Traces of bench/adc_map.py recorded by a 12-bit ADC over +-10 V (a step of 4.9 mV) under noise far below the step,
+#: ok but wrong on d90f51e: the quiet record moved in whole steps, its noise was estimated at a fraction of one, and
+#: a step before the contact passed for a foot of force (1:26: start 157 us early, TC +3.8 %) or the end was read off
+#: the staircase (2:75, TC +2.9 %; 3:262, right on d90f51e, TC +1.1 % once the noise is floored at the step's
+#: error, until the staircase check) (name, seed, index, what).
+COARSE_ADC = [
+    ("adc-12bit-noise-0.08mV-ideal-plate", 1, 26, "ok but wrong on d90f51e: TC +3.82 %"),
+    ("adc-12bit-noise-0.3mV-plate-21kHz", 2, 75, "ok but wrong on d90f51e: TC +2.93 %"),
+    ("adc-12bit-noise-0.25mV-slow-end", 3, 262, "ok but wrong with the noise floor alone: TC +1.08 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in COARSE_ADC])
+def test_zoo_coarse_adc_case(name, seed, index, what, tmp_path):
+    trace = bench_module("adc_map").trace_for(seed, index)
+    assert trace.rig.adc_bits == 12 and trace.rig.noise_V < 0.1 * 20.0 / 2**12, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+
+
 #: Traces of bench/spike_ends_map.py, ok but wrong on main at 257a046: a pressurised ball at 13.6 m/s, 51.7 kHz, a
 #: plate of 18.5 kHz (2.8 samples a period, damping 0.094) whose first overshoot of the force's jump is the largest
 #: sample, 1.3 samples after the contact start (peak +5.0 %), and an electrical spike of +0.33 V (38 noise deviations)

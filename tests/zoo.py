@@ -190,6 +190,8 @@ class Rig:
         > 1: kCAL is set so that the peak reaches this times the rail; 0 = off.
     mode : str
         "random" or the name of the one factor drawn (others benign).
+    adc_bits : int
+        The ADC's resolution over ``adc_range_v`` [bits] (the zoo's is ADC_BITS; bench/adc_map.py draws coarser).
     """
 
     ball: str
@@ -219,6 +221,7 @@ class Rig:
     truncate_frac: float
     clip_factor: float
     mode: str = "random"
+    adc_bits: int = ADC_BITS
 
 
 @dataclass
@@ -541,12 +544,12 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
         for k, rel, ph in rig.harmonics:
             v = v + rel * rig.hum_V * np.sin(2 * np.pi * k * f_m * t + ph)
     v = v + rng.normal(0.0, rig.noise_V, size=n)
-    lsb = (hi_v - lo_v) / 2**ADC_BITS
+    lsb = (hi_v - lo_v) / 2**rig.adc_bits
     clipped = bool(np.any(v >= hi_v - 0.5 * lsb) or np.any(v <= lo_v + 0.5 * lsb))
     for where, amp_v in rig.spikes:
         i = min(n - 1, int(where * n))
         v[i] = float(np.clip(v[i] + amp_v, lo_v + 3 * lsb, hi_v - 3 * lsb))
-    codes = np.clip(np.round((v - lo_v) / lsb), 0, 2**ADC_BITS - 1)
+    codes = np.clip(np.round((v - lo_v) / lsb), 0, 2**rig.adc_bits - 1)
     volts = lo_v + codes * lsb
 
     # Truth.
@@ -690,6 +693,9 @@ def describe(rig: Rig) -> str:
         parts.append(f"truncated at {rig.truncate}")
     if rig.clip_factor > 1:
         parts.append(f"clip x{rig.clip_factor:.2f}")
+    if rig.adc_bits != ADC_BITS:
+        step = (rig.adc_range_v[1] - rig.adc_range_v[0]) / 2**rig.adc_bits
+        parts.append(f"{rig.adc_bits}-bit ADC (step {1e3 * step:.3g} mV)")
     return ", ".join(parts)
 
 

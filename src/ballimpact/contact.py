@@ -50,6 +50,7 @@ __all__ = [
     "detect_contact",
     "detect_clipping",
     "robust_noise",
+    "quantization_step",
     "contact_samples",
     "end_from_curve",
     "MAD_TO_SIGMA",
@@ -90,6 +91,9 @@ PRETRIGGER_GUARD_S = 0.5e-3  # gap between the noise window and the first crossi
 MIN_NOISE_SAMPLES = 20  # fewest quiet samples for a noise estimate [samples]
 MIN_CONTACT_SAMPLES = 3  # fewest samples above threshold for a contact [samples]
 NOISE_FLOOR_FRACTION = 1e-6  # lower bound of the noise estimate, fraction of the peak [-]
+QUANTUM_MIN_STEPS = 20  # a grid of values is looked for only among at least this many distinct steps [-]
+QUANTUM_ON_GRID = 0.95  # ... and found when this fraction of them are whole multiples of the least one ... [-]
+QUANTUM_TOLERANCE = 0.02  # ... to within this fraction of it (a printed or float32 value's rounding) [-]
 
 
 @dataclass(frozen=True)
@@ -207,6 +211,45 @@ def robust_noise(values) -> float:
     if v.size == 0:
         return math.nan
     return float(MAD_TO_SIGMA * np.median(np.abs(v - np.median(v))))
+
+
+def quantization_step(values) -> float:
+    """The step of the grid that a recorded trace's values lie on: the ADC's step [V], 0 when there is none.
+
+    An ADC records whole multiples of its step (its range over 2^bits, plus
+    an offset); a trace written as text keeps them to its printed digits. The
+    least difference between distinct values is the step when nearly all the
+    differences (QUANTUM_ON_GRID of them, at least QUANTUM_MIN_STEPS) are
+    whole multiples of it, to within QUANTUM_TOLERANCE; values off any grid
+    (a float simulation) give 0, and so does a single value off it (an
+    interpolated sample: read the step on the samples as recorded). The step matters
+    when the noise is smaller: undithered, the recorded trace moves in steps
+    of it and its quiet stretches hold no noise to measure (the noise then
+    estimated says nothing of what a step is), while the recording's error
+    is up to half a step, with a standard deviation of step / sqrt(12) for a
+    signal that crosses many steps. Not in the paper.
+
+    Parameters
+    ----------
+    values : array_like
+        The recorded samples [V] (before any correction: a corrected trace
+        is off the grid).
+
+    Returns
+    -------
+    float
+        The step [V]; 0 when the values lie on no grid.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    steps = np.diff(np.unique(v[np.isfinite(v)]))
+    if steps.size < QUANTUM_MIN_STEPS:
+        return 0.0
+    q = float(steps.min())
+    if not q > 0:
+        return 0.0
+    ratio = steps / q
+    on_grid = np.abs(ratio - np.round(ratio)) <= QUANTUM_TOLERANCE
+    return q if np.count_nonzero(on_grid) >= QUANTUM_ON_GRID * steps.size else 0.0
 
 
 def detect_clipping(raw_voltage_V, adc_range_V, *, adc_bits: int = 16, tolerance_lsb: float = 1.5,
