@@ -36,6 +36,7 @@ def _excluded(reason, tc, kcal, peak, spike=False, category="excluded_measurable
             "peak_is_spike": spike}
 
 
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")  # the script's BLAS setting, numpy already loaded
 def test_exclusion_table_counts_the_traces_that_were_right_all_the_same():
     robustness = bench_module("robustness")
     nan = float("nan")

@@ -247,8 +247,9 @@ def quantization_step(values) -> float:
     q = float(steps.min())
     if not q > 0:
         return 0.0
-    ratio = steps / q
-    on_grid = np.abs(ratio - np.round(ratio)) <= QUANTUM_TOLERANCE
+    with np.errstate(over="ignore", invalid="ignore"):  # a least step near the smallest float: off any grid
+        ratio = steps / q
+        on_grid = np.abs(ratio - np.round(ratio)) <= QUANTUM_TOLERANCE
     return q if np.count_nonzero(on_grid) >= QUANTUM_ON_GRID * steps.size else 0.0
 
 
