@@ -80,9 +80,10 @@ def main(argv=None):
         print(f"  noise / step {band:>9}: {counts}")
     for index, rig, cat, err, reason in rows:
         if cat in ("ok_wrong", "faulty_ok") or (a.show_ok and cat.startswith("ok") and abs(err["tc"]) > 0.5):
+            plate = "ideal plate" if rig.plate_hz is None else f"plate {rig.plate_hz / 1e3:.1f} kHz"
             print(f"  {cat} {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
                   f"{rig.adc_bits} bits (step {1e3 * step_V(rig):.2f} mV), noise {1e3 * rig.noise_V:.3f} mV, "
-                  f"peak {rig.peak_volts:.2f} V, {'ideal plate' if rig.plate_hz is None else f'plate {rig.plate_hz / 1e3:.1f} kHz'}: "
+                  f"peak {rig.peak_volts:.2f} V, {plate}: "
                   f"TC {err['tc']:+.2f} %, kCAL {err['kcal']:+.2f} %, peak {err['peak']:+.2f} %")
 
 
