@@ -1709,6 +1709,14 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                            f"contact start not determined: the corrected signal in the {1e3 * FOOT_CHECK_S:.2g} ms "
                            f"before it stands {foot:.3g} standard errors out of the noise (a foot of force before "
                            "the rise, or a baseline wrong there): the force may start earlier"))
+    # and force after the end (the fade's rest beyond an end found early, e.g. where interference swung it to zero)
+    k = int(math.ceil(e_u)) + 1
+    tail = _foot_sigma(x[k:k + int(round(FOOT_CHECK_S * fs))], fit.noise)
+    if curve and tail > FOOT_CHECK_SIGMA:
+        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                           f"contact end not determined: the corrected signal in the {1e3 * FOOT_CHECK_S:.2g} ms "
+                           f"after it stands {tail:.3g} standard errors out of the noise (force after the end found, "
+                           "or a baseline wrong there): the force may end later"))
     late = contact.curve_end_s - contact.end_s
     if "end_jump" in contact.flags:  # a jump's end is the middle of its interval: no line through a fade to judge
         late = math.nan
