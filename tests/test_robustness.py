@@ -759,6 +759,24 @@ def test_zoo_coarse_adc_case(name, seed, index, what, tmp_path):
     assert_invariant(trace, result, judgement)
 
 
+#: Traces of bench/burst_map.py, ok but wrong on f34ee44: an alternating burst of interference (5-6 samples, 10-34
+#: noise deviations) on the contact's fade swung it to zero, and the end was found there, early (TC -22.5 to -2.0 %);
+#: the force after it, the fade's rest, now stands out of the noise (name, seed, index, what).
+BURST_AT_THE_END = [
+    ("burst-6-samples-34sd-77kHz", 1, 314, "ok but wrong on f34ee44: TC -22.51 %"),
+    ("burst-6-samples-27sd-72kHz", 1, 24, "ok but wrong on f34ee44: TC -3.37 %"),
+    ("burst-6-samples-10sd-192kHz", 1, 382, "ok but wrong on f34ee44: TC -2.67 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in BURST_AT_THE_END])
+def test_zoo_burst_at_the_end_case(name, seed, index, what, tmp_path):
+    trace, bursts = bench_module("burst_map").trace_for(seed, index)
+    assert trace.truth.measurable and any(b[1] >= 5 for b in bursts), name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with="after it stands")
+
+
 #: Traces of bench/spike_ends_map.py, ok but wrong on main at 257a046: a pressurised ball at 13.6 m/s, 51.7 kHz, a
 #: plate of 18.5 kHz (2.8 samples a period, damping 0.094) whose first overshoot of the force's jump is the largest
 #: sample, 1.3 samples after the contact start (peak +5.0 %), and an electrical spike of +0.33 V (38 noise deviations)
