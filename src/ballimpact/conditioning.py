@@ -770,7 +770,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         scale = 1.0
     v_spiky = polarity * (raw / scale)
     # an ADC step above the noise: the noise is taken as no less than the step's (its error's deviation)
-    noise_floor = quantization_step(v_spiky) / math.sqrt(12.0)
+    adc_step = quantization_step(v_spiky)
+    noise_floor = adc_step / math.sqrt(12.0)
     v, spikes = remove_spikes(v_spiky, keep=_kept or ())
     if _near_ends:
         near = np.asarray(_near_ends, dtype=int)
@@ -822,7 +823,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                                    post_guard_s))
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
-        staircase = _adc_step_problems(it.x, fs, it.fit.noise, noise_floor * math.sqrt(12.0), contact, t0_s, scale)
+        staircase = _adc_step_problems(it.x, fs, it.fit.noise, adc_step, contact, t0_s, scale)
         problems.extend(staircase)
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
