@@ -65,9 +65,7 @@ def run_one(args):
 
 
 def main(argv=None):
-    ap = zoo.map_arguments(__doc__)
-    ap.add_argument("--show-ok", action="store_true", help="also the ok traces with |TC err| > 0.5 %")
-    a = ap.parse_args(argv)
+    a = zoo.map_arguments(__doc__, show_ok=True).parse_args(argv)
     jobs = [(a.seed, i) for i in range(a.n)]
     rows = zoo.map_rows(run_one, jobs, a.workers)
     print(zoo.category_summary(a.n, a.seed, "second-order low-pass 2-40 kHz, damping 0.3-1, fs 20-200 kHz",

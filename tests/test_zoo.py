@@ -256,6 +256,10 @@ def test_map_command_line_and_summary():
     a = ap.parse_args([])
     assert (a.n, a.seed, a.workers) == (600, 2, 2)
     assert ap.parse_args(["--n", "7", "--seed", "3", "--workers", "1"]).n == 7
+    assert not hasattr(a, "show_ok")
+    with_ok = zoo.map_arguments("A map.", show_ok=True)
+    assert with_ok.parse_args(["--show-ok"]).show_ok
+    assert "--show-ok" in with_ok.format_help()  # its help prints (a bare % in it once broke --help)
     line = zoo.category_summary(5, 3, "ideal plate", ["ok_wrong", "ok_right", "ok_right", "excluded_measurable",
                                                        "ok_right"])
     assert line == "5 rigs (seed 3, ideal plate): excluded_measurable 1, ok_right 3, ok_wrong 1"

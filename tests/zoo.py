@@ -286,13 +286,15 @@ def band_counts(values, categories, edges, scale: float = 1.0, unit: str = "") -
             for i in sorted({i for i, _ in table})]
 
 
-def map_arguments(doc: str, *, n: int = 400, seed: int = 1) -> argparse.ArgumentParser:
-    """The command line the maps of bench/ share (``--n`` rigs, ``--seed``, ``--workers``), its description the
-    first line of ``doc``; a map adds its own options to it."""
+def map_arguments(doc: str, *, n: int = 400, seed: int = 1, show_ok: bool = False) -> argparse.ArgumentParser:
+    """The command line the maps of bench/ share (``--n`` rigs, ``--seed``, ``--workers``, and with ``show_ok``
+    ``--show-ok``), its description the first line of ``doc``; a map adds its own options to it."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--n", type=int, default=n, help="number of rigs")
     ap.add_argument("--seed", type=int, default=seed)
     ap.add_argument("--workers", type=int, default=2)
+    if show_ok:
+        ap.add_argument("--show-ok", action="store_true", help="also the ok traces with |TC err| > 0.5 %%")
     return ap
 
 
