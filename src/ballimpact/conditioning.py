@@ -1706,23 +1706,20 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                                "there"))
     # a foot before the start (a cloth that carries a little load before the core does) is part of the contact:
     # the corrected signal before the start (less the sample before it, which a start found a fraction of a
-    # sample late leaves some force in) must hold none that stands out of the noise as a level or a ramp
-    k = int(math.floor(s_u)) - 1
-    seg = x[max(k - int(round(FOOT_CHECK_S * fs)), 0):max(k, 0)][::-1]
-    foot = _foot_sigma(seg, fit.noise)
-    if curve and foot > FOOT_CHECK_SIGMA:
-        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
-                           f"contact start not determined: the corrected signal in the {1e3 * FOOT_CHECK_S:.2g} ms "
-                           f"before it stands {foot:.3g} standard errors out of the noise (a foot of force before "
-                           "the rise, or a baseline wrong there): the force may start earlier"))
-    # and force after the end (the fade's rest beyond an end found early, e.g. where interference swung it to zero)
-    k = int(math.ceil(e_u)) + 1
-    tail = _foot_sigma(x[k:k + int(round(FOOT_CHECK_S * fs))], fit.noise)
-    if curve and tail > FOOT_CHECK_SIGMA:
-        out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
-                           f"contact end not determined: the corrected signal in the {1e3 * FOOT_CHECK_S:.2g} ms "
-                           f"after it stands {tail:.3g} standard errors out of the noise (force after the end found, "
-                           "or a baseline wrong there): the force may end later"))
+    # sample late leaves some force in) must hold none that stands out of the noise as a level or a ramp; and
+    # force after the end (the fade's rest beyond an end found early, e.g. where interference swung it to zero)
+    n_beyond = int(round(FOOT_CHECK_S * fs))
+    k0, k1 = int(math.floor(s_u)) - 1, int(math.ceil(e_u)) + 1
+    beyond = (("start", x[max(k0 - n_beyond, 0):max(k0, 0)][::-1], "before", "a foot of force before the rise",
+               "start earlier"),
+              ("end", x[k1:k1 + n_beyond], "after", "force after the end found", "end later"))
+    for where, seg, side, seen, may in beyond if curve else ():
+        sigma = _foot_sigma(seg, fit.noise)
+        if sigma > FOOT_CHECK_SIGMA:
+            out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                               f"contact {where} not determined: the corrected signal in the "
+                               f"{1e3 * FOOT_CHECK_S:.2g} ms {side} it stands {sigma:.3g} standard errors out of the "
+                               f"noise ({seen}, or a baseline wrong there): the force may {may}"))
     late = contact.curve_end_s - contact.end_s
     if "end_jump" in contact.flags:  # a jump's end is the middle of its interval: no line through a fade to judge
         late = math.nan
