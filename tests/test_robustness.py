@@ -30,6 +30,11 @@ import zoo
 from ballimpact.problems import ProblemKind
 from workflow_helpers import bench_module
 
+
+def named(cases) -> list:
+    """The cases (tuples whose first item is the case's name) as pytest params, each with its name as the id."""
+    return [pytest.param(*c, id=c[0]) for c in cases]
+
 #: Rig overrides that leave only the factor of interest: no spikes, no other fault.
 CLEAN = dict(truncate="", clip_factor=0.0, spikes=(), second=None)
 
@@ -258,9 +263,8 @@ UNDONE_FN_TOLERANCE = {**{c[0]: 0.1 for c in ZOO_STEP_UNDONE},
 
 
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in
-                          ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED + ZOO_STEP_UNDONE + ZOO_LOWPASS_ENDS
-                          + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE])
+                         named(ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED + ZOO_STEP_UNDONE + ZOO_LOWPASS_ENDS
+                               + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE))
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
@@ -301,7 +305,7 @@ def test_zoo_case_still_wrong(name, seed, index, what, tmp_path):
     assert_invariant(trace, result, judgement)
 
 
-@pytest.mark.parametrize("name, seed, index, what, must_be_ok", [pytest.param(*c, id=c[0]) for c in ZOO_REGRESSION])
+@pytest.mark.parametrize("name, seed, index, what, must_be_ok", named(ZOO_REGRESSION))
 def test_zoo_regression_case(name, seed, index, what, must_be_ok, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable or trace.truth.marginal, name
@@ -401,7 +405,7 @@ ZOO_FEWER_HARMONICS = [
 
 
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_SHORT_POST + ZOO_FEWER_HARMONICS])
+                         named(ZOO_SHORT_POST + ZOO_FEWER_HARMONICS))
 def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
@@ -432,7 +436,7 @@ ZOO_STEP_RESPONSE = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_STEP_RESPONSE])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_STEP_RESPONSE))
 def test_zoo_peak_on_the_plates_step_response(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable or trace.truth.marginal, name
@@ -460,7 +464,7 @@ ZOO_CONVEX_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_CONVEX_END])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_CONVEX_END))
 def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
@@ -478,7 +482,7 @@ ZOO_FRONT_RINGING = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_FRONT_RINGING])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_FRONT_RINGING))
 def test_zoo_peak_on_the_ringing_from_the_jump(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.truth.peak_is_spike, name
@@ -502,7 +506,7 @@ ZOO_FADE_END = [
 
 
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_EDGE_BUMP + ZOO_END_CURVE + ZOO_FADE_END])
+                         named(ZOO_EDGE_BUMP + ZOO_END_CURVE + ZOO_FADE_END))
 def test_zoo_ideal_plate_case_ok_and_right(name, seed, index, what, tmp_path):
     """ZOO_EDGE_BUMP, ZOO_END_CURVE and ZOO_FADE_END: ideal-plate traces once excluded, ok and right now."""
     trace = zoo.trace_for(seed, index)
@@ -529,7 +533,7 @@ ZOO_MORE_CUTOFFS = [
 
 
 @pytest.mark.parametrize("name, seed, index, what",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_WEIGHTED_TOP + ZOO_MORE_CUTOFFS])
+                         named(ZOO_WEIGHTED_TOP + ZOO_MORE_CUTOFFS))
 def test_zoo_noisy_undone_force_low_passed_with_its_peak_shown(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
@@ -557,7 +561,7 @@ ZOO_FIRST_OVERSHOOT = [
 
 
 @pytest.mark.parametrize("name, seed, overrides, what, must_be_ok",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_FIRST_OVERSHOOT])
+                         named(ZOO_FIRST_OVERSHOOT))
 def test_zoo_peak_on_the_plates_first_overshoot(name, seed, overrides, what, must_be_ok, tmp_path):
     trace = zoo.make_trace(np.random.default_rng(seed), "plate", **overrides)
     assert trace.truth.measurable and trace.sample_rate_hz / trace.rig.plate_hz < 3.0, name
@@ -578,7 +582,7 @@ ZOO_ALIAS_EXCLUDED = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_ALIAS_EXCLUDED])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_ALIAS_EXCLUDED))
 def test_zoo_alias_first_overshoot_excluded(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz > 0.5 * trace.sample_rate_hz, name
@@ -603,7 +607,7 @@ ZOO_FAST_FRONT = [
 
 
 @pytest.mark.parametrize("name, seed, overrides, what, must_be_ok",
-                         [pytest.param(*c, id=c[0]) for c in ZOO_FAST_FRONT])
+                         named(ZOO_FAST_FRONT))
 def test_zoo_contact_front_ringing_near_half_the_sample_rate(name, seed, overrides, what, must_be_ok, tmp_path):
     trace = zoo.make_trace(np.random.default_rng(seed), "plate", **overrides)
     assert trace.truth.measurable and 2.0 < trace.sample_rate_hz / trace.rig.plate_hz < 3.6, name
@@ -678,7 +682,7 @@ ZOO_CURVE_SECOND_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, draw, what", [pytest.param(*c, id=c[0]) for c in ZOO_CURVE_SECOND_END])
+@pytest.mark.parametrize("name, seed, index, draw, what", named(ZOO_CURVE_SECOND_END))
 def test_zoo_curve_end_with_a_second_end_not_taken(name, seed, index, draw, what, tmp_path):
     rig = zoo.trace_for(seed, index).rig
     trace = zoo.render(rig, np.random.default_rng([99, seed, index, draw]), name)
@@ -734,7 +738,7 @@ LOWPASS_DELAY = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in LOWPASS_DELAY])
+@pytest.mark.parametrize("name, seed, index, what", named(LOWPASS_DELAY))
 def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
     trace = bench_module("lowpass_map").trace_for(seed, index)
     assert trace.rig.plate_zeta >= 0.3, name  # 1:140 and 1:47 are marginal (a spike peak, fn < 10 kHz): ok must be right
@@ -754,7 +758,7 @@ COARSE_ADC = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in COARSE_ADC])
+@pytest.mark.parametrize("name, seed, index, what", named(COARSE_ADC))
 def test_zoo_coarse_adc_case(name, seed, index, what, tmp_path):
     trace = bench_module("adc_map").trace_for(seed, index)
     assert trace.rig.adc_bits == 12 and trace.rig.noise_V < 0.1 * 20.0 / 2**12, name
@@ -772,7 +776,7 @@ BURST_AT_THE_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in BURST_AT_THE_END])
+@pytest.mark.parametrize("name, seed, index, what", named(BURST_AT_THE_END))
 def test_zoo_burst_at_the_end_case(name, seed, index, what, tmp_path):
     trace, bursts = bench_module("burst_map").trace_for(seed, index)
     assert trace.truth.measurable and any(b[1] >= 5 for b in bursts), name
@@ -794,7 +798,7 @@ SPIKE_ON_FIRST_OVERSHOOT = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in SPIKE_ON_FIRST_OVERSHOOT])
+@pytest.mark.parametrize("name, seed, index, what", named(SPIKE_ON_FIRST_OVERSHOOT))
 def test_spike_on_the_plates_first_overshoot_ringing_hides_no_plate(name, seed, index, what, tmp_path):
     trace, where = bench_module("spike_ends_map").trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None and where == "start", name
@@ -819,7 +823,7 @@ ZOO_OVERSHOOT_AS_SPIKE = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, overrides, what", [pytest.param(*c, id=c[0]) for c in ZOO_OVERSHOOT_AS_SPIKE])
+@pytest.mark.parametrize("name, seed, overrides, what", named(ZOO_OVERSHOOT_AS_SPIKE))
 def test_zoo_plates_overshoot_taken_for_a_spike_is_excluded(name, seed, overrides, what, tmp_path):
     trace = zoo.make_trace(np.random.default_rng(seed), "plate", **overrides)
     assert trace.truth.measurable, name
@@ -839,7 +843,7 @@ MAP_UNDONE_END_COLOURED_NOISE = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in MAP_UNDONE_END_COLOURED_NOISE])
+@pytest.mark.parametrize("name, seed, index, what", named(MAP_UNDONE_END_COLOURED_NOISE))
 def test_map_undone_end_known_to_its_coloured_noise(name, seed, index, what, tmp_path):
     rig, rng = bench_module("overshoot_map").rig_for(seed, index, True)
     trace = zoo.render(rig, rng, name)
@@ -862,7 +866,7 @@ MAP_UNDONE_LINE_ENDS = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in MAP_UNDONE_LINE_ENDS])
+@pytest.mark.parametrize("name, seed, index, what", named(MAP_UNDONE_LINE_ENDS))
 def test_map_undone_line_end_known_to_its_noise(name, seed, index, what, tmp_path):
     rig, rng = bench_module("overshoot_map").rig_for(seed, index, True)
     trace = zoo.render(rig, rng, name)
@@ -896,7 +900,7 @@ ZOO_SPIKE_AT_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", [pytest.param(*c, id=c[0]) for c in ZOO_SPIKE_AT_END])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_SPIKE_AT_END))
 def test_zoo_spike_at_a_contact_end_ok_and_right(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
