@@ -35,6 +35,7 @@ def named(cases) -> list:
     """The cases (tuples whose first item is the case's name) as pytest params, each with its name as the id."""
     return [pytest.param(*c, id=c[0]) for c in cases]
 
+
 #: Rig overrides that leave only the factor of interest: no spikes, no other fault.
 CLEAN = dict(truncate="", clip_factor=0.0, spikes=(), second=None)
 

@@ -1713,8 +1713,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
     beyond = (("start", x[max(k0 - n_beyond, 0):max(k0, 0)][::-1], "before", "a foot of force before the rise",
                "start earlier"),
               ("end", x[k1:k1 + n_beyond], "after", "force after the end found", "end later"))
-    for where, seg, side, seen, may in beyond if curve else ():
-        sigma = _foot_sigma(seg, fit.noise)
+    for where, seg, side, seen, may in beyond:
+        sigma = _foot_sigma(seg, fit.noise) if curve else 0.0
         if sigma > FOOT_CHECK_SIGMA:
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined: the corrected signal in the "
