@@ -83,7 +83,7 @@ from scipy.optimize import minimize_scalar
 from .calibration import force_top
 from .contact import ContactResult, detect_contact, quantization_step, robust_noise
 from .model import BUCKLING_TIME_S
-from .plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
+from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
                     refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain, fit_front,
                     undone_impulse_response)
 from .problems import Problem, ProblemKind
@@ -207,6 +207,8 @@ NEGATIVE_FRACTION = 5.0e-3  # ... by more than this fraction of the peak ... [-]
 NEGATIVE_SIGMA = 6.0  # ... and this many standard errors of the average [-]
 PLATE_ID_AFTER_S = 2.0e-3  # the plate's ringing is identified from the contact and this long after it [s]
 PLATE_ID_LAGS = (5, 8)  # two identifications, instruments this many samples back [samples]
+PLATE_FREE_AFTER_S = (0.02e-3, 0.1e-3)  # ... or, where they find nothing, fits of the free ringing from this long
+#                                         after the contact end (at least a sample) to PLATE_ID_AFTER_S after it [s]
 PLATE_REFINE_S = (0.2e-3, 1.0e-3)  # each refined on the undone force from this long before to after the contact [s]
 PLATE_AGREE_TC = 3.0e-3  # the two undone forces agree on TC to this fraction ... [-]
 PLATE_AGREE_PEAK = 0.01  # ... and on the peak to this fraction, or the plate is not known well enough [-]
@@ -1116,7 +1118,9 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     record does (the inverse's backward pass starts from rest there). The
     resonance is identified twice, from the contact (less two samples after its
     start, the force's jump) and PLATE_ID_AFTER_S after it, with instruments
-    PLATE_ID_LAGS samples back; each undone force must
+    PLATE_ID_LAGS samples back (where that finds nothing, from the free ringing alone: a fit of a damped
+    sinusoid from PLATE_FREE_AFTER_S after the contact's end to PLATE_ID_AFTER_S after it,
+    :func:`ballimpact.plate.identify_free_ringing`); each undone force must
     pass the contact, end and ringing checks again, its noise (undoing the
     resonance amplifies the noise above it) must stay below
     PLATE_NOISE_FRACTION of the peak, twice its TC's uncertainty (noise over
@@ -1193,8 +1197,11 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     ra = max(int(s_u - PLATE_REFINE_S[0] * fs), 0)
     rb = min(int(e_u + PLATE_REFINE_S[1] * fs), x.size)
     found = []
-    for lag in PLATE_ID_LAGS:
+    for lag, after_s in zip(PLATE_ID_LAGS, PLATE_FREE_AFTER_S):
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
+        if plate is None and fit.noise > 0:  # the force drowns a damped plate's recursion: its free ringing after
+            free = int(math.floor(e_u)) + max(int(round(after_s * fs)), 1)
+            plate = identify_free_ringing(x[free:b], fs, fit.noise)
         if plate is None:
             return ("plate resonance not undone: no decaying oscillation identified out of the noise in the "
                     "contact and the 2 ms after it")
