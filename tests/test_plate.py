@@ -13,7 +13,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.plate import (PlateResonance, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
+from ballimpact.plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
+                              lowpass_zero_phase,
                               refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
 from ballimpact.problems import ProblemKind
 
@@ -817,3 +818,61 @@ def test_undone_end_noise_se_is_the_spread_of_the_end_over_noise_draws(fn_hz, ze
     assert abs(np.mean(errors)) < 0.3 * rms
     # without the noise asked for, none is given
     assert math.isnan(undone_end(y, fs, fn_hz, zeta, cutoff_hz, te * fs, "end", inside_samples=6).noise_se)
+
+
+def _free_ringing_stretch(fn_hz, zeta, fs, noise, seed=5, after_s=0.02e-3):
+    """The sensed force from after_s past the end of a contact to 2 ms past it, with white noise."""
+    t = np.arange(int(0.010 * fs)) / fs
+    t0 = 100.3 / fs
+    kt = np.array([t0, t0 + 1e-9, t0 + 2.0e-3, t0 + 4.0e-3])
+    kf = np.array([0.0, 300.0, 1000.0, 0.0])
+    sensed = sensed_force(kt, kf, t, fn_hz, zeta) + np.random.default_rng(seed).normal(0.0, noise, t.size)
+    a = int(math.ceil((t0 + 4.0e-3 + after_s) * fs))
+    return sensed[a:a + int(2e-3 * fs)]
+
+
+@pytest.mark.parametrize("fn_hz, zeta, fs", [(3500.0, 0.22, 195900.0), (3200.0, 0.11, 137300.0),
+                                             (11000.0, 0.10, 124700.0), (5000.0, 0.03, 50000.0),
+                                             (15000.0, 0.05, 44700.0)])
+def test_resonance_identified_from_the_free_ringing_after_the_contact(fn_hz, zeta, fs):
+    # after the contact no force acts: the trace is the plate's free response, a damped sinusoid
+    plate = identify_free_ringing(_free_ringing_stretch(fn_hz, zeta, fs, 0.2), fs, 0.2)
+    assert plate is not None
+    assert_allclose(plate.frequency_hz, fn_hz, rtol=0.01)
+    assert_allclose(plate.damping_ratio, zeta, rtol=0.15)  # a short ringing: its decay is known to ~5 % (30 seeds)
+    assert_allclose([plate.a1, plate.a2], [_resonance(fn_hz, zeta, fs).a1, _resonance(fn_hz, zeta, fs).a2],
+                    rtol=0.02)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_no_free_ringing_in_white_noise(seed):
+    noise = np.random.default_rng(seed).normal(0.0, 0.5, 400)
+    assert identify_free_ringing(noise, 1e5, 0.5) is None
+
+
+def test_no_free_ringing_where_it_is_under_the_noise():
+    # a 5 kHz ringing of 0.2 noise deviations at its start: nothing stands out
+    assert identify_free_ringing(_free_ringing_stretch(5000.0, 0.05, 1e5, 20.0), 1e5, 20.0) is None
+
+
+def test_a_slow_decay_is_no_free_ringing():
+    # what an amplifier's undershoot left after the contact: an exponential, not a damped oscillation
+    fs = 1e5
+    t = np.arange(200) / fs
+    y = 30.0 * np.exp(-t / 1e-3) + np.random.default_rng(2).normal(0.0, 0.5, t.size)
+    plate = identify_free_ringing(y, fs, 0.5)
+    assert plate is None or plate.damping_ratio >= 0.3
+
+
+def test_too_short_a_stretch_has_no_free_ringing():
+    assert identify_free_ringing(np.sin(np.arange(12)), 5e4, 0.1) is None
+
+
+@pytest.mark.parametrize("args, match", [
+    ((np.zeros(100), 0.0, 1.0), "sample_rate_hz must be positive"),
+    ((np.zeros(100), 5e4, 0.0), "noise_rms must be positive"),
+    ((np.r_[np.zeros(50), np.nan, np.zeros(49)], 5e4, 1.0), "non-finite"),
+])
+def test_free_ringing_rejects_bad_arguments(args, match):
+    with pytest.raises(ValueError, match=match):
+        identify_free_ringing(*args)

@@ -234,8 +234,9 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     longer than a damped plate's ringing, drowns the recursion: zoo trace
     2:600, a 3.5 kHz plate damped 0.22 at 196 kHz), the ringing after the
     contact alone can still show it. The fit (least squares, bounded) starts
-    from FREE_RING_START_FACTORS of the peak of the stretch's Hann-windowed
-    spectrum and FREE_RING_START_DAMPING; the best is kept. Not in the paper;
+    from FREE_RING_START_FACTORS of the peak of the stretch's spectrum (no
+    taper: the ringing decays from the stretch's start) and
+    FREE_RING_START_DAMPING; the best is kept. Not in the paper;
     see the README, "Plate resonance".
 
     Parameters
@@ -283,7 +284,7 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
         wd = wn * math.sqrt(max(1.0 - zeta * zeta, 0.0))
         return (np.exp(-zeta * wn * t) * (amp_c * np.cos(wd * t) + amp_s * np.sin(wd * t)) + c - y) / noise
 
-    spectrum = np.abs(np.fft.rfft((y - y.mean()) * np.hanning(n), 8 * n))
+    spectrum = np.abs(np.fft.rfft(y - y.mean(), 8 * n))  # no taper: a decaying ringing is in the first samples
     freq = np.fft.rfftfreq(8 * n, 1.0 / fs)
     inside = (freq >= f_lo) & (freq <= f_hi)
     if not np.any(inside):
