@@ -256,16 +256,27 @@ ZOO_FRONT_UNDONE = [
     ("plate-16.3kHz-front-ringing-undone", 2, 936, "16.3 kHz plate, damping 0.12, pressurised ball at 124 kHz"),
 ]
 
+#: Traces of the benchmark excluded on main at ed0c366 although measurable: "no decaying oscillation identified out
+#: of the noise in the contact and the 2 ms after it" (a damped plate's short ringing drowned, in the recursion's
+#: fit, by the force's own second difference over the whole contact). Identified from the free ringing after the
+#: contact alone (``plate.identify_free_ringing``) and undone, ok and right (name, seed, index, what).
+ZOO_FREE_RINGING = [
+    ("free-ringing-3.5kHz-damped-196kHz", 2, 600, "3.5 kHz plate, damping 0.22, at 196 kHz: force below zero after"),
+    ("free-ringing-3.2kHz-137kHz", 3, 388, "3.2 kHz plate, damping 0.11, at 137 kHz: force below zero after"),
+    ("free-ringing-4.1kHz-129kHz", 2, 1176, "4.1 kHz plate, damping 0.15, at 129 kHz: peak on plate ringing"),
+    ("free-ringing-11kHz-125kHz", 3, 752, "11 kHz plate, damping 0.098, at 125 kHz: peak between samples"),
+]
+
 #: How close the undone resonance must be to the plate's for the cases above that check it [-].
 #: (ZOO_FRONT_UNDONE's identified from a short ringing: 2:936's 10.4 % high, its undone force right all the same).
 UNDONE_FN_TOLERANCE = {**{c[0]: 0.1 for c in ZOO_STEP_UNDONE},
-                       **{c[0]: 0.03 for c in ZOO_LOWPASS_ENDS + ZOO_EXACT_ENDS},
+                       **{c[0]: 0.03 for c in ZOO_LOWPASS_ENDS + ZOO_EXACT_ENDS + ZOO_FREE_RINGING},
                        **{c[0]: 0.15 for c in ZOO_FRONT_UNDONE}}
 
 
 @pytest.mark.parametrize("name, seed, index, what",
                          named(ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED + ZOO_STEP_UNDONE + ZOO_LOWPASS_ENDS
-                               + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE))
+                               + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE + ZOO_FREE_RINGING))
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
