@@ -65,8 +65,8 @@ REFINEMENTS = 2  # fits repeated with the smoothing chosen from the last estimat
 START_SMOOTHING = (1, 2, 4, 8, 16)  # moving averages tried in turn for a first estimate [samples]
 FREE_RING_MIN_CHI2 = 100.0  # a free ringing's fit lowers the stretch's sum of squares by this many residual
 #                             variances (each at least the noise's) [-]
-FREE_RING_START_DAMPING = (0.02, 0.1, 0.3)  # its fits start from these damping ratios ... [-]
-FREE_RING_START_FACTORS = (1.0, 0.7, 1.4)  # ... and these factors of the stretch's spectral peak [-]
+FREE_RING_START_DAMPING = tuple(np.geomspace(0.01, 0.4, 9))  # its fit starts from the best of these damping
+FREE_RING_START_FACTORS = tuple(np.geomspace(0.7, 1.4, 11))  # ratios and factors of the stretch's spectral peak [-]
 REFINE_BAND = 1.5  # the refinement minimises the undone force's ringing within this factor of the first fn [-]
 REFINE_STEP = (0.05, 0.5)  # its first steps in log(fn) and log(zeta) [-]
 REFINE_TOLERANCE = 2.0e-3  # ... and the step in log(fn) at which it stops [-]
@@ -229,14 +229,15 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     After the contact no force acts on the plate, so the trace there is the
     plate's free response, ``exp(-zeta wn t) (A cos wd t + B sin wd t)``
     with wd = wn sqrt(1 - zeta^2), plus a constant (what the baseline left)
-    and noise. Where :func:`identify_plate_resonance` finds nothing in the
+    and noise (the amplitudes and the constant solved for linearly at each fn
+    and zeta: a fit in two parameters). Where :func:`identify_plate_resonance` finds nothing in the
     contact and after it (the force's own second difference, many times
     longer than a damped plate's ringing, drowns the recursion: zoo trace
     2:600, a 3.5 kHz plate damped 0.22 at 196 kHz), the ringing after the
     contact alone can still show it. The fit (least squares, bounded) starts
-    from FREE_RING_START_FACTORS of the peak of the stretch's spectrum (no
-    taper: the ringing decays from the stretch's start) and
-    FREE_RING_START_DAMPING; the best is kept. Not in the paper;
+    from the best of a grid: FREE_RING_START_FACTORS of the peak of the
+    stretch's spectrum (no taper: the ringing decays from the stretch's start)
+    by FREE_RING_START_DAMPING. Not in the paper;
     see the README, "Plate resonance".
 
     Parameters
@@ -278,11 +279,15 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     t = np.arange(n) / fs
     f_lo, f_hi = MIN_FREQUENCY_FRACTION * fs, MAX_FREQUENCY_FRACTION * fs
 
-    def residual(p):
-        amp_c, amp_s, f, zeta, c = p
+    def basis(f, zeta):
         wn = 2.0 * math.pi * f
         wd = wn * math.sqrt(max(1.0 - zeta * zeta, 0.0))
-        return (np.exp(-zeta * wn * t) * (amp_c * np.cos(wd * t) + amp_s * np.sin(wd * t)) + c - y) / noise
+        decay = np.exp(-zeta * wn * t)
+        return np.column_stack([decay * np.cos(wd * t), decay * np.sin(wd * t), np.ones(n)])
+
+    def residual(p):  # the amplitudes and the constant are linear: solved for at each (fn, zeta)
+        b = basis(*p)
+        return (b @ np.linalg.lstsq(b, y, rcond=None)[0] - y) / noise
 
     spectrum = np.abs(np.fft.rfft(y - y.mean(), 8 * n))  # no taper: a decaying ringing is in the first samples
     freq = np.fft.rfftfreq(8 * n, 1.0 / fs)
@@ -290,18 +295,15 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     if not np.any(inside):
         return None
     f0 = float(freq[inside][np.argmax(spectrum[inside])])
-    lower = [-np.inf, -np.inf, f_lo, MIN_DAMPING_RATIO, -np.inf]
-    upper = [np.inf, np.inf, f_hi, MAX_DAMPING_RATIO, np.inf]
-    best = None
-    for factor, zeta0 in itertools.product(FREE_RING_START_FACTORS, FREE_RING_START_DAMPING):
-        start = [float(y[0]), 0.0, min(max(factor * f0, f_lo), f_hi), zeta0, 0.0]
-        fit = least_squares(residual, start, bounds=(lower, upper))
-        if best is None or fit.cost < best.cost:
-            best = fit
+    grid = [(min(max(factor * f0, f_lo), f_hi), zeta0)
+            for factor, zeta0 in itertools.product(FREE_RING_START_FACTORS, FREE_RING_START_DAMPING)]
+    start = min(grid, key=lambda p: float(np.sum(residual(p) ** 2)))
+    best = least_squares(residual, start, bounds=([f_lo, MIN_DAMPING_RATIO], [f_hi, MAX_DAMPING_RATIO]),
+                         x_scale=[f0, 0.1])
     chi2 = 2.0 * float(best.cost)
     chi2_flat = float(np.sum(((y - y.mean()) / noise) ** 2))
-    variance = max(chi2 / max(n - best.x.size, 1), 1.0)  # the residual's, in noise variances
-    f, zeta = float(best.x[2]), float(best.x[3])
+    variance = max(chi2 / max(n - 5, 1), 1.0)  # the residual's, in noise variances (five parameters)
+    f, zeta = float(best.x[0]), float(best.x[1])
     if chi2_flat - chi2 < FREE_RING_MIN_CHI2 * variance:
         return None
     if not (f_lo < f < f_hi and MIN_DAMPING_RATIO < zeta < MAX_DAMPING_RATIO):
