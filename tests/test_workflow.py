@@ -335,6 +335,7 @@ def _summary_block(summary: str, session: str) -> str:
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_bad_session_stops_only_itself(mixed_run):
     """keep-going (profiles/default): the good sessions complete beside the bad one."""
     results, proc = mixed_run["results"], mixed_run["proc"]
@@ -346,6 +347,7 @@ def test_bad_session_stops_only_itself(mixed_run):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_hostile_trace_cells_stop_only_their_impacts(mixed_run):
     """A NUL byte, a control character and a 10 000-character path in the trace cells of one
     session: the workflow plans and runs it; those impacts are excluded with a reason."""
@@ -635,6 +637,7 @@ def test_snakemake_lint_is_clean():
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_run_summary_shows_warnings_errors_and_stale_results(mixed_run, tmp_path):
     raw, results, proc = mixed_run["raw"], mixed_run["results"], mixed_run["proc"]
     lab = raw / "lab"
