@@ -83,9 +83,9 @@ from scipy.optimize import minimize_scalar
 from .calibration import force_top
 from .contact import ContactResult, detect_contact, quantization_step, robust_noise
 from .model import BUCKLING_TIME_S
-from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples, lowpass_zero_phase,
-                    refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain, fit_front,
-                    undone_impulse_response)
+from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
+                    lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain,
+                    fit_front, undone_impulse_response)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]

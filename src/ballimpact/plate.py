@@ -49,8 +49,8 @@ import numpy as np
 
 from ._checks import finite_samples, positive_scalar
 
-__all__ = ["PlateResonance", "identify_plate_resonance", "identify_free_ringing", "undo_plate_resonance", "lowpass_zero_phase",
-           "undone_noise_gain", "lowpass_kernel",
+__all__ = ["PlateResonance", "identify_plate_resonance", "identify_free_ringing", "undo_plate_resonance",
+           "lowpass_zero_phase", "undone_noise_gain", "lowpass_kernel",
            "lowpass_spread_samples", "refine_plate_resonance", "undone_end", "FrontFit", "front_responses", "fit_front",
            "undone_impulse_response"]
 
@@ -230,15 +230,16 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     plate's free response, ``exp(-zeta wn t) (A cos wd t + B sin wd t)``
     with wd = wn sqrt(1 - zeta^2), plus a constant (what the baseline left)
     and noise (the amplitudes and the constant solved for linearly at each fn
-    and zeta: a fit in two parameters). Where :func:`identify_plate_resonance` finds nothing in the
-    contact and after it (the force's own second difference, many times
-    longer than a damped plate's ringing, drowns the recursion: zoo trace
+    and zeta: a fit in two parameters). Where
+    :func:`identify_plate_resonance` finds nothing in the contact and after
+    it (the force's own second difference, many times longer than a damped
+    plate's ringing, drowns the recursion: zoo trace
     2:600, a 3.5 kHz plate damped 0.22 at 196 kHz), the ringing after the
     contact alone can still show it. The fit (least squares, bounded) starts
     from the best of a grid: FREE_RING_START_FACTORS of the peak of the
     stretch's spectrum (no taper: the ringing decays from the stretch's start)
-    by FREE_RING_START_DAMPING. Not in the paper;
-    see the README, "Plate resonance".
+    by FREE_RING_START_DAMPING. Not in the paper; see the README, "Plate
+    resonance".
 
     Parameters
     ----------
