@@ -26,13 +26,12 @@ run: setup
 	$(BIN)/snakemake --cores $(CORES)
 
 # the suite in TEST_WORKERS processes (pytest-xdist): on 027a4de, on a 2-core machine, `pytest -q` took 9 min 26 s
-# and `pytest -q -n 2` 5 min 43 s. --dist loadgroup keeps each xdist_group's tests (those of one costly module
-# fixture: the demo run, mixed_run) on one worker, so the fixture is built once, not once per worker: in fresh
-# clones on a slower machine, 10 min 06 s wall (install included) on 30aec0a and 9 min 29 s on 0555092
+# and `pytest -q -n 2` 5 min 43 s. The fixtures that run a whole workflow (the demo run, mixed_run, the reruns' run)
+# are built once per test run, not once per worker (tests/shared_fixture.py).
 TEST_WORKERS ?= 2
 
 test: setup
-	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
 bench: setup
 	$(BIN)/python bench/run.py

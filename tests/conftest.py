@@ -47,12 +47,14 @@ def synth_session_negative_tdms(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def demo_run_output(tmp_path_factory):
-    """The workflow run on raw/demo-2004 (once per test run; used by test_run.py and test_readme.py).
+    """The workflow run on raw/demo-2004 (once per test run, shared by the xdist workers:
+    shared_fixture.build_once; used by test_run.py and test_readme.py).
 
     A dict: ``workdir`` (the run's working folder, holding ``results/``), ``results``
     (its results folder), ``raw_before`` (path -> (sha256, mtime) of raw/demo-2004 before
     the run) and ``stdout`` (what Snakemake printed, stderr merged).
     """
+    from shared_fixture import build_once
     from workflow_helpers import REPO, run_snakemake
 
     demo = REPO / "raw" / "demo-2004"
@@ -61,11 +63,13 @@ def demo_run_output(tmp_path_factory):
         return {p.relative_to(folder).as_posix(): (hashlib.sha256(p.read_bytes()).hexdigest(), p.stat().st_mtime_ns)
                 for p in sorted(folder.rglob("*")) if p.is_file()}
 
-    tmp = tmp_path_factory.mktemp("demo")
-    before = hashes(demo)
-    results = tmp / "results"
-    proc = run_snakemake("--snakefile", REPO / "Snakefile", "--directory", tmp, "--cores", "2",
-                         "--config", f"raw_dir={REPO / 'raw'}", f"results_dir={results}", "sessions=[demo-2004]",
-                         cwd=tmp)
-    assert proc.returncode == 0, proc.stdout[-5000:]
-    return {"workdir": tmp, "results": results, "raw_before": before, "stdout": proc.stdout}
+    def run(tmp: Path) -> dict:
+        before = hashes(demo)
+        results = tmp / "results"
+        proc = run_snakemake("--snakefile", REPO / "Snakefile", "--directory", tmp, "--cores", "2",
+                             "--config", f"raw_dir={REPO / 'raw'}", f"results_dir={results}",
+                             "sessions=[demo-2004]", cwd=tmp)
+        assert proc.returncode == 0, proc.stdout[-5000:]
+        return {"workdir": tmp, "results": results, "raw_before": before, "stdout": proc.stdout}
+
+    return build_once(tmp_path_factory, "demo-run", run)

@@ -20,8 +20,6 @@ from ballimpact.cli import build_parser
 from ballimpact.session import read_session
 from workflow_helpers import REPO
 
-# xdist_group: one worker builds the demo run (conftest.demo_run_output) for this module and test_run.py
-pytestmark = pytest.mark.xdist_group("demo_run")
 
 README = REPO / "README.md"
 BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)

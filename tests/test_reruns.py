@@ -16,6 +16,7 @@ import pytest
 
 from ballimpact.balls import BALLS
 from ballimpact.synth import SynthConfig, write_session
+from shared_fixture import build_once
 from workflow_helpers import run_snakemake
 
 pytestmark = pytest.mark.slow
@@ -32,16 +33,19 @@ def _args(root: Path, *extra):
 
 @pytest.fixture(scope="module")
 def done_run(tmp_path_factory) -> Path:
-    """A folder holding raw/ (two small synthetic sessions) and results/ after a complete run."""
-    root = tmp_path_factory.mktemp("reruns")
-    raw = root / "raw"
-    for k, name in enumerate(SESSIONS):
-        write_session(raw / name, SynthConfig(session_id=name, impacts_per_ball=4, faults_per_kind=0,
-                                              balls={"pressurised": BALLS["pressurised"].params}, seed=20 + k))
-        for truth in raw.glob(f"{name}.truth.*"):
-            truth.unlink()
-    run_snakemake(*_args(root), check=True)
-    return root
+    """A folder holding raw/ (two small synthetic sessions) and results/ after a complete run
+    (built once per test run and shared by the xdist workers: shared_fixture.build_once)."""
+    def run(root: Path) -> Path:
+        raw = root / "raw"
+        for k, name in enumerate(SESSIONS):
+            write_session(raw / name, SynthConfig(session_id=name, impacts_per_ball=4, faults_per_kind=0,
+                                                  balls={"pressurised": BALLS["pressurised"].params}, seed=20 + k))
+            for truth in raw.glob(f"{name}.truth.*"):
+                truth.unlink()
+        run_snakemake(*_args(root), check=True)
+        return root
+
+    return build_once(tmp_path_factory, "reruns", run)
 
 
 @pytest.fixture

@@ -28,8 +28,7 @@ from ballimpact.balls import BALLS
 from ballimpact.synth import SynthConfig, write_session
 from workflow_helpers import IMPACTS_CSV_COLUMNS, REPO, SNAKEMAKE, run_snakemake
 
-# xdist_group: one worker builds the demo run (conftest.demo_run_output) for this module and test_readme.py
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("demo_run")]
+pytestmark = pytest.mark.slow
 
 DEMO = REPO / "raw" / "demo-2004"
 

@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from ballimpact import pipeline
-
+from shared_fixture import build_once
 from workflow_helpers import (  # noqa: E402  (shared with test_run.py)
     BALLIMPACT, FINAL_FIGURES, IMPACTS_CSV_COLUMNS, REPO, run_snakemake,
 )
@@ -296,35 +296,38 @@ def mixed_run(synth_raw, tmp_path_factory):
     * 'bad': plate.polarity 2 (a session-level error).
 
     A dict: raw, results, proc (the CompletedProcess), hostile_ids, first_ball (of 'lab').
+    Built once per test run and shared by the xdist workers (shared_fixture.build_once).
     """
-    tmp = tmp_path_factory.mktemp("mixed")
-    raw = tmp / "raw"
-    raw.mkdir()
-    lab = copy_session(synth_raw / "s1", raw, "lab")
-    original = (lab / "session.yaml").read_text(encoding="utf-8")
-    (lab / "session.yaml").write_text(_lab_typo(original), encoding="utf-8")
-    first_ball = next(iter(yaml.safe_load(original)["balls"]))
+    def run(tmp: Path) -> dict:
+        raw = tmp / "raw"
+        raw.mkdir()
+        lab = copy_session(synth_raw / "s1", raw, "lab")
+        original = (lab / "session.yaml").read_text(encoding="utf-8")
+        (lab / "session.yaml").write_text(_lab_typo(original), encoding="utf-8")
+        first_ball = next(iter(yaml.safe_load(original)["balls"]))
 
-    bad = copy_session(synth_raw / "s1", raw, "bad")
-    text = (bad / "session.yaml").read_text(encoding="utf-8")
-    (bad / "session.yaml").write_text(text.replace("  polarity: 1", "  polarity: 2", 1), encoding="utf-8")
+        bad = copy_session(synth_raw / "s1", raw, "bad")
+        text = (bad / "session.yaml").read_text(encoding="utf-8")
+        (bad / "session.yaml").write_text(text.replace("  polarity: 1", "  polarity: 2", 1), encoding="utf-8")
 
-    hostile = copy_session(synth_raw / "s1", raw, "hostile")
-    csv_path = hostile / "impacts.csv"
-    lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
-    header = lines[0].rstrip("\r\n").split(",")
-    col = header.index("trace")
-    hostile_ids = []
-    for k, cell in enumerate(HOSTILE_CELLS, start=1):
-        fields = lines[k].rstrip("\r\n").split(",")
-        fields[col] = cell
-        hostile_ids.append(fields[header.index("impact_id")])
-        lines[k] = ",".join(fields) + "\n"
-    csv_path.write_text("".join(lines), encoding="utf-8")
+        hostile = copy_session(synth_raw / "s1", raw, "hostile")
+        csv_path = hostile / "impacts.csv"
+        lines = csv_path.read_text(encoding="utf-8").splitlines(keepends=True)
+        header = lines[0].rstrip("\r\n").split(",")
+        col = header.index("trace")
+        hostile_ids = []
+        for k, cell in enumerate(HOSTILE_CELLS, start=1):
+            fields = lines[k].rstrip("\r\n").split(",")
+            fields[col] = cell
+            hostile_ids.append(fields[header.index("impact_id")])
+            lines[k] = ",".join(fields) + "\n"
+        csv_path.write_text("".join(lines), encoding="utf-8")
 
-    results = tmp / "results"
-    proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
-    return {"raw": raw, "results": results, "proc": proc, "hostile_ids": hostile_ids, "first_ball": first_ball}
+        results = tmp / "results"
+        proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+        return {"raw": raw, "results": results, "proc": proc, "hostile_ids": hostile_ids, "first_ball": first_ball}
+
+    return build_once(tmp_path_factory, "mixed-run", run)
 
 
 def _summary_block(summary: str, session: str) -> str:
@@ -335,7 +338,6 @@ def _summary_block(summary: str, session: str) -> str:
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_bad_session_stops_only_itself(mixed_run):
     """keep-going (profiles/default): the good sessions complete beside the bad one."""
     results, proc = mixed_run["results"], mixed_run["proc"]
@@ -347,7 +349,6 @@ def test_bad_session_stops_only_itself(mixed_run):
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_hostile_trace_cells_stop_only_their_impacts(mixed_run):
     """A NUL byte, a control character and a 10 000-character path in the trace cells of one
     session: the workflow plans and runs it; those impacts are excluded with a reason."""
@@ -637,7 +638,6 @@ def test_snakemake_lint_is_clean():
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("mixed_run")  # one worker builds the module's mixed_run
 def test_run_summary_shows_warnings_errors_and_stale_results(mixed_run, tmp_path):
     raw, results, proc = mixed_run["raw"], mixed_run["results"], mixed_run["proc"]
     lab = raw / "lab"
