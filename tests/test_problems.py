@@ -97,6 +97,9 @@ MESSAGES = {
                                    "baseline or amplifier decay not removed",
     ProblemKind.BASELINE_RESIDUAL: "quiet baseline not explained by offset, drift, hum and decay: 2 mV rms above the "
                                    "white noise",
+    ProblemKind.BASELINE_STEP: "step in the baseline: the corrected signal's level shifts by -10.6 mV (0.26 % of the "
+                               "peak, 15.4 standard errors) between 19.5 and 26.18 ms, which offset, drift, hum and "
+                               "decay do not explain; the baseline under the contact is uncertain",
     ProblemKind.CONTACT_END_UNDETERMINED: "contact start not determined: the 0.05 ms inside it hold no force",
     ProblemKind.TOO_FEW_SAMPLES: "only 7.5 samples in the contact (fewer than 10): sample rate too low",
     ProblemKind.PLATE_RINGING: "plate ringing at 8.1 kHz during the contact",

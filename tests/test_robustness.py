@@ -796,6 +796,28 @@ def test_zoo_burst_at_the_end_case(name, seed, index, what, tmp_path):
     assert_invariant(trace, result, judgement, excluded_with="after it stands")
 
 
+#: Traces of bench/step_map.py, ok but wrong on cedcc5c: the recorded level shifts once by 0.1-3 % of the peak (a
+#: DAQ's or an amplifier's offset changing), and the baseline fit spread the shift over the record as drift, leaving
+#: the contact's ends on a level a little off zero; or, with the decay estimated and the step 1.7 ms after the end,
+#: kappa took it for the undershoot and the correction lifted the record before it into a shelf of force (name,
+#: seed, index, what the reason must name, what).
+BASELINE_STEPS = [
+    ("step-0.43pc-17ms-before", 2, 300, "step in the baseline", "ok but wrong on cedcc5c: TC +1.01 %"),
+    ("step-0.28pc-after-the-end", 1, 138, "step in the baseline", "ok but wrong on cedcc5c: TC +2.06 %"),
+    ("step-0.15pc-in-the-contact-tau-given", 2, 374, "step in the baseline", "ok but wrong on cedcc5c: TC +2.39 %"),
+    ("step-3.1pc-1.7ms-after-tau-estimated", 2, 95, "force is flat over the last",
+     "ok but wrong on cedcc5c: TC +42.5 %, kCAL -6.2 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, named_in_reason, what", named(BASELINE_STEPS))
+def test_zoo_baseline_step_case(name, seed, index, named_in_reason, what, tmp_path):
+    trace, height, _ = bench_module("step_map").trace_for(seed, index)
+    assert trace.truth.measurable and abs(height) >= 1e-3, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with=named_in_reason)
+
+
 #: Traces of bench/spike_ends_map.py, ok but wrong on main at 257a046: a pressurised ball at 13.6 m/s, 51.7 kHz, a
 #: plate of 18.5 kHz (2.8 samples a period, damping 0.094) whose first overshoot of the force's jump is the largest
 #: sample, 1.3 samples after the contact start (peak +5.0 %), and an electrical spike of +0.33 V (38 noise deviations)

@@ -128,7 +128,17 @@ SPIKE_END_IMPULSE = 0.005  # a sample kept at a contact end, were it electrical,
 FLAT_WINDOW_S = 2.0e-3  # stretches of the corrected signal checked for a level off zero [s]
 FLAT_FRACTION = 2.0e-3  # a level above this fraction of the peak ... [-]
 FLAT_SIGMA = 5.0  # ... and this many standard errors is a problem [-]
+BASELINE_STEP_WINDOWS_S = (1.0e-3, 4.0e-3, 16.0e-3)  # a line and a step fitted to this long of quiet samples on
+#                                                    either side of every candidate instant ... [s]
+BASELINE_STEP_GRID_S = 0.25e-3  # ... the candidates this far apart (and the first quiet sample after each gap) [s]
+BASELINE_STEP_SIGMA = 7.0  # ... a step of this many standard errors (a scan of many instants) ... [-]
+BASELINE_STEP_FRACTION = 5.0e-4  # ... and this fraction of the peak is a step in the baseline [-]
+BASELINE_STEP_ACROSS_SIGMA = 4.5  # across the contact, with every quiet sample on either side: one test, not a scan [-]
 MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
+PLATEAU_END_FRACTION = 0.1  # the force over this fraction of TC before the end (at least PLATEAU_END_MIN samples) ... [-]
+PLATEAU_END_MIN = 8  # [samples]
+PLATEAU_END_FALL = 0.25  # ... that falls by less than this fraction of its level ... [-]
+PLATEAU_END_LEVEL = 0.01  # ... at a level above this fraction of the peak and 10 standard errors: a plateau [-]
 END_CHECK_S = 0.2e-3  # the samples this long inside each end of the contact ... [s]
 END_CHECK_SIGMA = 3.0  # ... must average above this many standard errors [-]
 RING_GAP_S = 0.1e-3  # the ringing check starts this long after the contact end [s]
@@ -826,6 +836,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
         staircase = _adc_step_problems(it.x, fs, it.fit.noise, adc_step, contact, t0_s, scale)
+        staircase += _baseline_step_problems(it.x, fs, it.fit, contact, t0_s, scale)
+        staircase += _plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s)
         problems.extend(staircase)
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
@@ -1635,6 +1647,101 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
                                    f"({100 * excess / peak:.2g} % of the peak; "
                                    f"{_residual_where(y, fit.pre[qi], fit.post[qi], white, peak)})"))
     return out
+
+
+def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale) -> list[Problem]:
+    """A step in the level of the quiet baseline, which offset, drift, hum and decay cannot explain.
+
+    A DAQ's or an amplifier's offset can shift within the record (a relay or a light gate switching near the
+    wiring, a range change). The baseline fit then spreads the shift over the record as drift, and the corrected
+    signal sits a fraction of it off zero at the contact's ends: on a slow fade a shift of 0.1-0.4 % of the peak
+    moved the end by 1-2.4 % of TC with every level check passed (``python bench/step_map.py``). On the fit's quiet
+    samples (the contact and the events left out), clipped at ROBUST_SIGMA noise deviations so that a burst or a
+    spike weighs little, a line and a step are fitted to BASELINE_STEP_WINDOWS_S on either side of candidate
+    instants BASELINE_STEP_GRID_S apart (the line takes up what the global fit's drift made of the step); a step of
+    BASELINE_STEP_SIGMA standard errors and BASELINE_STEP_FRACTION of the peak is a problem. At the contact the two
+    sides are every quiet sample before and after it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the
+    contact when ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the
+    contact, which is then taken for the amplifier's undershoot: only the given time constant tells them apart."""
+    peak = float(contact.peak_V)
+    qi = np.flatnonzero(fit.quiet)
+    if not (peak > 0 and fit.noise > 0) or qi.size < 2 * MIN_QUIET_SAMPLES:
+        return []
+    lim = ROBUST_SIGMA * fit.noise
+    y = np.clip(x[qi], -lim, lim)
+    t = qi / fs
+    # prefix sums: every window's line-and-step fit in O(1)
+    c = [np.concatenate([[0.0], np.cumsum(q)]) for q in (np.ones(qi.size), t, t * t, y, t * y)]
+    grid = np.unique(np.concatenate([
+        np.searchsorted(t, np.arange(t[0], t[-1], BASELINE_STEP_GRID_S)),
+        np.flatnonzero(np.diff(qi) > 1) + 1]))  # and the first sample after every gap (the contact's, an event's)
+    grid = grid[(grid > 0) & (grid < qi.size)]
+    pre_n = int(np.count_nonzero(fit.pre[qi]))
+    best = None  # (standard errors, step [V / scale], last sample before, first after)
+    tests = [(max(int(round(w * fs)), MIN_QUIET_SAMPLES), grid, BASELINE_STEP_SIGMA) for w in BASELINE_STEP_WINDOWS_S]
+    if 0 < pre_n < qi.size and np.all(fit.post[qi[pre_n:]]):
+        tests.append((qi.size, np.array([pre_n]), BASELINE_STEP_ACROSS_SIGMA))
+    for w, j, sigma in tests:
+        lo, hi = np.maximum(j - w, 0), np.minimum(j + w, qi.size)
+        sides = []
+        for a, b in ((lo, j), (j, hi)):
+            n, st, stt, sy, sty = (ck[b] - ck[a] for ck in c)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                sides.append((n, st / n, sy / n, stt - st * st / n, sty - st * sy / n))
+        (nl, tl, yl, sxx_l, sxy_l), (nr, tr, yr, sxx_r, sxy_r) = sides
+        ok = (nl >= MIN_QUIET_SAMPLES) & (nr >= MIN_QUIET_SAMPLES) & (sxx_l + sxx_r > 0)
+        if not ok.any():
+            continue
+        nl, tl, yl, nr, tr, yr = nl[ok], tl[ok], yl[ok], nr[ok], tr[ok], yr[ok]
+        sxx, slope = sxx_l[ok] + sxx_r[ok], (sxy_l[ok] + sxy_r[ok]) / (sxx_l[ok] + sxx_r[ok])
+        h = (yr - yl) - slope * (tr - tl)
+        se = fit.noise * np.sqrt(1.0 / nl + 1.0 / nr + (tr - tl) ** 2 / sxx)
+        z = np.abs(h) / se
+        z[np.abs(h) < BASELINE_STEP_FRACTION * peak] = 0.0
+        k = int(np.argmax(z))
+        if z[k] >= sigma and (best is None or z[k] > best[0]):
+            at = int(j[ok][k])
+            best = (float(z[k]), float(h[k]), int(qi[at - 1]), int(qi[at]))
+    if best is None:
+        return []
+    z, d, before, after = best
+    return [Problem(ProblemKind.BASELINE_STEP,
+                    f"step in the baseline: the corrected signal's level shifts by {d * scale * 1e3:.3g} mV "
+                    f"({100 * abs(d) / peak:.2g} % of the peak, {z:.3g} standard errors) between "
+                    f"{1e3 * (before / fs + t0_s):.4g} and {1e3 * (after / fs + t0_s):.4g} ms, which offset, drift, "
+                    "hum and decay do not explain; the baseline under the contact is uncertain")]
+
+
+def _plateau_end_problems(x, fs, noise, contact: ContactResult, t0_s) -> list[Problem]:
+    """A contact that ends on a plateau: the force flat over its last PLATEAU_END_FRACTION of TC, then gone.
+
+    A ball's force falls into its end (a fade to zero, or the model's drop at 2 mm of compression after a steep
+    fall). A flat stretch at a level of PLATEAU_END_LEVEL of the peak or more that falls by less than
+    PLATEAU_END_FALL of its level is not a ball's: it is what a step down in the baseline shortly after the contact
+    leaves when the amplifier's decay is estimated, kappa taking the step for the undershoot and the decay
+    correction lifting the record between the contact and the step into a shelf of force (``python
+    bench/step_map.py --n 400 --seed 2`` trace 2:95: a step of -3.1 % of the peak 1.7 ms after the end, TC +42 %)."""
+    peak = float(contact.peak_V)
+    tc = contact.contact_time_s
+    if not (peak > 0 and noise > 0 and tc > 0):
+        return []
+    b = int(math.floor((contact.end_s - t0_s) * fs))  # the last sample inside the contact
+    n = max(int(round(PLATEAU_END_FRACTION * tc * fs)), PLATEAU_END_MIN)
+    a = max(b - n, int(math.ceil((contact.start_s - t0_s) * fs)))
+    if b - a < PLATEAU_END_MIN or b >= x.size:
+        return []
+    y = x[a:b]  # less the last sample (a jump's)
+    u = np.arange(y.size) - 0.5 * (y.size - 1)
+    slope = float(np.dot(u, y) / np.dot(u, u))
+    level, fall = float(np.mean(y)), -slope * y.size
+    if level > PLATEAU_END_LEVEL * peak and level > 10.0 * noise / math.sqrt(y.size) \
+            and fall < PLATEAU_END_FALL * level:
+        return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                        f"contact end not determined: the force is flat over the last {1e3 * y.size / fs:.2g} ms "
+                        f"before it, at {100 * level / peak:.2g} % of the peak, falling by {100 * fall / level:.2g} % "
+                        "of that: not a ball's fade; a step down in the baseline just after the contact taken for the "
+                        "amplifier's undershoot? (give plate.time_constant_s)")]
+    return []
 
 
 def _residual_where(y, pre, post, white, peak) -> str:

@@ -54,6 +54,7 @@ class ProblemKind(enum.Enum):
     UNDERSHOOT_NOT_MEASURABLE = "undershoot_not_measurable"
     BASELINE_OFF_ZERO = "baseline_off_zero"
     BASELINE_RESIDUAL = "baseline_residual"
+    BASELINE_STEP = "baseline_step"
     CONTACT_END_UNDETERMINED = "contact_end_undetermined"
     TOO_FEW_SAMPLES = "too_few_samples"
     PLATE_RINGING = "plate_ringing"
@@ -127,6 +128,7 @@ _MESSAGE_STARTS = {
     ProblemKind.UNDERSHOOT_NOT_MEASURABLE: r"charge-amplifier undershoot not measurable",
     ProblemKind.BASELINE_OFF_ZERO: r"corrected signal .* off zero",
     ProblemKind.BASELINE_RESIDUAL: r"quiet baseline not explained",
+    ProblemKind.BASELINE_STEP: r"step in the baseline",
     ProblemKind.CONTACT_END_UNDETERMINED: r"contact (start|end) not determined",
     ProblemKind.TOO_FEW_SAMPLES: r"only \S+ samples in the contact",
     ProblemKind.PLATE_RINGING: r"plate ringing",
