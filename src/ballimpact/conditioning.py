@@ -46,8 +46,11 @@ Integrity checks (``ConditionedSignal.problems``, each one a reason to exclude
 the impact): decay not measurable or not an amplifier decay, corrected signal
 before or after the contact not flat at zero, mains frequency not resolved (or
 hum in a record shorter than one mains period), a quiet residual that is more
-than white noise, plate ringing during the contact (a spectral line) or after
-it, a peak that is one of the plate's swings (or lifted by its ringing from the
+than white noise, a step in the quiet baseline's level (the fit would spread
+it over the record as drift) or across the contact when the time constant is
+given, a contact that ends on a flat shelf of force (a step just after it
+taken for the amplifier's undershoot), plate ringing during the contact (a
+spectral line) or after it, a peak that is one of the plate's swings (or lifted by its ringing from the
 force's jump), a peak between samples (the
 largest sample on a steep ramp, or the first of the contact), force
 below zero after the contact (the plate swinging back), a contact end that
@@ -836,8 +839,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(_short_record_hum(it.x, fs, it.fit, tuple(f for f in candidates if f > 0),
                                           float(contact.peak_V), scale))
         staircase = _adc_step_problems(it.x, fs, it.fit.noise, adc_step, contact, t0_s, scale)
-        staircase += _baseline_step_problems(it.x, fs, it.fit, contact, t0_s, scale)
-        staircase += _plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s)
+        staircase += _baseline_step_problems(it.x, fs, it.fit, contact, t0_s, scale, tau_given=tau_s is not None)
         problems.extend(staircase)
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
@@ -847,8 +849,11 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
                             + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
-            return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, at_ends + staircase, t0_s,
-                           scale, spikes, it.mains, mains_source, it.contact_integral, plate)
+            # the undone force's own noise: the ringing's plateau check on its final contact
+            plateau = _plateau_end_problems(y, fs, robust_noise(np.diff(y)) / math.sqrt(2.0), contact, t0_s)
+            return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, at_ends + staircase + plateau,
+                           t0_s, scale, spikes, it.mains, mains_source, it.contact_integral, plate)
+        problems.extend(_plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
     if contact.found and not problems:  # last, on a trace nothing else excludes: its fits cost a few ms
         problems = _front_lowpass(it.x, fs, it.fit.noise, float(contact.peak_V), (contact.start_s - t0_s) * fs,
                                   (contact.end_s - t0_s) * fs, contact.contact_time_s)
@@ -1649,7 +1654,8 @@ def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=P
     return out
 
 
-def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale) -> list[Problem]:
+def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale,
+                            tau_given: bool) -> list[Problem]:
     """A step in the level of the quiet baseline, which offset, drift, hum and decay cannot explain.
 
     A DAQ's or an amplifier's offset can shift within the record (a relay or a light gate switching near the
@@ -1677,11 +1683,9 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
         np.flatnonzero(np.diff(qi) > 1) + 1]))  # and the first sample after every gap (the contact's, an event's)
     grid = grid[(grid > 0) & (grid < qi.size)]
     pre_n = int(np.count_nonzero(fit.pre[qi]))
-    best = None  # (standard errors, step [V / scale], last sample before, first after)
-    tests = [(max(int(round(w * fs)), MIN_QUIET_SAMPLES), grid, BASELINE_STEP_SIGMA) for w in BASELINE_STEP_WINDOWS_S]
-    if 0 < pre_n < qi.size and np.all(fit.post[qi[pre_n:]]):
-        tests.append((qi.size, np.array([pre_n]), BASELINE_STEP_ACROSS_SIGMA))
-    for w, j, sigma in tests:
+
+    def steps(w, j):
+        """(step [V / scale], standard errors) of the line-and-step fit over w quiet samples either side of j."""
         lo, hi = np.maximum(j - w, 0), np.minimum(j + w, qi.size)
         sides = []
         for a, b in ((lo, j), (j, hi)):
@@ -1689,19 +1693,30 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
             with np.errstate(invalid="ignore", divide="ignore"):
                 sides.append((n, st / n, sy / n, stt - st * st / n, sty - st * sy / n))
         (nl, tl, yl, sxx_l, sxy_l), (nr, tr, yr, sxx_r, sxy_r) = sides
-        ok = (nl >= MIN_QUIET_SAMPLES) & (nr >= MIN_QUIET_SAMPLES) & (sxx_l + sxx_r > 0)
-        if not ok.any():
-            continue
-        nl, tl, yl, nr, tr, yr = nl[ok], tl[ok], yl[ok], nr[ok], tr[ok], yr[ok]
-        sxx, slope = sxx_l[ok] + sxx_r[ok], (sxy_l[ok] + sxy_r[ok]) / (sxx_l[ok] + sxx_r[ok])
-        h = (yr - yl) - slope * (tr - tl)
-        se = fit.noise * np.sqrt(1.0 / nl + 1.0 / nr + (tr - tl) ** 2 / sxx)
-        z = np.abs(h) / se
+        sxx = sxx_l + sxx_r
+        with np.errstate(invalid="ignore", divide="ignore"):
+            h = (yr - yl) - (sxy_l + sxy_r) / sxx * (tr - tl)
+            z = np.abs(h) / (fit.noise * np.sqrt(1.0 / nl + 1.0 / nr + (tr - tl) ** 2 / sxx))
+        z[~((nl >= MIN_QUIET_SAMPLES) & (nr >= MIN_QUIET_SAMPLES) & (sxx > 0))] = 0.0
+        return h, np.nan_to_num(z)
+
+    widths = [max(int(round(w * fs)), MIN_QUIET_SAMPLES) for w in BASELINE_STEP_WINDOWS_S]
+    best = None  # (standard errors, step [V / scale], last sample before, first after)
+    for i, w in enumerate(widths):
+        h, z = steps(w, grid)
         z[np.abs(h) < BASELINE_STEP_FRACTION * peak] = 0.0
-        k = int(np.argmax(z))
-        if z[k] >= sigma and (best is None or z[k] > best[0]):
-            at = int(j[ok][k])
-            best = (float(z[k]), float(h[k]), int(qi[at - 1]), int(qi[at]))
+        for k in np.argsort(z)[::-1][:8]:  # the largest few: a hump (a small second contact) is not a step
+            if z[k] < BASELINE_STEP_SIGMA or (best is not None and z[k] <= best[0]):
+                break
+            wider = [steps(4 * w2, grid[k:k + 1]) for w2 in widths[i:]]  # the shift must hold further out
+            if all(hw[0] * h[k] > 0 and abs(hw[0]) >= 0.5 * abs(h[k]) and zw[0] >= 3.0 for hw, zw in wider):
+                best = (float(z[k]), float(h[k]), int(qi[grid[k] - 1]), int(qi[grid[k]]))
+                break
+    if tau_given and 0 < pre_n < qi.size and np.all(fit.post[qi[pre_n:]]):
+        h, z = steps(qi.size, np.array([pre_n]))
+        if z[0] >= BASELINE_STEP_ACROSS_SIGMA and abs(h[0]) >= BASELINE_STEP_FRACTION * peak \
+                and (best is None or z[0] > best[0]):
+            best = (float(z[0]), float(h[0]), int(qi[pre_n - 1]), int(qi[pre_n]))
     if best is None:
         return []
     z, d, before, after = best
@@ -1713,7 +1728,8 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
 
 
 def _plateau_end_problems(x, fs, noise, contact: ContactResult, t0_s) -> list[Problem]:
-    """A contact that ends on a plateau: the force flat over its last PLATEAU_END_FRACTION of TC, then gone.
+    """A contact that ends on a plateau: the force flat over its last PLATEAU_END_FRACTION of TC, then gone (on the
+    final force: a plate's undone, whose ringing would make any end's stretch rise and fall).
 
     A ball's force falls into its end (a fade to zero, or the model's drop at 2 mm of compression after a steep
     fall). A flat stretch at a level of PLATEAU_END_LEVEL of the peak or more that falls by less than
@@ -1735,7 +1751,7 @@ def _plateau_end_problems(x, fs, noise, contact: ContactResult, t0_s) -> list[Pr
     slope = float(np.dot(u, y) / np.dot(u, u))
     level, fall = float(np.mean(y)), -slope * y.size
     if level > PLATEAU_END_LEVEL * peak and level > 10.0 * noise / math.sqrt(y.size) \
-            and fall < PLATEAU_END_FALL * level:
+            and abs(fall) < PLATEAU_END_FALL * level:
         return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                         f"contact end not determined: the force is flat over the last {1e3 * y.size / fs:.2g} ms "
                         f"before it, at {100 * level / peak:.2g} % of the peak, falling by {100 * fall / level:.2g} % "
