@@ -138,8 +138,8 @@ BASELINE_STEP_SIGMA = 7.0  # ... a step of this many standard errors (a scan of 
 BASELINE_STEP_FRACTION = 5.0e-4  # ... and this fraction of the peak is a step in the baseline [-]
 BASELINE_STEP_ACROSS_SIGMA = 4.5  # across the contact, with every quiet sample on either side: one test, not a scan [-]
 MIN_CONTACT_SAMPLES = 20  # fewest samples across the contact [samples]
-PLATEAU_END_FRACTION = 0.1  # the force over this fraction of TC before the end (at least PLATEAU_END_MIN samples) ... [-]
-PLATEAU_END_MIN = 8  # [samples]
+PLATEAU_END_FRACTION = 0.1  # the force over this fraction of TC before the end (PLATEAU_END_MIN samples or more) [-]
+PLATEAU_END_MIN = 8  # fewest samples of that stretch [samples]
 PLATEAU_END_FALL = 0.25  # ... that falls by less than this fraction of its level ... [-]
 PLATEAU_END_LEVEL = 0.01  # ... at a level above this fraction of the peak and 10 standard errors: a plateau [-]
 END_CHECK_S = 0.2e-3  # the samples this long inside each end of the contact ... [s]
@@ -1754,7 +1754,7 @@ def _plateau_end_problems(x, fs, noise, contact: ContactResult, t0_s) -> list[Pr
             and abs(fall) < PLATEAU_END_FALL * level:
         return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                         f"contact end not determined: the force is flat over the last {1e3 * y.size / fs:.2g} ms "
-                        f"before it, at {100 * level / peak:.2g} % of the peak, falling by {100 * fall / level:.2g} % "
+                        f"before it, at {100 * level / peak:.2g} % of the peak, falling by {100 * fall / level:+.2g} % "
                         "of that: not a ball's fade; a step down in the baseline just after the contact taken for the "
                         "amplifier's undershoot? (give plate.time_constant_s)")]
     return []
