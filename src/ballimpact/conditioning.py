@@ -1665,7 +1665,9 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
     samples (the contact and the events left out), clipped at ROBUST_SIGMA noise deviations so that a burst or a
     spike weighs little, a line and a step are fitted to BASELINE_STEP_WINDOWS_S on either side of candidate
     instants BASELINE_STEP_GRID_S apart (the line takes up what the global fit's drift made of the step); a step of
-    BASELINE_STEP_SIGMA standard errors and BASELINE_STEP_FRACTION of the peak is a problem. At the contact the two
+    BASELINE_STEP_SIGMA standard errors and BASELINE_STEP_FRACTION of the peak that still holds, half its size and
+    3 standard errors, when fitted over four times as long (a small second contact below the event mask's 1 % of the
+    peak is a hump, not a step) is a problem. At the contact the two
     sides are every quiet sample before and after it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the
     contact when ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the
     contact, which is then taken for the amplifier's undershoot: only the given time constant tells them apart."""
