@@ -1841,7 +1841,7 @@ def _step_problems(c):
 
 
 @pytest.mark.parametrize("where, tau_given", [
-    ("before", False),  # in the pre-trigger, 10 ms before the contact: the block scan
+    ("before", False),  # in the pre-trigger, 10 ms before the contact: the scan of instants
     ("after", False),  # 12 ms after the end, in the quiet record the decay is fitted on
     ("inside", True),  # within the contact with the time constant given: the levels either side differ
 ])
@@ -1866,8 +1866,9 @@ def test_step_in_the_baseline_is_a_problem_naming_its_size(where, tau_given, see
 
 
 def test_step_check_passes_bursts_spikes_and_a_step_within_the_noise():
-    """The blocks' medians pass a burst of 5 samples of 30 noise deviations in the quiet record; a shift of 0.02 %
-    of the peak (below BASELINE_STEP_FRACTION) is not a problem however many standard errors it is."""
+    """The fits on residuals clipped at 5 noise deviations pass a burst of 5 samples of 30 noise deviations in the
+    quiet record; a shift of 0.02 % of the peak (below BASELINE_STEP_FRACTION) is not a problem however many
+    standard errors it is."""
     v, fs, truth = make_trace(tau_s=0.5, seed=3, **CHAIN)
     burst = np.array(v, dtype=float)
     k = int(np.searchsorted(truth.time_s, truth.start_s - 8e-3))

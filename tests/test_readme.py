@@ -20,7 +20,6 @@ from ballimpact.cli import build_parser
 from ballimpact.session import read_session
 from workflow_helpers import REPO
 
-
 README = REPO / "README.md"
 BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)
 

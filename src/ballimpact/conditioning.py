@@ -50,8 +50,8 @@ than white noise, a step in the quiet baseline's level (the fit would spread
 it over the record as drift) or across the contact when the time constant is
 given, a contact that ends on a flat shelf of force (a step just after it
 taken for the amplifier's undershoot), plate ringing during the contact (a
-spectral line) or after it, a peak that is one of the plate's swings (or lifted by its ringing from the
-force's jump), a peak between samples (the
+spectral line) or after it, a peak that is one of the plate's swings (or
+lifted by its ringing from the force's jump), a peak between samples (the
 largest sample on a steep ramp, or the first of the contact), force
 below zero after the contact (the plate swinging back), a contact end that
 moves when fitted again from higher samples (a tail fading into the noise), a
@@ -1667,9 +1667,8 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
     instants BASELINE_STEP_GRID_S apart (the line takes up what the global fit's drift made of the step); a step of
     BASELINE_STEP_SIGMA standard errors and BASELINE_STEP_FRACTION of the peak that still holds, half its size and
     3 standard errors, when fitted over four times as long (a small second contact below the event mask's 1 % of the
-    peak is a hump, not a step) is a problem. At the contact the two
-    sides are every quiet sample before and after it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the
-    contact when ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the
+    peak is a hump, not a step) is a problem. At the contact the two sides are every quiet sample before and after
+    it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the contact when ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the
     contact, which is then taken for the amplifier's undershoot: only the given time constant tells them apart."""
     peak = float(contact.peak_V)
     qi = np.flatnonzero(fit.quiet)
