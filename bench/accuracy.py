@@ -5,7 +5,10 @@
 
 Prints, over the good impacts, the mean and largest error of TC, kCAL, peak force,
 COR, largest displacement and time to peak, and whether every planted fault was
-excluded with the expected reason.
+excluded with the expected reason. When the session's ``.truth.yaml`` names the sensor
+chain's amplifier, also the error of the time constants estimated from the traces and
+the RMS of (estimate - truth) / standard error, which is about 1 when the standard
+errors the archive records are honest.
 """
 
 from __future__ import annotations
@@ -15,7 +18,9 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+import yaml
 
 from ballimpact.processing import apply_calibration_check, iter_process
 from ballimpact.session import read_session
@@ -56,7 +61,25 @@ def measure(session_dir: Path) -> dict:
             err = 100 * err / truth.loc[ok, col].astype(float)
         unit = "%" if relative else ("ms" if col.endswith("_ms") else "")
         out[col] = {"mean": float(err.mean()), "max_abs": float(err.abs().max()), "unit": unit}
+    out["time_constant"] = _time_constant(session_dir, [r for r in results if r.impact_id in set(ok)])
     return out
+
+
+def _time_constant(session_dir: Path, good) -> dict | None:
+    """Error [%] of the estimated amplifier time constants and their z-scores' RMS [-], or None."""
+    truth_yaml = session_dir.parent / f"{session_dir.name}.truth.yaml"
+    if not truth_yaml.is_file():
+        return None
+    chain = (yaml.safe_load(truth_yaml.read_text(encoding="utf-8")) or {}).get("sensor_chain", {})
+    true_tau = chain.get("amplifier_time_constant_s")
+    estimated = [r for r in good if r.tau_source == "estimated"]
+    if true_tau is None or not estimated:
+        return None
+    tau = np.array([r.tau_s for r in estimated])
+    z = (tau - true_tau) / np.array([r.tau_se_s for r in estimated])
+    err = 100 * (tau - true_tau) / true_tau
+    return {"true_s": float(true_tau), "n_estimated": len(estimated), "mean": float(err.mean()),
+            "max_abs": float(np.abs(err).max()), "z_rms": float(np.sqrt(np.mean(z**2)))}
 
 
 def main():
@@ -74,6 +97,10 @@ def main():
     for col in QUANTITIES:
         e = out[col]
         print(f"  {col:22s} error mean {e['mean']:+.4f} {e['unit']:2s}  largest {e['max_abs']:.4f} {e['unit']}")
+    tau = out["time_constant"]
+    if tau is not None:
+        print(f"  amplifier time constant ({tau['true_s']:g} s), estimated in {tau['n_estimated']}: error mean "
+              f"{tau['mean']:+.2f} %, largest {tau['max_abs']:.2f} %; RMS of error / standard error {tau['z_rms']:.2f}")
 
 
 if __name__ == "__main__":

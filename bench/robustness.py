@@ -67,6 +67,7 @@ def run_one(args):
     tr = zoo.trace_for(seed, index)
     t1 = time.perf_counter()
     c1 = time.process_time()
+    result = None
     try:
         result, j = zoo.run_trace(tr, _scratch)
         category, reason, errors, wrong = j.category, j.reason, j.errors, j.wrong
@@ -80,7 +81,37 @@ def run_one(args):
         "peak_is_spike": tr.truth.peak_is_spike, "labels": "|".join(zoo.factor_labels(tr.rig, tr.truth)),
         "factors": zoo.describe(tr.rig), "n_samples": tr.voltage_V.size,
         "make_s": t1 - t0, "process_s": time.perf_counter() - t1, "process_cpu_s": time.process_time() - c1,
+        "tau_true_s": tr.rig.tau_s, "tau_given": tr.rig.tau_known, "tau_s": getattr(result, "tau_s", math.nan),
+        "tau_se_s": getattr(result, "tau_se_s", math.nan), "tau_source": getattr(result, "tau_source", ""),
     }
+
+
+def time_constants(records):
+    """How honest the standard errors of the estimated time constants are, on the ok traces.
+
+    In kappa = 1 / tau [1/s] (the quantity the baseline fit estimates; 0 for a DC-coupled
+    rig): z = (kappa - kappa_true) / se(kappa), whose RMS is about 1 for honest standard
+    errors, by the true time constant's band.
+    """
+    bands = defaultdict(list)
+    for r in records:
+        if not (r["category"].startswith("ok_") and r["tau_source"] == "estimated" and r["tau_se_s"] > 0):
+            continue
+        true = float(r["tau_true_s"])
+        kappa, kappa_true = 1.0 / r["tau_s"], (0.0 if math.isinf(true) else 1.0 / true)
+        z = (kappa - kappa_true) / (r["tau_se_s"] / r["tau_s"] ** 2)
+        band = "DC" if math.isinf(true) else "0.01-0.1 s" if true < 0.1 else "0.1-1 s" if true < 1 else "1-100 s"
+        bands[band].append(z)
+    if not bands:
+        return ""
+    lines = ["", "#### time constants estimated on the ok traces: (kappa - true) / standard error", "",
+             "| true time constant | traces | RMS of z | abs(z) > 3 |", "|---|---|---|---|"]
+    for band in ("0.01-0.1 s", "0.1-1 s", "1-100 s", "DC"):
+        z = bands.get(band)
+        if z:
+            rms = math.sqrt(sum(v * v for v in z) / len(z))
+            lines.append(f"| {band} | {len(z)} | {rms:.2f} | {sum(abs(v) > 3 for v in z)} |")
+    return "\n".join(lines)
 
 
 def table(records):
@@ -234,7 +265,7 @@ def main(argv=None):
                f"({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU: writing, reading and processing "
                "the trace, less sensitive to other load)")
     text = (markdown(records, title) + "\n\n" + summary + "\n" + exclusions(records, args.worst)
-            + "\n" + offenders(records, args.worst) + "\n")
+            + "\n" + time_constants(records) + "\n" + offenders(records, args.worst) + "\n")
     print(text)
     stem = OUT / f"robustness-s{args.seed}-n{n}"
     stem.with_suffix(".md").write_text(text, encoding="utf-8")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import math
 
 import numpy as np
 import xarray as xr
@@ -93,6 +94,13 @@ def _measured(impact_id, ball, vin, rng, *, status="ok", reason="", keep_series=
         mass_kg=p.mass_kg,
         raw_time_s=raw_t,
         raw_voltage_V=raw_v,
+        # the raw trace above: white noise, no hum, no amplifier decay, no plate ringing
+        noise_rms_V=0.004,
+        hum_amplitude_V=0.0,
+        mains_hz=0.0,
+        mains_source="none",
+        tau_s=math.inf,
+        tau_source="none",
     )
     if keep_series:
         r.time_s = t

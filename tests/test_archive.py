@@ -1,6 +1,7 @@
 """The netCDF archive: schema, tables, metadata, round trip, compression and atomic writes."""
 
 import json
+import math
 import re
 
 import netCDF4
@@ -255,6 +256,33 @@ def test_all_excluded_and_empty(tmp_path):
     write_dataset(empty, tmp_path / "empty.nc")
     assert open_dataset(tmp_path / "empty.nc").sizes["impact"] == 0
     assert list(impacts_table(empty).columns)[: len(SPEC_IMPACT_COLUMNS)] == SPEC_IMPACT_COLUMNS
+
+
+def test_conditioning_of_each_trace_is_archived(tmp_path):
+    results = [
+        impact_result("est", "pressurised", noise_rms_V=0.0015, hum_amplitude_V=0.012, mains_hz=50.0,
+                      mains_source="detected", tau_s=0.8, tau_se_s=0.005, tau_source="estimated",
+                      plate_resonance_hz=18_500.0, plate_damping_ratio=0.1),
+        impact_result("given", "pressurised", noise_rms_V=0.002, hum_amplitude_V=0.0, mains_hz=0.0,
+                      mains_source="none", tau_s=2.5, tau_source="given"),
+        impact_result("dc", "pressurised", noise_rms_V=0.002, hum_amplitude_V=0.003, mains_hz=60.0,
+                      mains_source="given", tau_s=math.inf, tau_source="none"),
+        impact_result("early", "pressurised", status="excluded", reason="missing gate time gate_in_1_s"),
+    ]
+    write_dataset(impacts_dataset(results), tmp_path / "c.nc")
+    back = open_dataset(tmp_path / "c.nc")
+    assert_allclose(back["amplifier_time_constant_s"].values, [0.8, 2.5, np.nan, np.nan], rtol=0)  # inf: none undone
+    assert_allclose(back["amplifier_time_constant_se_s"].values, [0.005, np.nan, np.nan, np.nan], rtol=0)
+    assert list(back["amplifier_time_constant_source"].values) == ["estimated", "given", "none", ""]
+    assert_allclose(back["mains_frequency_hz"].values, [50.0, 0.0, 60.0, np.nan], rtol=0)
+    assert list(back["mains_source"].values) == ["detected", "none", "given", ""]
+    assert_allclose(back["noise_rms_V"].values, [0.0015, 0.002, 0.002, np.nan], rtol=0)
+    assert_allclose(back["hum_amplitude_V"].values, [0.012, 0.0, 0.003, np.nan], rtol=0)
+    assert_allclose(back["plate_resonance_hz"].values, [18_500.0, np.nan, np.nan, np.nan], rtol=0)
+    assert_allclose(back["plate_damping_ratio"].values, [0.1, np.nan, np.nan, np.nan], rtol=0)
+    assert back["amplifier_time_constant_s"].attrs["units"] == "s"
+    assert back["noise_rms_V"].attrs["coverage_content_type"] == "physicalMeasurement"
+    assert back["mains_source"].attrs["coverage_content_type"] == "auxiliaryInformation"
 
 
 def test_max_raw_samples_decimates():

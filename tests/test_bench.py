@@ -56,3 +56,28 @@ def test_exclusion_table_counts_the_traces_that_were_right_all_the_same():
     assert table.index("| peak force between samples | 3 | 1 |") < table.index(
         "| contact end not determined to # % | 1 | 0 |")
     assert robustness.exclusions(records[5:], 10) == ""
+
+
+def _tau(category, source, true, tau, se):
+    return {"category": category, "tau_source": source, "tau_true_s": true, "tau_s": tau, "tau_se_s": se}
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_time_constant_table_judges_the_standard_errors_in_kappa():
+    robustness = bench_module("robustness")
+    inf, nan = float("inf"), float("nan")
+    # kappa = 1 / tau, se(kappa) = se(tau) / tau^2: 1/0.05 = 20 per s, the estimate 1/0.04 = 25 per s with
+    # se(kappa) = 0.0004 / 0.0016 = 0.25 per s -> z = 20
+    records = [
+        _tau("ok_right", "estimated", 0.05, 0.04, 0.0004),  # z = 20
+        _tau("ok_wrong", "estimated", 0.05, 0.05, 0.001),  # z = 0
+        _tau("ok_right", "estimated", inf, 10.0, 50.0),  # DC rig: kappa 0.1 per s, se 0.5 -> z = 0.2
+        _tau("excluded_measurable", "estimated", 0.5, 0.4, 0.001),  # not ok: not counted
+        _tau("ok_right", "given", 0.5, 0.5, nan),  # given: not counted
+        _tau("ok_right", "none", 200.0, inf, nan),  # not corrected: not counted
+    ]
+    table = robustness.time_constants(records).splitlines()
+    assert f"| 0.01-0.1 s | 2 | {(20.0**2 / 2) ** 0.5:.2f} | 1 |" in table
+    assert "| DC | 1 | 0.20 | 0 |" in table
+    assert not any(line.startswith(("| 0.1-1 s", "| 1-100 s")) for line in table)
+    assert robustness.time_constants(records[3:]) == ""

@@ -195,6 +195,49 @@ def test_bad_kcal_range_is_a_session_fault(synth_session, tmp_path):
         read_session(copy)
 
 
+# ------------------------------------------------------------ how each trace was conditioned
+
+
+def test_conditioning_recorded_against_the_sensor_chain(processed):
+    # Both fixtures use SensorChain()'s amplifier, hum and noise (synth.py's defaults, written
+    # in session.yaml only as daq.mains_hz): 0.8 s, 12 mV of 50 Hz hum, 1.5 mV of white noise.
+    from ballimpact.synth import SensorChain
+
+    chain = SensorChain()
+    _, results, _ = processed
+    good = [r for r in results if r.status == "ok"]
+    get = lambda name: np.array([getattr(r, name) for r in good])  # noqa: E731
+    assert {r.tau_source for r in good} == {"estimated"}
+    tau, se = get("tau_s"), get("tau_se_s")
+    assert np.all(se > 0) and np.all(se < 0.02 * chain.amplifier_time_constant_s)
+    # an honest standard error: the estimates scatter about the truth by about one of them
+    z = (tau - chain.amplifier_time_constant_s) / se
+    assert np.all(np.abs(z) < 4.5), z
+    assert 0.6 < np.sqrt(np.mean(z**2)) < 1.8  # 16 draws of N(0, 1): 0.65-1.35 at 99 %
+    assert {r.mains_source for r in good} == {"given"}
+    assert_allclose(get("mains_hz"), chain.mains_hz, rtol=0)
+    assert_allclose(get("hum_amplitude_V"), chain.hum_V, rtol=0.05)
+    assert_allclose(get("noise_rms_V"), chain.noise_V, rtol=0.1)
+
+
+def test_given_time_constant_is_used_and_mains_found_without_daq_mains_hz(synth_session):
+    import dataclasses
+
+    from ballimpact.synth import SensorChain
+
+    session_dir, truth = synth_session
+    session = read_session(session_dir)
+    chain = SensorChain()
+    session.meta = dataclasses.replace(session.meta, time_constant_s=chain.amplifier_time_constant_s, mains_hz=None)
+    good = [i for i in truth.index if not truth.loc[i, "fault"]][:3]
+    results = list(iter_process(session, impact_ids=good))
+    assert [r.status for r in results] == ["ok"] * 3, [r.reason for r in results]
+    for r in results:
+        assert (r.tau_source, r.tau_s) == ("given", chain.amplifier_time_constant_s)
+        assert np.isnan(r.tau_se_s)
+        assert (r.mains_source, r.mains_hz) == ("detected", chain.mains_hz)
+
+
 # ------------------------------------------------------------ wrong plate.polarity (issue 14)
 
 

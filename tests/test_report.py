@@ -232,3 +232,80 @@ def test_itf_comparison_states_prediction_measurement_and_cor_gap():
     assert re.search(r"model's COR 0\.851 is 0\.083 above the drop test's 0\.768", lines[0])
     assert "extrapolation: the slowest impact fitted was 14.0 m/s" in lines[0]
     assert "measured 103.8 cm, no model prediction (no fit)" in lines[1]
+
+
+# ------------------------------------------------------------ how the traces were conditioned
+
+
+def _conditioned(ds, *, tau, tau_se, tau_source, mains_hz, mains_source, hum_V=0.012, plate_hz=np.nan):
+    """``ds`` with every impact's conditioning variables set to the given values."""
+    out = ds.copy()
+    n = out.sizes["impact"]
+    for name, value in [("amplifier_time_constant_s", tau), ("amplifier_time_constant_se_s", tau_se),
+                        ("mains_frequency_hz", mains_hz), ("hum_amplitude_V", hum_V), ("noise_rms_V", 0.0015),
+                        ("plate_resonance_hz", plate_hz), ("plate_damping_ratio", 0.1)]:
+        out[name] = ("impact", np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy(), ds[name].attrs)
+    for name, value in [("amplifier_time_constant_source", tau_source), ("mains_source", mains_source)]:
+        out[name] = ("impact", np.array([value] * n, dtype=object), ds[name].attrs)
+    return out
+
+
+def test_conditioning_summary_of_the_fixture_says_no_decay_was_corrected(ds):
+    n_good = int((ds["status"].values == "ok").sum())
+    lines = report.conditioning_summary(ds)
+    assert lines[0].startswith(f"Charge-amplifier time constant not corrected in {n_good} (")
+    assert "Give plate.time_constant_s in session.yaml" in lines[0]
+    assert lines[1] == "No mains hum removed: none found in the traces."
+    assert len(lines) == 2  # no plate undone
+
+
+def test_conditioning_summary_of_estimated_and_given_time_constants(ds):
+    n = ds.sizes["impact"]
+    n_good = int((ds["status"].values == "ok").sum())
+    tau = np.linspace(0.78, 0.82, n)
+    estimated = _conditioned(ds, tau=tau, tau_se=0.005, tau_source="estimated", mains_hz=60.0,
+                             mains_source="detected", plate_hz=18_500.0)
+    good = estimated["status"].values == "ok"
+    lines = report.conditioning_summary(estimated)
+    med, lo, hi = np.median(tau[good]), tau[good].min(), tau[good].max()
+    assert lines[0].startswith(f"Charge-amplifier time constant estimated from the trace in {n_good} of {n_good} "
+                               f"good impacts, median {med:.3g} s ({lo:.3g}-{hi:.3g} s). Give plate.time_constant_s")
+    assert lines[1] == f"Mains hum at 60 Hz (detected) removed in {n_good} of {n_good} good impacts, fundamental 12 mV."
+    assert lines[2] == (f"Plate resonance identified from its ringing and undone in {n_good} of {n_good} good "
+                        "impacts, 18.5 kHz.")
+    given = _conditioned(ds, tau=2.5, tau_se=np.nan, tau_source="given", mains_hz=50.0, mains_source="given")
+    lines = report.conditioning_summary(given)
+    assert lines[0] == "Charge-amplifier decay undone with plate.time_constant_s = 2.5 s."
+    assert "50 Hz (given)" in lines[1]
+
+
+def test_conditioning_summary_needs_the_archive_variables(ds):
+    old = ds.drop_vars(["amplifier_time_constant_source"])  # an archive written before they were added
+    assert report.conditioning_summary(old) == []
+    fig = report._summary_page(old, report._session_info(old))
+    assert _text_inside_page(fig) == []
+
+
+@pytest.mark.parametrize(("tau", "tau_se", "source", "expected"), [
+    (0.803, 0.0049, "estimated", "time constant 0.803 +/- 0.005 s (estimated)"),
+    (2.5, np.nan, "given", "time constant 2.5 s (given)"),
+    (np.nan, np.nan, "none", "amplifier decay not corrected"),
+])
+def test_impact_conditioning_line(ds, tau, tau_se, source, expected):
+    c = _conditioned(ds, tau=tau, tau_se=tau_se, tau_source=source, mains_hz=50.0, mains_source="given",
+                     plate_hz=18_500.0)
+    assert report.impact_conditioning(c, 0) == (f"noise 1.5 mV, hum 12 mV at 50 Hz (given), {expected}, "
+                                                "plate resonance 18.5 kHz (damping ratio 0.1) undone")
+    early = _conditioned(ds, tau=tau, tau_se=tau_se, tau_source="", mains_hz=np.nan, mains_source="")
+    assert report.impact_conditioning(early, 0) == ""  # excluded before its trace was conditioned
+
+
+def test_summary_page_with_conditioning_sentences_fits():
+    full = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
+    full.attrs["session_description"] = "A long description of the session. " * 20
+    n = full.sizes["impact"]
+    full = _conditioned(full, tau=np.linspace(0.5, 1.5, n), tau_se=0.01, tau_source="estimated", mains_hz=50.0,
+                        mains_source="detected", plate_hz=np.linspace(9e3, 20e3, n))
+    fig = report._summary_page(full, report._session_info(full))
+    assert len(report.conditioning_summary(full)) == 3
+    assert _text_inside_page(fig) == []

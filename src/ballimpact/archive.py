@@ -7,7 +7,10 @@ Layout (one root group, see docs/outputs.md):
 * per impact: ``impact_id`` (coordinate), ``impact_ball``, ``status``, ``reason``,
   ``trace_file``, ``trace_sha256`` and the scalar results of :data:`IMPACT_COLUMNS`,
   plus ``impact_mass_kg`` and ``sample_rate_hz``, ``model_agreement_fraction`` and
-  ``model_rms_N``;
+  ``model_rms_N``, and how the trace was conditioned: ``noise_rms_V``,
+  ``hum_amplitude_V``, ``mains_frequency_hz`` / ``mains_source``,
+  ``amplifier_time_constant_s`` / ``_se_s`` / ``_source``, ``plate_resonance_hz`` and
+  ``plate_damping_ratio``;
 * per ball: the fitted parameters of :data:`PARAMETER_COLUMNS` (``mass_kg`` is the
   ball type's mass, which is why the per-impact mass is called ``impact_mass_kg``),
   ``ball_label``, ``fit_message``, ``ak_a_correlation`` and the paper's Table 2
@@ -98,7 +101,8 @@ _CONTENT_TYPES = (
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
      "modelResult"),
-    (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit"),
+    (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
+      "amplifier_time_constant_source"),
      "auxiliaryInformation"),
 )
 _PER_IMPACT_SCALARS = [
@@ -118,6 +122,14 @@ _PER_IMPACT_SCALARS = [
     ("sample_rate_hz", "sample_rate_hz"),
     ("vin_gate_m_s", "vin_gate_m_s"),
     ("vout_gate_m_s", "vout_gate_m_s"),
+    # how the trace was conditioned (ballimpact.conditioning): what a lab checks an exclusion against
+    ("noise_rms_V", "noise_rms_V"),
+    ("hum_amplitude_V", "hum_amplitude_V"),
+    ("mains_frequency_hz", "mains_hz"),
+    ("amplifier_time_constant_s", "tau_s"),
+    ("amplifier_time_constant_se_s", "tau_se_s"),
+    ("plate_resonance_hz", "plate_resonance_hz"),
+    ("plate_damping_ratio", "plate_damping_ratio"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
@@ -150,6 +162,18 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "kv_damping_N_s_m": ("N s m-1", "Kelvin-Voigt damping cB = -2 m ln(COR) / TC (Eq. 3)"),
     "impact_mass_kg": ("kg", "ball mass used for this impact"),
     "sample_rate_hz": ("Hz", "sample rate of the trace"),
+    "noise_rms_V": ("V", "noise standard deviation of the trace's quiet baseline (robust)"),
+    "hum_amplitude_V": ("V", "peak amplitude of the mains hum's fundamental removed (0 when none was fitted)"),
+    "mains_frequency_hz": ("Hz", "mains frequency whose hum was removed (0 when none was)"),
+    "mains_source": ("1", "where the mains frequency came from: given (daq.mains_hz), detected or none"),
+    "amplifier_time_constant_s": (
+        "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
+    "amplifier_time_constant_se_s": (
+        "s", "standard error of the time constant when estimated from the trace (NaN when given or none)"),
+    "amplifier_time_constant_source": (
+        "1", "where the time constant came from: given (plate.time_constant_s), estimated or none"),
+    "plate_resonance_hz": ("Hz", "plate resonance identified from its ringing and undone (NaN when none was)"),
+    "plate_damping_ratio": ("1", "damping ratio of the plate resonance undone (NaN when none was)"),
     "model_agreement_fraction": (
         "1",
         "share of the contact after 0.2 ms where the fitted model force is within 10 % of the measured peak",
@@ -236,6 +260,11 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
 }
 
 _TEXT_PER_IMPACT = ["impact_ball", "status", "reason", "trace_file", "trace_sha256"]
+_CONDITIONING_TEXT = [
+    # (archive name, ImpactResult attribute)
+    ("mains_source", "mains_source"),
+    ("amplifier_time_constant_source", "tau_source"),
+]
 
 
 def _text_array(values) -> np.ndarray:
@@ -369,7 +398,7 @@ class _ImpactColumns:
 
     def __init__(self):
         self.ids = []
-        self.text = {k: [] for k in _TEXT_PER_IMPACT}
+        self.text = {k: [] for k in _TEXT_PER_IMPACT + [name for name, _ in _CONDITIONING_TEXT]}
         self.scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
         self.series = {k: [] for k in _SERIES}
         self.raw_t, self.raw_v = [], []
@@ -392,8 +421,13 @@ class _ImpactColumns:
         self.text["reason"].append("" if status == "ok" else (r.reason or ""))
         self.text["trace_file"].append(trace_file)
         self.text["trace_sha256"].append(trace_sha)
+        for name, attr in _CONDITIONING_TEXT:
+            self.text[name].append(getattr(r, attr, "") or "")
         for name, attr in _PER_IMPACT_SCALARS:
-            self.scalars[name].append(_float(getattr(r, attr, math.nan)))
+            value = _float(getattr(r, attr, math.nan))
+            if name == "amplifier_time_constant_s" and math.isinf(value):
+                value = math.nan  # no decay corrected (inf in processing): NaN, with its source "none"
+            self.scalars[name].append(value)
         self._add_series(r, impact_id)
         self._add_raw(r, impact_id, max_raw_samples)
 

@@ -95,7 +95,11 @@ class ImpactResult:
     trace_file: str = ""
     noise_rms_V: float = math.nan
     hum_amplitude_V: float = math.nan
-    tau_s: float = math.nan
+    tau_s: float = math.nan  # charge-amplifier time constant [s] used (inf: no decay corrected)
+    tau_se_s: float = math.nan  # its standard error [s] when estimated from the trace, else NaN
+    tau_source: str = ""  # "given" (plate.time_constant_s), "estimated" or "none"
+    mains_hz: float = math.nan  # mains frequency [Hz] whose hum was removed (0: none)
+    mains_source: str = ""  # "given" (daq.mains_hz), "detected" or "none"
     plate_resonance_hz: float = math.nan  # the plate resonance undone (ballimpact.plate); NaN when none was
     plate_damping_ratio: float = math.nan
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -272,6 +276,12 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     res.noise_rms_V = cond.noise_rms_V
     res.hum_amplitude_V = cond.hum_amplitude_V
     res.tau_s = cond.tau_s
+    res.tau_source = cond.tau_source
+    kappa, kappa_se = (cond.baseline_coefficients.get(k, math.nan) for k in ("kappa_per_s", "kappa_se_per_s"))
+    if cond.tau_source == "estimated" and math.isfinite(kappa_se) and kappa > 0:
+        res.tau_se_s = kappa_se / kappa**2  # tau = 1 / kappa
+    res.mains_hz = cond.baseline_coefficients.get("mains_hz", math.nan)
+    res.mains_source = cond.baseline_coefficients.get("mains_source", "")
     if cond.plate is not None:
         res.plate_resonance_hz = cond.plate.frequency_hz
         res.plate_damping_ratio = cond.plate.damping_ratio

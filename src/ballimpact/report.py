@@ -18,7 +18,8 @@ from . import summary as _summary
 from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
 
-__all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "itf_comparison", "write_report", "report_page_count"]
+__all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "conditioning_summary", "impact_conditioning", "itf_comparison",
+           "write_report", "report_page_count"]
 
 #: A4 portrait page size [in].
 A4_PORTRAIT_IN = (8.27, 11.69)
@@ -236,6 +237,125 @@ def itf_comparison(ds) -> list[str]:
     return lines
 
 
+def _conditioned(ds, *, good_only: bool = False) -> np.ndarray:
+    """Positions of the impacts whose trace was conditioned (a time-constant source recorded);
+    with ``good_only`` those of the ok impacts when there are any (a faulty trace, clipped or
+    with two contacts, can bias its own estimates)."""
+    if "amplifier_time_constant_source" not in ds or not ds.sizes.get("impact", 0):
+        return np.array([], dtype=int)
+    done = ar.text_values(ds["amplifier_time_constant_source"].values) != ""
+    ok = done & (ar.text_values(ds["status"].values) == "ok")
+    return np.flatnonzero(ok if good_only and ok.any() else done)
+
+
+def _range_text(values, fmt, unit) -> str:
+    """``median X unit (lo-hi)`` of finite values; one value when they all round alike."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return f"- {unit}"
+    med, lo, hi = (format(x, fmt) for x in (np.median(v), v.min(), v.max()))
+    return f"{med} {unit}" if lo == hi else f"median {med} {unit} ({lo}-{hi} {unit})"
+
+
+def conditioning_summary(ds) -> list[str]:
+    """Sentences on how the session's traces were conditioned, for the summary page.
+
+    Over the good impacts (all conditioned traces when none is good): says where
+    the charge-amplifier time constant came from (``plate.time_constant_s``
+    or estimated per trace, with its median and range [s]), which mains hum was removed
+    (given or detected, its amplitude [mV]) and in how many traces a plate resonance
+    was undone. When the time constant was estimated it recommends giving it: a
+    step of the baseline inside a contact and the amplifier's own undershoot look
+    alike to the estimate, and only a known time constant tells them apart.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive (:mod:`ballimpact.archive`); an archive without the
+        conditioning variables gives no sentences.
+
+    Returns
+    -------
+    list of str
+        One sentence per item; empty when no trace was conditioned.
+    """
+    idx = _conditioned(ds, good_only=True)
+    if idx.size == 0:
+        return []
+    of = f"of {idx.size} {'good ' if (ar.text_values(ds['status'].values)[idx] == 'ok').all() else ''}impacts"
+    tau = np.asarray(ds["amplifier_time_constant_s"].values, dtype=float)[idx]
+    tau_source = ar.text_values(ds["amplifier_time_constant_source"].values)[idx]
+    lines = []
+    given = tau_source == "given"
+    if given.all():
+        lines.append(f"Charge-amplifier decay undone with plate.time_constant_s = {_range_text(tau[given], '.4g', 's')}.")
+    else:
+        estimated = tau_source == "estimated"
+        parts = []
+        if estimated.any():
+            parts.append(f"estimated from the trace in {int(estimated.sum())} {of}, "
+                         f"{_range_text(tau[estimated], '.3g', 's')}")
+        if (tau_source == "none").any():
+            parts.append(f"not corrected in {int((tau_source == 'none').sum())} (too slow to matter, or refused)")
+        if given.any():
+            parts.append(f"given for {int(given.sum())}")
+        lines.append("Charge-amplifier time constant " + "; ".join(parts) + ". Give plate.time_constant_s in "
+                     "session.yaml when it is known: with it the decay is undone exactly, and a step of the "
+                     "baseline inside a contact is told from the amplifier's undershoot.")
+    mains_source = ar.text_values(ds["mains_source"].values)[idx]
+    mains = np.asarray(ds["mains_frequency_hz"].values, dtype=float)[idx]
+    hum_mV = 1e3 * np.asarray(ds["hum_amplitude_V"].values, dtype=float)[idx]
+    hummed = np.isfinite(mains) & (mains > 0)
+    if hummed.any():
+        freqs = ", ".join(f"{f:g} Hz" for f in np.unique(mains[hummed]))
+        how = sorted(set(mains_source[hummed]))
+        lines.append(f"Mains hum at {freqs} ({' and '.join(how)}) removed in {int(hummed.sum())} {of}, "
+                     f"fundamental {_range_text(hum_mV[hummed], '.2g', 'mV')}.")
+    else:
+        lines.append("No mains hum removed" + (" (daq.mains_hz given, none fitted)." if (mains_source == "given").any()
+                                               else ": none found in the traces."))
+    plate = np.asarray(ds["plate_resonance_hz"].values, dtype=float)[idx]
+    if np.isfinite(plate).any():
+        lines.append(f"Plate resonance identified from its ringing and undone in {int(np.isfinite(plate).sum())} "
+                     f"{of}, {_range_text(plate[np.isfinite(plate)] / 1e3, '.3g', 'kHz')}.")
+    return lines
+
+
+def impact_conditioning(ds, i: int) -> str:
+    """How impact ``i``'s trace was conditioned, in one line for its QC page ('' when it was not).
+
+    Noise [mV], hum [mV] at the mains frequency [Hz] and its source, the
+    charge-amplifier time constant [s] with its standard error when estimated, and
+    the plate resonance [kHz] undone.
+    """
+    if i not in set(_conditioned(ds).tolist()):
+        return ""
+
+    def num(name):
+        return float(np.asarray(ds[name].values, dtype=float)[i])
+
+    def text(name):
+        return str(ar.text_values(ds[name].values)[i])
+
+    parts = [f"noise {_fmt(1e3 * num('noise_rms_V'), '.2g')} mV"]
+    mains = num("mains_frequency_hz")
+    parts.append(f"hum {_fmt(1e3 * num('hum_amplitude_V'), '.2g')} mV at {mains:g} Hz ({text('mains_source')})"
+                 if math.isfinite(mains) and mains > 0 else f"no hum removed ({text('mains_source') or 'none'})")
+    tau, se, source = num("amplifier_time_constant_s"), num("amplifier_time_constant_se_s"), \
+        text("amplifier_time_constant_source")
+    if not math.isfinite(tau):
+        parts.append("amplifier decay not corrected")
+    elif math.isfinite(se):
+        parts.append(f"time constant {tau:.3g} +/- {se:.1g} s ({source})")
+    else:
+        parts.append(f"time constant {tau:.4g} s ({source})")
+    plate = num("plate_resonance_hz")
+    if math.isfinite(plate):
+        parts.append(f"plate resonance {plate / 1e3:.3g} kHz (damping ratio {num('plate_damping_ratio'):.2g}) undone")
+    return ", ".join(parts)
+
+
 def _summary_page(ds, info) -> Figure:
     fig = _page()
     cur = _Cursor(fig)
@@ -311,7 +431,12 @@ def _counts_block(fig, cur, ds) -> None:
     tab_h = row_h * len(cells)
     ax = fig.add_axes([x0 / w, 1 - (cur.y + tab_h) / h, 5.4 / w, tab_h / h])
     _table(ax, cells, [0.4, 0.15, 0.15, 0.15, 0.15], font_size=8.5, shade_rows=(len(cells) - 1,))
-    cur.skip(tab_h + 0.3)
+    cur.skip(tab_h + 0.1)
+    conditioning = conditioning_summary(ds)
+    if conditioning:
+        wrapped = "\n".join(textwrap.fill(line, 120) for line in conditioning)
+        cur.text(x0, wrapped, size=8, color="0.25")
+    cur.skip(0.2)
 
 
 _PARAMETER_HEAD = ["Ball type", "Source", "n", "kB(0)\n[kN/m]", "AK\n[kN/m^(1+a)]", "a\n[-]", "AC\n[kN s/m\u00b3]",
@@ -645,6 +770,7 @@ def _qc_page(ds, info, impact_id, number, n_total, figures_dir, images=None) -> 
         ("Contact", f"TC = {value('contact_time_ms', '.3f', ' ms')}, "
                     f"peak force = {value('peak_force_N', '.0f', ' N')}, "
                     f"kCAL = {value('kcal_N_per_V', '.1f', ' N/V')}"),
+        ("Conditioning", "\n".join(textwrap.wrap(impact_conditioning(ds, i), 85)) or "-"),
     ]
     for key, text in facts:
         fig.text(_MARGIN_IN / w, 1 - cur.y / h, key, fontsize=9, weight="bold", va="top")
