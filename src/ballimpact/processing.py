@@ -96,7 +96,8 @@ class ImpactResult:
     noise_rms_V: float = math.nan
     hum_amplitude_V: float = math.nan
     tau_s: float = math.nan  # charge-amplifier time constant [s] used (inf: no decay corrected)
-    tau_se_s: float = math.nan  # its standard error [s] when estimated from the trace, else NaN
+    tau_se_s: float = math.nan  # the baseline fit's standard error of it [s] when estimated (noise only: it
+    # understates the scatter below 1 s, bench/robustness.py; not archived), else NaN
     tau_source: str = ""  # "given" (plate.time_constant_s), "estimated" or "none"
     mains_hz: float = math.nan  # mains frequency [Hz] whose hum was removed (0: none)
     mains_source: str = ""  # "given" (daq.mains_hz), "detected" or "none"
