@@ -81,3 +81,20 @@ def test_time_constant_table_judges_the_standard_errors_in_kappa():
     assert "| DC | 1 | 0.20 | 0 |" in table
     assert not any(line.startswith(("| 0.1-1 s", "| 1-100 s")) for line in table)
     assert robustness.time_constants(records[3:]) == ""
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_wander_map_noise_is_one_over_f_meeting_the_white_at_the_corner():
+    import numpy as np
+
+    wander = bench_module("wander_map")
+    rng = np.random.default_rng(0)
+    fs, n, white, corner = 10_000.0, 2**14, 0.002, 100.0
+    power = np.mean([np.abs(np.fft.rfft(wander.pink_noise(n, fs, white, corner, rng))) ** 2 for _ in range(40)],
+                    axis=0)
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    # white noise of rms s has E|X_k|^2 = n s^2 in every bin: the 1/f noise n s^2 corner / f, the white's at f = corner
+    for lo, hi in [(5.0, 20.0), (80.0, 125.0), (800.0, 1250.0)]:
+        band = (f >= lo) & (f < hi)
+        assert_allclose(np.mean(power[band] * f[band]) / (n * white**2 * corner), 1.0, rtol=0.1)
+    assert power[0] == pytest.approx(0.0, abs=1e-20)  # no mean: the zoo's offset stays the rig's
