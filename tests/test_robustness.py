@@ -940,3 +940,12 @@ def test_zoo_spike_at_a_contact_end_ok_and_right(name, seed, index, what, tmp_pa
     assert trace.truth.measurable, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, must_be_ok=True)
+
+
+def test_trace_whose_time_constant_is_estimated_but_no_contact_found_gives_a_reason():
+    # zoo trace 0:204 (a 3.8 kHz plate, 17 mV of hum, 6.4 ms of record): the decay is estimated and no contact
+    # is found; the time constant's standard error once read the contact's NaN ends and raised
+    tr = zoo.trace_for(0, 204)
+    result, _ = zoo.run_trace(tr)
+    assert (result.status, result.reason) == ("excluded", "no contact found")
+    assert result.tau_source == "estimated" and result.tau_se_s > 0

@@ -327,8 +327,8 @@ def impact_conditioning(ds, i: int) -> str:
 
     Noise [mV], hum [mV] at the mains frequency [Hz] and its source, the
     charge-amplifier time constant [s] and its source, and the plate resonance [kHz]
-    undone. (No standard error of an estimated time constant: the baseline fit's
-    understates the scatter on short time constants, see bench/robustness.py.)
+    undone. (No standard error of an estimated time constant: it does not count the
+    choice of hum model on a short record; README, Accuracy.)
     """
     if i not in set(_conditioned(ds).tolist()):
         return ""
