@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from ballimpact.processing import apply_calibration_check, iter_process
+from ballimpact.processing import apply_calibration_check, apply_time_constant_check, iter_process
 from ballimpact.session import read_session
 
 QUANTITIES = {  # column: relative (True) or absolute (False) error
@@ -38,6 +38,7 @@ QUANTITIES = {  # column: relative (True) or absolute (False) error
 def measure(session_dir: Path) -> dict:
     session = read_session(session_dir)
     results = list(iter_process(session))
+    apply_time_constant_check(results)  # the session checks, in the pipeline's order (pipeline.collect_impacts)
     apply_calibration_check(results)
     table = pd.DataFrame([r.row() for r in results]).set_index("impact_id")
     truth = pd.read_csv(session_dir.parent / f"{session_dir.name}.truth.csv", keep_default_na=False)

@@ -272,7 +272,7 @@ def test_conditioning_of_each_trace_is_archived(tmp_path):
     write_dataset(impacts_dataset(results), tmp_path / "c.nc")
     back = open_dataset(tmp_path / "c.nc")
     assert_allclose(back["amplifier_time_constant_s"].values, [0.8, 2.5, np.nan, np.nan], rtol=0)  # inf: none undone
-    assert "amplifier_time_constant_se_s" not in back  # not honest on every record (README, Accuracy)
+    assert_allclose(back["amplifier_time_constant_se_s"].values, [0.005, np.nan, np.nan, np.nan], rtol=0)
     assert list(back["amplifier_time_constant_source"].values) == ["estimated", "given", "none", ""]
     assert_allclose(back["mains_frequency_hz"].values, [50.0, 0.0, 60.0, np.nan], rtol=0)
     assert list(back["mains_source"].values) == ["detected", "none", "given", ""]

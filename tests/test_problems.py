@@ -120,6 +120,10 @@ MESSAGES = {
                                    "(plate.kcal_range_N_per_V)",
     ProblemKind.KCAL_OUTLIER: "calibration factor 240.3 N/V is 33 % from the session median 180.1 N/V "
                               "(robust z = 12.0)",
+    ProblemKind.TIME_CONSTANT_OUTLIER: "charge-amplifier time constant 0.0823 s estimated, unlike the session's "
+                                       "4.42 s (6 impacts; 131 standard errors): the impulse and kCAL may be off by "
+                                       "2.1 %; a step in the baseline within the contact taken for the decay? (give "
+                                       "plate.time_constant_s)",
 }
 
 

@@ -1,8 +1,12 @@
 """Per-impact processing against the ground truth of synthetic sessions (issue 3 accuracy targets)."""
 
+import re
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+
+from ballimpact import processing
 
 from ballimpact.problems import Problem, ProblemKind
 from ballimpact.processing import (
@@ -305,3 +309,39 @@ def test_speeds_corrected_to_the_plate_recover_cor(tmp_path, orientation):
     assert np.max(np.abs(cor_gate - t.cor.to_numpy())) > 0.005
     if orientation == "horizontal":  # about 1 % low at every speed (the issue's estimate)
         assert np.all(cor_gate < t.cor.to_numpy() - 0.004)
+
+
+# ------------------------------------------------------------ the session's time constant (issue 9)
+
+def _taus(tau_s, tau_se_s, tc_ms=3.7, ok=None):
+    n = len(tau_s)
+    return processing.flag_time_constant_outliers(tau_s, tau_se_s, [tc_ms] * n, [True] * n if ok is None else ok)
+
+
+def test_time_constant_unlike_the_sessions_is_flagged_with_what_it_costs():
+    rng = np.random.default_rng(0)
+    tau = list(0.8 + 0.005 * rng.standard_normal(9)) + [0.0796]
+    reasons, median = _taus(tau, [0.005] * 9 + [1e-4])
+    assert reasons[:9] == [""] * 9
+    # kappa 12.56 against 1.25 per s: the impulse moves by 11.3 x 3.7 ms / 2 = 2.1 %
+    assert re.match(r"charge-amplifier time constant 0.0796 s estimated, unlike the session's 0.8\d* s \(10 impacts; "
+                    r"\d+ standard errors\): the impulse and kCAL may be off by 2.1 %", reasons[9]), reasons[9]
+    assert_allclose(median, 0.8, rtol=0.01)
+
+
+@pytest.mark.parametrize("tau_out, se_out, flagged", [
+    (0.7, 1e-4, False),  # 1000 standard errors, but kappa differs by 0.18 per s: 0.03 % of the impulse
+    (0.3, 1e-4, True),  # 2.1 per s: 0.39 % of the impulse
+    (0.3, 0.3, False),  # as far, but within its own standard error (kappa se 3.3 per s)
+])
+def test_time_constant_check_needs_both_significance_and_an_effect(tau_out, se_out, flagged):
+    reasons, _ = _taus([0.8] * 5 + [tau_out], [0.005] * 5 + [se_out])
+    assert bool(reasons[5]) is flagged, reasons[5]
+
+
+def test_time_constant_check_skips_sessions_with_fewer_than_three_estimates_and_excluded_impacts():
+    assert _taus([0.8, 0.08], [0.005, 1e-4]) == ([""] * 2, pytest.approx(np.nan, nan_ok=True))
+    # an excluded impact is neither typical nor judged; NaN (given or not estimated) are left out
+    reasons, median = _taus([0.8, 0.8, 0.08, 0.08, np.nan], [0.005, 0.005, 1e-4, 1e-4, np.nan],
+                            ok=[True, True, False, False, True])
+    assert reasons == [""] * 5 and np.isnan(median)

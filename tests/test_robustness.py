@@ -949,3 +949,24 @@ def test_trace_whose_time_constant_is_estimated_but_no_contact_found_gives_a_rea
     result, _ = zoo.run_trace(tr)
     assert (result.status, result.reason) == ("excluded", "no contact found")
     assert result.tau_source == "estimated" and result.tau_se_s > 0
+
+
+def test_step_within_a_contact_taken_for_the_decay_is_excluded_by_the_sessions_time_constant():
+    """bench/step_map.py trace 2:249: a step of -2.7 % of the peak at 0.89 TC, the time constant (5.7 s) estimated.
+    Alone, the fit takes the step for the amplifier's undershoot (0.082 s) and the trace is ok with kCAL -2.8 %. In a
+    session with five more shots on the same rig (no step) the session time-constant check excludes it, and only it."""
+    import dataclasses
+
+    from ballimpact.processing import apply_time_constant_check
+
+    trace, _, _ = bench_module("step_map").trace_for(2, 249)
+    rig = trace.rig
+    siblings = [zoo.render(dataclasses.replace(rig, vin_m_s=vin), np.random.default_rng([2, 249, k]), f"sibling {k}")
+                for k, vin in enumerate((12.0, 16.0, 20.0, 24.0, 28.0))]
+    runs = [zoo.run_trace(t) for t in [trace] + siblings]
+    assert [j.category for _, j in runs] == ["ok_wrong"] + ["ok_right"] * 5
+    results = [r for r, _ in runs]
+    median = apply_time_constant_check(results)
+    assert 1 / median == pytest.approx(1 / rig.tau_s, abs=0.15)  # kappa [1/s]: each sibling's is known to 0.08-0.11
+    assert [r.status for r in results] == ["excluded"] + ["ok"] * 5, [r.reason for r in results]
+    assert [p.kind for p in results[0].problems] == [ProblemKind.TIME_CONSTANT_OUTLIER]

@@ -9,7 +9,7 @@ Layout (one root group, see docs/outputs.md):
   plus ``impact_mass_kg`` and ``sample_rate_hz``, ``model_agreement_fraction`` and
   ``model_rms_N``, and how the trace was conditioned: ``noise_rms_V``,
   ``hum_amplitude_V``, ``mains_frequency_hz`` / ``mains_source``,
-  ``amplifier_time_constant_s`` / ``_source``, ``plate_resonance_hz`` and
+  ``amplifier_time_constant_s`` / ``_se_s`` / ``_source``, ``plate_resonance_hz`` and
   ``plate_damping_ratio``;
 * per ball: the fitted parameters of :data:`PARAMETER_COLUMNS` (``mass_kg`` is the
   ball type's mass, which is why the per-impact mass is called ``impact_mass_kg``),
@@ -127,6 +127,7 @@ _PER_IMPACT_SCALARS = [
     ("hum_amplitude_V", "hum_amplitude_V"),
     ("mains_frequency_hz", "mains_hz"),
     ("amplifier_time_constant_s", "tau_s"),
+    ("amplifier_time_constant_se_s", "tau_se_s"),
     ("plate_resonance_hz", "plate_resonance_hz"),
     ("plate_damping_ratio", "plate_damping_ratio"),
 ]
@@ -167,6 +168,9 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "mains_source": ("1", "where the mains frequency came from: given (daq.mains_hz), detected or none"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
+    "amplifier_time_constant_se_s": (
+        "s", "standard error of the time constant estimated from the trace, from the noise and the contact's "
+             "sampling (not the choice of hum model on a record of about a mains period); NaN when given or none"),
     "amplifier_time_constant_source": (
         "1", "where the time constant came from: given (plate.time_constant_s), estimated or none"),
     "plate_resonance_hz": ("Hz", "plate resonance identified from its ringing and undone (NaN when none was)"),

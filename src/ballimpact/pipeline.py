@@ -279,7 +279,11 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     one chunk (none dropped, none twice). The session kCAL check
     (:func:`ballimpact.processing.flag_calibration_outliers`) excludes impacts whose
     calibration factor is far from the session's typical value; the session median
-    and robust standard deviation of kCAL [N/V] go into the file's attributes. Then
+    and robust standard deviation of kCAL [N/V] go into the file's attributes. Before
+    it, the session time-constant check
+    (:func:`ballimpact.processing.flag_time_constant_outliers`) excludes impacts whose
+    amplifier time constant, estimated from the trace, is not the session's; the
+    session's typical one [s] goes into ``time_constant_median_s``. Then
     the fit outliers of every ball type are named (:func:`mark_fit_outliers`:
     ``used_in_fit``, ``fit_note``), so that impacts.csv carries them.
 
@@ -330,11 +334,20 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
             f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
         )
     ds = ds.isel(impact=[position[i] for i in order])
-    # session kCAL QC: a kCAL far from the session's typical value excludes the impact
+    # session time-constant QC: one amplifier serves the session; an estimate unlike the others excludes the impact
     before = [str(v) for v in ds["status"].values]
-    status, reason, median, spread = processing.exclude_calibration_outliers(
-        before, ds["reason"].values, ds["kcal_N_per_V"].values
+    status, reason, tau_median = processing.exclude_time_constant_outliers(
+        before, ds["reason"].values, ds["amplifier_time_constant_s"].values,
+        ds["amplifier_time_constant_se_s"].values, ds["amplifier_time_constant_source"].values,
+        ds["contact_time_ms"].values,
     )
+    for impact_id, old, new, why in zip(order, before, status, reason):
+        if old != new:
+            logger.info("%s: excluded by the session time-constant check: %s", impact_id, why)
+    # session kCAL QC: a kCAL far from the session's typical value excludes the impact
+    before = status
+    status, reason, median, spread = processing.exclude_calibration_outliers(before, reason,
+                                                                             ds["kcal_N_per_V"].values)
     for impact_id, old, new, why in zip(order, before, status, reason):
         if old != new:
             logger.info("%s: excluded by the session kCAL check: %s", impact_id, why)
@@ -342,6 +355,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds["reason"] = ("impact", np.array(reason, dtype=object), ds["reason"].attrs)
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
+    ds.attrs["time_constant_median_s"] = tau_median
     ds = mark_fit_outliers(ds, read_session(session_dir).meta.balls)
     ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)

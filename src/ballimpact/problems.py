@@ -70,6 +70,7 @@ class ProblemKind(enum.Enum):
     NO_CALIBRATION = "no_calibration"
     KCAL_OUT_OF_RANGE = "kcal_out_of_range"  # outside plate.kcal_range_N_per_V
     KCAL_OUTLIER = "kcal_outlier"  # far from the session median
+    TIME_CONSTANT_OUTLIER = "time_constant_outlier"  # estimated amplifier decay unlike the session's
 
 
 #: Gate-time faults the session reader finds in a row (processing does not repeat them).
@@ -143,6 +144,7 @@ _MESSAGE_STARTS = {
     ProblemKind.NO_CALIBRATION: r"no calibration",
     ProblemKind.KCAL_OUT_OF_RANGE: r"calibration factor \S+ N/V outside the plate's range",
     ProblemKind.KCAL_OUTLIER: r"calibration factor \S+ N/V is \S+ % from the session median",
+    ProblemKind.TIME_CONSTANT_OUTLIER: r"charge-amplifier time constant \S+ s estimated, unlike the session's",
 }
 _MESSAGE_PATTERNS = {kind: re.compile(start) for kind, start in _MESSAGE_STARTS.items()}
 

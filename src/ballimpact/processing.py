@@ -5,8 +5,9 @@
 contact detection (:mod:`ballimpact.contact`) and calibration
 (:mod:`ballimpact.calibration`). It never raises for a fault of one impact:
 the impact comes back ``excluded`` with its reason. :func:`iter_process`
-streams a session, holding one trace in memory at a time, and
-:func:`flag_calibration_outliers` applies the session-level kCAL check.
+streams a session, holding one trace in memory at a time;
+:func:`flag_calibration_outliers` and :func:`flag_time_constant_outliers` apply the
+session-level checks (kCAL, and the amplifier's time constant where it is estimated).
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ __all__ = [
     "flag_calibration_outliers",
     "exclude_calibration_outliers",
     "apply_calibration_check",
+    "apply_time_constant_check",
+    "exclude_time_constant_outliers",
+    "flag_time_constant_outliers",
 ]
 
 #: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
@@ -59,6 +63,12 @@ PHYSICAL_BOUNDS = {
 HUM_HARMONICS = 5
 KCAL_MAX_ROBUST_Z = 5.0
 KCAL_MAX_RELATIVE = 0.10
+#: Session time-constant check: an impact whose amplifier time constant was estimated from its trace is excluded
+#: when its kappa = 1 / tau differs from the session's median kappa by more than this many joint standard
+#: errors ... [-]
+TAU_MAX_Z = 5.0
+#: ... and by enough to move its impulse, and kCAL, by more than this fraction (kappa TC / 2) [-]
+TAU_MAX_IMPULSE = 0.003
 
 
 @dataclass
@@ -96,7 +106,7 @@ class ImpactResult:
     noise_rms_V: float = math.nan
     hum_amplitude_V: float = math.nan
     tau_s: float = math.nan  # charge-amplifier time constant [s] used (inf: no decay corrected)
-    tau_se_s: float = math.nan  # its standard error [s] when estimated (_tau_standard_error; not archived), else NaN
+    tau_se_s: float = math.nan  # its standard error [s] when estimated (_tau_standard_error), else NaN
     tau_source: str = ""  # "given" (plate.time_constant_s), "estimated" or "none"
     mains_hz: float = math.nan  # mains frequency [Hz] whose hum was removed (0: none)
     mains_source: str = ""  # "given" (daq.mains_hz), "detected" or "none"
@@ -281,7 +291,7 @@ def _tau_standard_error(cond, fs: float, t0_s: float) -> float:
     sample-to-sample rise [V] times 1 / (fs sqrt(12)) [s] (uniform over the interval). Without that term the
     estimates of 0.01-0.1 s scattered four times their standard error about the truth over the zoo's ok
     traces (``python bench/robustness.py --n 2000 --seed 0``, its time-constant table). Still not counted: the
-    choice of hum model on a record of about one mains period (zoo trace 0:428); hence not archived.
+    choice of hum model on a record of about one mains period (zoo trace 0:428).
 
     Parameters
     ----------
@@ -484,6 +494,118 @@ def exclude_calibration_outliers(status, reason, kcal_N_per_V):
             status[k] = "excluded"
             reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
     return status, reason, median, spread
+
+
+def flag_time_constant_outliers(tau_s, tau_se_s, contact_time_ms, ok, *, max_z=TAU_MAX_Z,
+                                 max_impulse=TAU_MAX_IMPULSE):
+    """Impacts whose charge-amplifier time constant, estimated from the trace, is not the session's.
+
+    One charge amplifier serves a session, so every trace decays with the same time
+    constant. Where it is estimated (no ``plate.time_constant_s``), something else in
+    the baseline can take its place: a step of the level within the contact is, to
+    the fit, what the amplifier's undershoot looks like (``bench/step_map.py`` 2:249: a
+    step of -2.7 % of the peak took 5.7 s for 0.082 s and kCAL came out 2.8 % low), and
+    nothing in the one trace tells them apart. The session's other impacts do. In
+    kappa = 1 / tau [1/s]: typical = median over the ``ok`` impacts with an estimate
+    (at least 3), its standard error 1.2533 x robust spread / sqrt(n). An ok impact is
+    flagged when its kappa is more than ``max_z`` joint standard errors from the
+    median AND the difference moves its impulse by more than ``max_impulse``: undoing
+    the decay adds kappa times the running integral of the signal, which over a pulse
+    symmetric in time adds kappa TC / 2 of the impulse (and of 1 / kCAL).
+
+    Parameters
+    ----------
+    tau_s : array_like
+        Time constant of every impact [s]; NaN where none was estimated (given, not
+        corrected, or the impact excluded before).
+    tau_se_s : array_like
+        Its standard error [s] (NaN where none).
+    contact_time_ms : array_like
+        Contact time TC [ms].
+    ok : array_like of bool
+        Impacts to take the typical value from and to judge.
+    max_z : float
+        Largest accepted difference in joint standard errors [-].
+    max_impulse : float
+        Largest accepted effect on the impulse [-].
+
+    Returns
+    -------
+    reasons : list of str
+        Per impact, "" or the exclusion reason.
+    median_s : float
+        Session's typical time constant, 1 / median kappa [s] (NaN with fewer than
+        3 estimates).
+    """
+    tau = np.asarray(tau_s, dtype=float)
+    se = np.asarray(tau_se_s, dtype=float)
+    tc = np.asarray(contact_time_ms, dtype=float) * 1e-3
+    use = np.asarray(ok, dtype=bool) & np.isfinite(tau) & (tau > 0) & np.isfinite(se) & (se > 0)
+    reasons = [""] * tau.size
+    if use.sum() < 3:
+        return reasons, math.nan
+    kappa = np.where(use, 1.0 / np.where(use, tau, 1.0), np.nan)
+    kappa_se = np.where(use, se / np.where(use, tau, 1.0) ** 2, np.nan)  # d(1/tau) = dtau / tau^2
+    med = float(np.median(kappa[use]))
+    med_se = 1.2533 * float(1.4826 * np.median(np.abs(kappa[use] - med))) / math.sqrt(use.sum())
+    for i in np.flatnonzero(use):
+        diff = abs(kappa[i] - med)
+        z = diff / math.hypot(kappa_se[i], med_se)
+        impulse = diff * tc[i] / 2.0 if np.isfinite(tc[i]) else math.inf
+        if z > max_z and impulse > max_impulse:
+            typical = 1.0 / med if med > 0 else math.inf
+            reasons[i] = (
+                f"charge-amplifier time constant {tau[i]:.3g} s estimated, unlike the session's {typical:.3g} s "
+                f"({int(use.sum())} impacts; {z:.0f} standard errors): the impulse and kCAL may be off by "
+                f"{100 * impulse:.2g} %; a step in the baseline within the contact taken for the decay? (give "
+                "plate.time_constant_s)"
+            )
+    return reasons, (1.0 / med if med > 0 else math.inf)
+
+
+def exclude_time_constant_outliers(status, reason, tau_s, tau_se_s, tau_source, contact_time_ms):
+    """The session time-constant check on table columns: new status and reason per impact.
+
+    Parameters
+    ----------
+    status, reason : sequence of str
+        Per impact: ``ok`` / ``excluded`` and the reasons so far.
+    tau_s, tau_se_s : array_like
+        Per impact, the amplifier time constant and its standard error [s].
+    tau_source : sequence of str
+        Per impact, ``estimated``, ``given``, ``none`` or empty: only estimates are judged.
+    contact_time_ms : array_like
+        Per impact TC [ms].
+
+    Returns
+    -------
+    status, reason : list of str
+        With the outliers of :func:`flag_time_constant_outliers` excluded, their reason appended.
+    median_s : float
+        Session's typical time constant [s] (NaN with fewer than 3 estimates).
+    """
+    status, reason = [str(s) for s in status], [str(r) for r in reason]
+    estimated = [str(s) == "estimated" for s in tau_source]
+    tau = np.where(estimated, np.asarray(tau_s, dtype=float), np.nan)
+    flags, median = flag_time_constant_outliers(tau, tau_se_s, contact_time_ms,
+                                                [s == "ok" for s in status])
+    for k, flag in enumerate(flags):
+        if flag:
+            status[k] = "excluded"
+            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
+    return status, reason, median
+
+
+def apply_time_constant_check(results: list[ImpactResult]) -> float:
+    """Exclude, in place, ok impacts whose estimated time constant is not the session's; returns it [s]."""
+    tau = [r.tau_s if r.tau_source == "estimated" else math.nan for r in results]
+    flags, median = flag_time_constant_outliers(tau, [r.tau_se_s for r in results],
+                                                [r.contact_time_ms for r in results],
+                                                [r.status == "ok" for r in results])
+    for r, flag in zip(results, flags):
+        if flag:
+            r.exclude(Problem(ProblemKind.TIME_CONSTANT_OUTLIER, flag))
+    return median
 
 
 def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
