@@ -4,6 +4,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from ballimpact import processing
@@ -345,3 +347,27 @@ def test_time_constant_check_skips_sessions_with_fewer_than_three_estimates_and_
     reasons, median = _taus([0.8, 0.8, 0.08, 0.08, np.nan], [0.005, 0.005, 1e-4, 1e-4, np.nan],
                             ok=[True, True, False, False, True])
     assert reasons == [""] * 5 and np.isnan(median)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"tau_se_s": [0.1, 0.1]}, r"one value per impact, got 3, 2, 3 and 3"),
+    ({"max_z": 0.0}, r"max_z and max_impulse must be positive, got 0.0 and 0.003"),
+])
+def test_time_constant_check_validates_its_input(kwargs, match):
+    args = {"tau_s": [0.8] * 3, "tau_se_s": [0.01] * 3, "contact_time_ms": [4.0] * 3, "ok": [True] * 3, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        processing.flag_time_constant_outliers(**args)
+
+
+@given(tau=st.floats(0.01, 100.0), n=st.integers(3, 40), rel_se=st.floats(1e-4, 0.3), tc_ms=st.floats(2.0, 8.0),
+       spread=st.floats(1.0, 100.0), seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=200)
+def test_time_constant_check_passes_a_session_of_honest_estimates(tau, n, rel_se, tc_ms, spread, seed):
+    """One true time constant, each impact's kappa off by at most 3.5 of its own standard error, standard errors
+    spread over a factor ``spread`` between impacts: nothing is flagged."""
+    rng = np.random.default_rng(seed)
+    kappa_se = rel_se / tau * np.exp(rng.uniform(0.0, np.log(spread), n))
+    kappa = 1.0 / tau + np.clip(rng.standard_normal(n), -3.5, 3.5) * kappa_se
+    assume(np.all(kappa > 0))
+    reasons, _ = processing.flag_time_constant_outliers(1.0 / kappa, kappa_se / kappa**2, [tc_ms] * n, [True] * n)
+    assert reasons == [""] * n

@@ -537,10 +537,16 @@ def flag_time_constant_outliers(tau_s, tau_se_s, contact_time_ms, ok, *, max_z=T
         Session's typical time constant, 1 / median kappa [s] (NaN with fewer than
         3 estimates).
     """
-    tau = np.asarray(tau_s, dtype=float)
-    se = np.asarray(tau_se_s, dtype=float)
-    tc = np.asarray(contact_time_ms, dtype=float) * 1e-3
-    use = np.asarray(ok, dtype=bool) & np.isfinite(tau) & (tau > 0) & np.isfinite(se) & (se > 0)
+    if not (max_z > 0 and max_impulse > 0):
+        raise ValueError(f"max_z and max_impulse must be positive, got {max_z!r} and {max_impulse!r}")
+    tau = np.asarray(tau_s, dtype=float).ravel()
+    se = np.asarray(tau_se_s, dtype=float).ravel()
+    tc = np.asarray(contact_time_ms, dtype=float).ravel() * 1e-3
+    ok = np.asarray(ok, dtype=bool).ravel()
+    if not (se.size == tc.size == ok.size == tau.size):
+        raise ValueError(f"tau_s, tau_se_s, contact_time_ms and ok must have one value per impact, got "
+                         f"{tau.size}, {se.size}, {tc.size} and {ok.size}")
+    use = ok & np.isfinite(tau) & (tau > 0) & np.isfinite(se) & (se > 0)
     reasons = [""] * tau.size
     if use.sum() < 3:
         return reasons, math.nan
