@@ -510,6 +510,32 @@ def test_collect_impacts_restores_raw_order_and_pads(synth_raw, tmp_path):
         assert np.all(force[: 10 + 3 * k] == 10 + 3 * k) and np.all(np.isnan(force[10 + 3 * k:]))
 
 
+def test_collect_impacts_excludes_a_time_constant_unlike_the_sessions(synth_raw, tmp_path, caplog):
+    from ballimpact import archive
+
+    session = synth_raw / "s1"
+    rows = raw_rows(session)
+    results = [_FakeResult(r["impact_id"], r["ball"], n_samples=10) for r in rows]
+    for k, r in enumerate(results):  # one amplifier of 0.8 s; the third impact took a step for its decay
+        r.tau_s, r.tau_se_s, r.tau_source, r.contact_time_ms = (0.08, 1e-4, "estimated", 4.0) if k == 2 else \
+            (0.8 * (1 + 0.002 * (k % 3 - 1)), 0.005, "estimated", 4.0)
+    path = tmp_path / "chunk_0.nc"
+    archive.write_dataset(archive.impacts_dataset(results), path)
+    pipeline.collect_impacts(session, [path], tmp_path / "impacts.csv", tmp_path / "impacts.nc")
+    ds = archive.open_dataset(tmp_path / "impacts.nc")
+    status = [str(s) for s in ds["status"].values]
+    assert status == ["ok"] * 2 + ["excluded"] + ["ok"] * (len(rows) - 3)
+    assert str(ds["reason"].values[2]).startswith("charge-amplifier time constant 0.08 s estimated, unlike the session's")
+    assert ds.attrs["time_constant_median_s"] == pytest.approx(0.8, rel=0.01)
+    # chunk files written before the time constant was archived: the check is skipped, and says so
+    old = tmp_path / "old_chunk_0.nc"
+    archive.write_dataset(archive.open_dataset(path).drop_vars(["amplifier_time_constant_se_s"]), old)
+    with caplog.at_level("WARNING"):
+        pipeline.collect_impacts(session, [old], tmp_path / "old.csv", tmp_path / "old.nc")
+    assert [str(s) for s in archive.open_dataset(tmp_path / "old.nc")["status"].values] == ["ok"] * len(rows)
+    assert "the session time-constant check is skipped" in caplog.text
+
+
 def test_collect_impacts_refuses_a_dropped_impact(synth_raw, tmp_path):
     session = synth_raw / "s1"
     dropped = raw_rows(session)[4]["impact_id"]

@@ -336,11 +336,13 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds = ds.isel(impact=[position[i] for i in order])
     # session time-constant QC: one amplifier serves the session; an estimate unlike the others excludes the impact
     before = [str(v) for v in ds["status"].values]
-    status, reason, tau_median = processing.exclude_time_constant_outliers(
-        before, ds["reason"].values, ds["amplifier_time_constant_s"].values,
-        ds["amplifier_time_constant_se_s"].values, ds["amplifier_time_constant_source"].values,
-        ds["contact_time_ms"].values,
-    )
+    tau_names = ["amplifier_time_constant_s", "amplifier_time_constant_se_s", "amplifier_time_constant_source"]
+    if all(name in ds for name in tau_names):
+        status, reason, tau_median = processing.exclude_time_constant_outliers(
+            before, ds["reason"].values, *(ds[name].values for name in tau_names), ds["contact_time_ms"].values)
+    else:  # chunk files written before the time constant was archived: re-run the chunks for the check
+        logger.warning("chunk files without %s: the session time-constant check is skipped", ", ".join(tau_names))
+        status, reason, tau_median = before, [str(r) for r in ds["reason"].values], float("nan")
     for impact_id, old, new, why in zip(order, before, status, reason):
         if old != new:
             logger.info("%s: excluded by the session time-constant check: %s", impact_id, why)
