@@ -83,10 +83,7 @@ def main(argv=None):
         if cat in ("ok_wrong", "faulty_ok"):
             said = "; ".join(f"{w} samples {amp / rig.noise_V:+.0f} noise deviations{' alternating' if alt else ''} "
                              f"at sample {first}" for first, w, amp, alt in bursts)
-            print(f"  {cat} {a.seed}:{index}: fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
-                  f"{'ideal plate' if rig.plate_hz is None else f'plate {rig.plate_hz / 1e3:.1f} kHz'}, noise "
-                  f"{1e3 * rig.noise_V:.1f} mV; {said}: TC {err['tc']:+.2f} %, kCAL {err['kcal']:+.2f} %, "
-                  f"peak {err['peak']:+.2f} %")
+            print(zoo.map_offender(cat, a.seed, index, rig, said, err, tau=False))
 
 
 if __name__ == "__main__":

@@ -71,11 +71,8 @@ def main(argv=None):
         print(f"  step at {band:>8}: {counts}")
     for index, rig, height, where, cat, err in rows:
         if cat in ("ok_wrong", "faulty_ok"):
-            print(f"  {cat} {a.seed}:{index}: fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
-                  f"{'ideal plate' if rig.plate_hz is None else f'plate {rig.plate_hz / 1e3:.1f} kHz'}, tau "
-                  f"{rig.tau_s:.3g} s {'given' if rig.tau_known else 'estimated'}, noise {1e3 * rig.noise_V:.1f} mV; "
-                  f"step {100 * height:+.2f} % of the peak at {where:+.2f} TC: TC {err['tc']:+.2f} %, "
-                  f"kCAL {err['kcal']:+.2f} %, peak {err['peak']:+.2f} %")
+            print(zoo.map_offender(cat, a.seed, index, rig, f"step {100 * height:+.2f} % of the peak at {where:+.2f} TC",
+                                   err))
 
 
 if __name__ == "__main__":

@@ -90,12 +90,8 @@ def main(argv=None):
           + ", ".join(f"{head} {n}" for head, n in heads.most_common(8)))
     for index, rig, corner, ratio, cat, err, _ in rows:
         if cat in ("ok_wrong", "faulty_ok"):
-            print(f"  {cat} {a.seed}:{index}: fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
-                  f"{'ideal plate' if rig.plate_hz is None else f'plate {rig.plate_hz / 1e3:.1f} kHz'}, tau "
-                  f"{rig.tau_s:.3g} s {'given' if rig.tau_known else 'estimated'}, noise {1e3 * rig.noise_V:.1f} mV, "
-                  f"record {1e3 * rig.pre_s:.0f} + {1e3 * rig.post_s:.0f} ms; 1/f corner {corner:.3g} Hz "
-                  f"(wander {ratio:.2f} x the white noise): TC {err['tc']:+.2f} %, kCAL {err['kcal']:+.2f} %, "
-                  f"peak {err['peak']:+.2f} %")
+            print(zoo.map_offender(cat, a.seed, index, rig, f"record {1e3 * rig.pre_s:.0f} + {1e3 * rig.post_s:.0f} "
+                                   f"ms, 1/f corner {corner:.3g} Hz (wander {ratio:.2f} x the white noise)", err))
 
 
 if __name__ == "__main__":

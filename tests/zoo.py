@@ -312,6 +312,17 @@ def category_summary(n: int, seed: int, what: str, categories) -> str:
     return f"{n} rigs (seed {seed}{', ' + what if what else ''}): " + ", ".join(f"{k} {v}" for k, v in counts)
 
 
+def map_offender(category: str, seed: int, index: int, rig: Rig, what: str, errors_pct: dict, *,
+                 tau: bool = True) -> str:
+    """A map's line for an ok-but-wrong or faulty-ok trace: ``"  <category> <seed>:<index>: fs, plate[, tau], noise;
+    <what>: TC, kCAL, peak errors"`` (errors in per cent, as the maps' ``run_one`` give them)."""
+    plate = "ideal plate" if rig.plate_hz is None else f"plate {rig.plate_hz / 1e3:.1f} kHz"
+    amplifier = f"tau {rig.tau_s:.3g} s {'given' if rig.tau_known else 'estimated'}, " if tau else ""
+    return (f"  {category} {seed}:{index}: fs {rig.sample_rate_hz / 1e3:.1f} kHz, {plate}, {amplifier}"
+            f"noise {1e3 * rig.noise_V:.1f} mV; {what}: TC {errors_pct['tc']:+.2f} %, kCAL {errors_pct['kcal']:+.2f} %, "
+            f"peak {errors_pct['peak']:+.2f} %")
+
+
 def map_shot(rng: np.random.Generator) -> dict:
     """Rig fields of one shot for the maps of bench/ (rigs apart from the zoo's seeds): an inbound speed of
     10-35 m/s, the ball's Table 2 parameters scaled by 0.95-1.05 or 0.8-1.2 each, and white noise of 0.1-0.5 % of

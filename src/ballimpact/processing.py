@@ -469,6 +469,22 @@ def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_
     return reasons, med, spread
 
 
+def _exclude_flagged(status: list[str], reason: list[str], flags: list[str]) -> tuple[list[str], list[str]]:
+    """Status and reason columns with every flagged impact excluded, its flag appended to its reason."""
+    for k, flag in enumerate(flags):
+        if flag:
+            status[k] = "excluded"
+            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
+    return status, reason
+
+
+def _exclude_flagged_results(results: list[ImpactResult], flags: list[str], kind: ProblemKind) -> None:
+    """Exclude, in place, every result whose flag is not empty, for a problem of ``kind`` with the flag's message."""
+    for r, flag in zip(results, flags):
+        if flag:
+            r.exclude(Problem(kind, flag))
+
+
 def exclude_calibration_outliers(status, reason, kcal_N_per_V):
     """The session kCAL check on table columns: new status and reason per impact.
 
@@ -489,11 +505,7 @@ def exclude_calibration_outliers(status, reason, kcal_N_per_V):
     """
     status, reason = [str(s) for s in status], [str(r) for r in reason]
     flags, median, spread = flag_calibration_outliers(kcal_N_per_V, [s == "ok" for s in status])
-    for k, flag in enumerate(flags):
-        if flag:
-            status[k] = "excluded"
-            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
-    return status, reason, median, spread
+    return *_exclude_flagged(status, reason, flags), median, spread
 
 
 def flag_time_constant_outliers(tau_s, tau_se_s, contact_time_ms, ok, *, max_z=TAU_MAX_Z,
@@ -595,11 +607,7 @@ def exclude_time_constant_outliers(status, reason, tau_s, tau_se_s, tau_source, 
     tau = np.where(estimated, np.asarray(tau_s, dtype=float), np.nan)
     flags, median = flag_time_constant_outliers(tau, tau_se_s, contact_time_ms,
                                                 [s == "ok" for s in status])
-    for k, flag in enumerate(flags):
-        if flag:
-            status[k] = "excluded"
-            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
-    return status, reason, median
+    return *_exclude_flagged(status, reason, flags), median
 
 
 def apply_time_constant_check(results: list[ImpactResult]) -> float:
@@ -608,9 +616,7 @@ def apply_time_constant_check(results: list[ImpactResult]) -> float:
     flags, median = flag_time_constant_outliers(tau, [r.tau_se_s for r in results],
                                                 [r.contact_time_ms for r in results],
                                                 [r.status == "ok" for r in results])
-    for r, flag in zip(results, flags):
-        if flag:
-            r.exclude(Problem(ProblemKind.TIME_CONSTANT_OUTLIER, flag))
+    _exclude_flagged_results(results, flags, ProblemKind.TIME_CONSTANT_OUTLIER)
     return median
 
 
@@ -618,7 +624,5 @@ def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
     """Exclude, in place, impacts whose kCAL is an outlier of the session; returns (median, spread) [N/V]."""
     flags, median, spread = flag_calibration_outliers([r.kcal_N_per_V for r in results],
                                                       [r.status == "ok" for r in results])
-    for r, flag in zip(results, flags):
-        if flag:
-            r.exclude(Problem(ProblemKind.KCAL_OUTLIER, flag))
+    _exclude_flagged_results(results, flags, ProblemKind.KCAL_OUTLIER)
     return median, spread
