@@ -267,7 +267,8 @@ def conditioning_summary(ds) -> list[str]:
     (given or detected, its amplitude [mV]) and in how many traces a plate resonance
     was undone. When the time constant was estimated it recommends giving it: a
     step of the baseline inside a contact and the amplifier's own undershoot look
-    alike to the estimate, and only a known time constant tells them apart.
+    alike to one trace's estimate (the session time-constant check sees it only where
+    the other impacts disagree; a known time constant always).
 
     Parameters
     ----------
@@ -330,14 +331,14 @@ def impact_conditioning(ds, i: int) -> str:
     undone. (No standard error of an estimated time constant: it does not count the
     choice of hum model on a short record; README, Accuracy.)
     """
-    if i not in set(_conditioned(ds).tolist()):
-        return ""
-
     def num(name):
         return float(np.asarray(ds[name].values, dtype=float)[i])
 
     def text(name):
         return str(ar.text_values(ds[name].values)[i])
+
+    if "amplifier_time_constant_source" not in ds or not text("amplifier_time_constant_source"):
+        return ""  # not conditioned: excluded before, or an archive from before these variables
 
     parts = [f"noise {_fmt(1e3 * num('noise_rms_V'), '.2g')} mV"]
     mains = num("mains_frequency_hz")
