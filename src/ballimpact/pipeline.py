@@ -271,6 +271,13 @@ def process_chunk(session_dir, chunk: int, n_chunks: int, out_nc, *, mains_hz: f
     logger.info("chunk %d of %d: %d impacts written to %s", chunk, n_chunks, len(ids), out_nc)
 
 
+def _log_exclusions(order, before, status, reason, check: str) -> None:
+    """Log each impact a session check excluded (its status went from ok to excluded), with the reason."""
+    for impact_id, old, new, why in zip(order, before, status, reason):
+        if old != new:
+            logger.info("%s: excluded by the session %s check: %s", impact_id, check, why)
+
+
 def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     """
     Join the chunk files into all impacts in raw order: ``impacts.csv`` and ``work/impacts.nc``.
@@ -343,16 +350,12 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     else:  # chunk files written before the time constant was archived: re-run the chunks for the check
         logger.warning("chunk files without %s: the session time-constant check is skipped", ", ".join(tau_names))
         status, reason, tau_median = before, [str(r) for r in ds["reason"].values], float("nan")
-    for impact_id, old, new, why in zip(order, before, status, reason):
-        if old != new:
-            logger.info("%s: excluded by the session time-constant check: %s", impact_id, why)
+    _log_exclusions(order, before, status, reason, "time-constant")
     # session kCAL QC: a kCAL far from the session's typical value excludes the impact
     before = status
     status, reason, median, spread = processing.exclude_calibration_outliers(before, reason,
                                                                              ds["kcal_N_per_V"].values)
-    for impact_id, old, new, why in zip(order, before, status, reason):
-        if old != new:
-            logger.info("%s: excluded by the session kCAL check: %s", impact_id, why)
+    _log_exclusions(order, before, status, reason, "kCAL")
     ds["status"] = ("impact", np.array(status, dtype=object), ds["status"].attrs)
     ds["reason"] = ("impact", np.array(reason, dtype=object), ds["reason"].attrs)
     ds.attrs["kcal_median_N_per_V"] = median
