@@ -192,6 +192,10 @@ class Rig:
         "random" or the name of the one factor drawn (others benign).
     adc_bits : int
         The ADC's resolution over ``adc_range_v`` [bits] (the zoo's is ADC_BITS; bench/adc_map.py draws coarser).
+    plate_modes : tuple
+        Further modes of the plate, each (resonance [Hz], damping ratio [-], residue [-]); the sensed force is
+        the modal sum, the ``plate_hz`` mode's residue being 1 less theirs (unit static gain). The zoo draws
+        none (bench/two_mode_map.py does).
     """
 
     ball: str
@@ -222,6 +226,7 @@ class Rig:
     clip_factor: float
     mode: str = "random"
     adc_bits: int = ADC_BITS
+    plate_modes: tuple = ()
 
 
 @dataclass
@@ -545,7 +550,10 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     sensed = force
     if rig.plate_hz is not None:
         b, a = _plate_filter(rig.plate_hz, rig.plate_zeta, h)
-        sensed = signal.lfilter(b, a, force)
+        sensed = (1.0 - sum(r for *_, r in rig.plate_modes)) * signal.lfilter(b, a, force)
+        for fn_k, zeta_k, r_k in rig.plate_modes:
+            b, a = _plate_filter(fn_k, zeta_k, h)
+            sensed = sensed + r_k * signal.lfilter(b, a, force)
     amp = _highpass(sensed, rig.tau_s, h)
     take = (np.arange(n) - i0) * m
     t = np.arange(n) / fs
@@ -585,6 +593,9 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     marginal = []
     if rig.plate_hz is not None and rig.plate_hz < PLATE_MARGINAL_HZ:
         marginal.append(f"plate resonance {rig.plate_hz:.0f} Hz below {PLATE_MARGINAL_HZ:.0f} Hz")
+    for fn_k, *_ in rig.plate_modes:
+        if fn_k < PLATE_MARGINAL_HZ:
+            marginal.append(f"plate mode {fn_k:.0f} Hz below {PLATE_MARGINAL_HZ:.0f} Hz")
     if spike and rig.plate_hz is not None and rig.plate_hz < PLATE_SPIKE_MARGINAL_HZ:
         marginal.append(f"pre-buckling-spike peak with plate resonance {rig.plate_hz:.0f} Hz")
     at_samples = np.interp(t, knots_t + t_start, knots_f, left=0.0, right=0.0)
