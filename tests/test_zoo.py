@@ -49,6 +49,28 @@ def test_plate_keeps_the_impulse(seed):
     assert_allclose(impulse_V_s * t.kcal_N_per_V, t.mass_kg * (t.vin_m_s + t.vout_m_s), rtol=1e-3)
 
 
+@pytest.mark.parametrize("residue", [-0.45, 0.3])
+def test_plate_of_two_modes_keeps_the_impulse_and_rings_at_both(residue):
+    # bench/two_mode_map.py's plates: a modal sum of unit static gain still only redistributes the force in time,
+    # and what it adds to the force (the same trace on an ideal plate: the plate draws nothing from the generator)
+    # rings at both modes
+    fn1, fn2 = 6000.0, 17000.0
+    fields = dict(plate_zeta=0.02, post_s=0.2, sample_rate_hz=200e3)
+    tr = ideal(1, plate_hz=fn1, plate_modes=((fn2, 0.02, residue),), **fields)
+    t = tr.truth
+    impulse_V_s = np.sum(tr.voltage_V) / tr.sample_rate_hz * tr.rig.polarity
+    assert_allclose(impulse_V_s * t.kcal_N_per_V, t.mass_kg * (t.vin_m_s + t.vout_m_s), rtol=1e-3)
+    ringing = tr.voltage_V - ideal(1, plate_hz=None, **fields).voltage_V
+    k = int(t.start_s * tr.sample_rate_hz)
+    ringing = ringing[k:k + 2000]
+    power = np.abs(np.fft.rfft(ringing * np.hanning(ringing.size))) ** 2
+    f = np.fft.rfftfreq(ringing.size, 1.0 / tr.sample_rate_hz)
+    lines = [f[np.argmax(np.where(abs(f - fn) < 2000.0, power, 0.0))] for fn in (fn1, fn2)]
+    assert_allclose(lines, [fn1, fn2], atol=200.0)
+    between = np.max(power[(f > 9e3) & (f < 14e3)])  # the trough between the two modes
+    assert min(power[np.searchsorted(f, lines)]) > 10 * between
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_force_is_nonzero_exactly_between_truth_start_and_end(seed):
     tr = ideal(seed)
