@@ -761,23 +761,27 @@ def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
 #: Traces of bench/two_mode_map.py, ok but wrong on 7489769: a plate of two modes (the second 1.3-4 times the first's
 #: frequency, its residue -45 to +12 %) answers the force's jump with an overshoot that the one-mode fits of the
 #: ringing checks do not recognise, and the largest sample, 0.02-0.08 ms into the contact, is that overshoot's top.
-#: The force leaves it over 4-11 samples, where the ball's drops at once at buckling (``_peak_on_slow_fall``)
-#: (name, seed, index, what).
+#: The force leaves it over 4-11 samples, where the ball's drops at once at buckling (``_peak_on_slow_fall``). On 5:243
+#: the lightly damped second mode was identified and undone, and the undone force kept the first mode's overshoot
+#: (name, seed, index, what the reason must name, what).
+SLOW_FALL = "a ball's force drops at once"
 TWO_MODE_PLATES = [
-    ("two-modes-10.6+24.7kHz-54.9kHz", 2, 371, "ok but wrong on 7489769: peak +12.25 %"),
-    ("two-modes-7.5+27.0kHz-93.7kHz", 2, 385, "ok but wrong on 7489769: peak +15.28 %"),
-    ("two-modes-10.5+40.9kHz-155kHz", 2, 27, "ok but wrong on 7489769: peak +3.72 %"),
-    ("two-modes-6.1+19.5kHz-141.7kHz", 3, 301, "ok but wrong on 7489769: peak +27.83 %"),
+    ("two-modes-10.6+24.7kHz-54.9kHz", 2, 371, SLOW_FALL, "ok but wrong on 7489769: peak +12.25 %"),
+    ("two-modes-7.5+27.0kHz-93.7kHz", 2, 385, SLOW_FALL, "ok but wrong on 7489769: peak +15.28 %"),
+    ("two-modes-10.5+40.9kHz-155kHz", 2, 27, SLOW_FALL, "ok but wrong on 7489769: peak +3.72 %"),
+    ("two-modes-6.1+19.5kHz-141.7kHz", 3, 301, SLOW_FALL, "ok but wrong on 7489769: peak +27.83 %"),
+    ("two-modes-8.0+30.3kHz-undone-132.7kHz", 5, 243, "the undone force still shows peak force on the plate's step",
+     "ok but wrong on 7489769 (the 30.3 kHz mode undone): peak +28.89 %"),
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", named(TWO_MODE_PLATES))
-def test_zoo_two_mode_plate_case(name, seed, index, what, tmp_path):
+@pytest.mark.parametrize("name, seed, index, named_in_reason, what", named(TWO_MODE_PLATES))
+def test_zoo_two_mode_plate_case(name, seed, index, named_in_reason, what, tmp_path):
     rig, rng = bench_module("two_mode_map").rig_for(seed, index)
     assert len(rig.plate_modes) == 1, name
     trace = zoo.render(rig, rng, name)
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, excluded_with="a ball's force drops at once as its wall buckles")
+    assert_invariant(trace, result, judgement, excluded_with=named_in_reason)
 
 
 #: Traces of bench/adc_map.py recorded by a 12-bit ADC over +-10 V (a step of 4.9 mV) under noise far below the step,
