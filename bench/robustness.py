@@ -83,6 +83,7 @@ def run_one(args):
         "make_s": t1 - t0, "process_s": time.perf_counter() - t1, "process_cpu_s": time.process_time() - c1,
         "tau_true_s": tr.rig.tau_s, "tau_given": tr.rig.tau_known, "tau_s": getattr(result, "tau_s", math.nan),
         "tau_se_s": getattr(result, "tau_se_s", math.nan), "tau_source": getattr(result, "tau_source", ""),
+        "kinds": " ".join(dict.fromkeys(p.kind.value for p in getattr(result, "problems", []))),
     }
 
 
@@ -177,6 +178,20 @@ def exclusions(records, k):
     return "\n".join(lines)
 
 
+#: Problem kinds about the peak alone: an impact excluded for these only has TC and kCAL judged by every other check.
+PEAK_KINDS = frozenset({"peak_on_ringing", "peak_between_samples"})
+
+
+def peak_alone(records):
+    """The measurable traces excluded for the peak alone (every problem of PEAK_KINDS), and how many of them had TC
+    and kCAL within 1 % (what a verdict per quantity, the peak withheld and the impact kept, would keep) and how
+    many had not (what it would pass as ok and wrong): (excluded, TC and kCAL right, TC or kCAL wrong)."""
+    alone = [r for r in records if r["category"] == "excluded_measurable" and r["kinds"]
+             and set(r["kinds"].split()) <= PEAK_KINDS]
+    right = sum(abs(r["tc_err_pct"]) <= 1.0 and abs(r["kcal_err_pct"]) <= 1.0 for r in alone)
+    return len(alone), right, len(alone) - right
+
+
 def offenders(records, k):
     lines = []
     for cat in ("crash", "faulty_ok", "ok_wrong", "excluded_measurable"):
@@ -264,6 +279,10 @@ def main(argv=None):
                f"{sum(r['process_s'] for r in records) / n * 1e3:.0f} ms per trace on average "
                f"({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU: writing, reading and processing "
                "the trace, less sensitive to other load)")
+    alone, alone_right, alone_wrong = peak_alone(records)
+    summary += (f"\nexcluded measurable for the peak alone (every problem {' or '.join(sorted(PEAK_KINDS))}): "
+                f"{alone}, {alone_right} of them with TC and kCAL within 1 % and {alone_wrong} not (a verdict per "
+                "quantity, the peak withheld, would keep the first and pass the second as ok)")
     text = (markdown(records, title) + "\n\n" + summary + "\n" + exclusions(records, args.worst)
             + "\n" + time_constants(records) + "\n" + offenders(records, args.worst) + "\n")
     print(text)

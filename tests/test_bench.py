@@ -58,6 +58,19 @@ def test_exclusion_table_counts_the_traces_that_were_right_all_the_same():
     assert robustness.exclusions(records[5:], 10) == ""
 
 
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_peak_alone_counts_the_exclusions_a_verdict_per_quantity_would_undo():
+    robustness = bench_module("robustness")
+    records = [
+        {**_excluded("", 0.2, -0.3, 9.0), "kinds": "peak_on_ringing"},  # TC and kCAL right: kept
+        {**_excluded("", 0.2, -2.2, 9.0), "kinds": "peak_on_ringing peak_between_samples"},  # kCAL off: ok but wrong
+        {**_excluded("", 0.2, 0.3, 9.0), "kinds": "peak_on_ringing plate_ringing"},  # another problem: not alone
+        {**_excluded("", 0.2, 0.3, 9.0), "kinds": ""},  # no problem kinds recorded: not counted
+        {**_excluded("", 0.2, 0.3, 9.0, category="excluded_marginal"), "kinds": "peak_between_samples"},
+    ]
+    assert robustness.peak_alone(records) == (2, 1, 1)
+
+
 def _tau(category, source, true, tau, se):
     return {"category": category, "tau_source": source, "tau_true_s": true, "tau_s": tau, "tau_se_s": se}
 
