@@ -23,7 +23,6 @@ from __future__ import annotations
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import dataclasses
 import sys
-from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,10 +83,7 @@ def main(argv=None):
     if not a.one_mode:
         for band, counts in zoo.band_counts([r[2] for r in rows], [r[3] for r in rows], RESIDUE_BANDS):
             print(f"  residue {band:>10}: {counts}")
-    excluded = [r for r in rows if r[3] == "excluded_measurable"]
-    heads = Counter(reason.split(":")[0].split("(")[0].strip() for *_, reason in excluded)
-    print(f"  first reasons of the {len(excluded)} measurable excluded: "
-          + ", ".join(f"{head} {n}" for head, n in heads.most_common(8)))
+    print(zoo.first_reasons([r[3] for r in rows], [r[-1] for r in rows]))
     for index, rig, _, cat, err, _ in rows:
         if cat in ("ok_wrong", "faulty_ok"):
             print(zoo.map_offender(cat, a.seed, index, rig, f"damping {rig.plate_zeta:.3f}, {second_of(rig)}", err))

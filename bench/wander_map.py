@@ -21,7 +21,6 @@ from __future__ import annotations
 import single_thread  # noqa: F401  (first: one BLAS thread per process, before numpy)
 import dataclasses
 import sys
-from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,10 +83,7 @@ def main(argv=None):
     print(zoo.category_summary(a.n, a.seed, f"{what}, fs 20-200 kHz", [r[4] for r in rows]))
     for band, counts in zoo.band_counts([r[2] for r in rows], [r[4] for r in rows], CORNER_BANDS_HZ, unit=" Hz"):
         print(f"  corner {band:>12}: {counts}")
-    excluded = [r for r in rows if r[4] == "excluded_measurable"]
-    heads = Counter(reason.split(":")[0].split("(")[0].strip() for *_, reason in excluded)
-    print(f"  first reasons of the {len(excluded)} measurable excluded: "
-          + ", ".join(f"{head} {n}" for head, n in heads.most_common(8)))
+    print(zoo.first_reasons([r[4] for r in rows], [r[-1] for r in rows]))
     for index, rig, corner, ratio, cat, err, _ in rows:
         if cat in ("ok_wrong", "faulty_ok"):
             print(zoo.map_offender(cat, a.seed, index, rig, f"record {1e3 * rig.pre_s:.0f} + {1e3 * rig.post_s:.0f} "

@@ -317,6 +317,15 @@ def category_summary(n: int, seed: int, what: str, categories) -> str:
     return f"{n} rigs (seed {seed}{', ' + what if what else ''}): " + ", ".join(f"{k} {v}" for k, v in counts)
 
 
+def first_reasons(categories, reasons, k: int = 8) -> str:
+    """A map's line for its exclusions of measurable traces: ``"  first reasons of the <n> measurable excluded:
+    <head> <count>, ..."`` (a reason's head: before its first colon or bracket; the ``k`` most common)."""
+    heads = Counter(r.split(":")[0].split("(")[0].strip()
+                    for c, r in zip(categories, reasons) if c == "excluded_measurable")
+    return (f"  first reasons of the {sum(heads.values())} measurable excluded: "
+            + ", ".join(f"{head} {n}" for head, n in heads.most_common(k)))
+
+
 def map_offender(category: str, seed: int, index: int, rig: Rig, what: str, errors_pct: dict, *,
                  tau: bool = True) -> str:
     """A map's line for an ok-but-wrong or faulty-ok trace: ``"  <category> <seed>:<index>: fs, plate[, tau], noise;
