@@ -1932,7 +1932,7 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False,
         out.extend(_peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u))
     if front and not {p.kind for p in out} & PLATE_EVIDENCE:
         out.extend(_start_on_fast_ringing(x, fs, noise, peak, s_u, e_u))
-    if fall and not {p.kind for p in out} & (PLATE_EVIDENCE | {ProblemKind.PEAK_BETWEEN_SAMPLES}):
+    if fall and not out:  # a peak no check above judged (without ``front`` they find only plate or peak kinds)
         out.extend(_peak_on_slow_fall(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
                          noise)
