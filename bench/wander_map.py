@@ -80,15 +80,11 @@ def main(argv=None):
     a = ap.parse_args(argv)
     rows = zoo.map_rows(run_one, [(a.seed, i, not a.no_wander) for i in range(a.n)], a.workers)
     what = "white noise alone" if a.no_wander else "1/f noise with its corner at 1 Hz-2 kHz"
-    print(zoo.category_summary(a.n, a.seed, f"{what}, fs 20-200 kHz", [r[4] for r in rows]))
-    for band, counts in zoo.band_counts([r[2] for r in rows], [r[4] for r in rows], CORNER_BANDS_HZ, unit=" Hz"):
-        print(f"  corner {band:>12}: {counts}")
-    print(zoo.first_reasons([r[4] for r in rows], [r[-1] for r in rows]))
-    for index, rig, corner, ratio, cat, err, _ in rows:
-        if cat in ("ok_wrong", "faulty_ok"):
-            print(zoo.map_offender(cat, a.seed, index, rig, f"record {1e3 * rig.pre_s:.0f} + {1e3 * rig.post_s:.0f} "
-                                   f"ms, 1/f corner {corner:.3g} Hz (wander {ratio:.2f} x the white noise)", err))
-
+    print("\n".join(zoo.map_report(
+        rows, a.seed, f"{what}, fs 20-200 kHz",
+        [r[2] for r in rows], CORNER_BANDS_HZ, lambda band: f"  corner {band:>12}",
+        lambda r: f"record {1e3 * r[1].pre_s:.0f} + {1e3 * r[1].post_s:.0f} ms, 1/f corner {r[2]:.3g} Hz "
+                  f"(wander {r[3]:.2f} x the white noise)", unit=" Hz")))
 
 if __name__ == "__main__":
     main()

@@ -1930,3 +1930,20 @@ def test_step_just_after_the_contact_taken_for_the_decay_leaves_a_plateau_that_i
     assert found and found[0].kind is ProblemKind.CONTACT_END_UNDETERMINED, [p.message for p in c.problems]
     given = condition_voltage(stepped, fs, tau_s=math.inf)
     assert _step_problems(given) or any(p.kind is ProblemKind.BASELINE_OFF_ZERO for p in given.problems)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_contact_found_only_after_a_baseline_through_it_is_unchecked_and_a_problem(seed):
+    """A flat top (a saturated stage) under a 1 ms pre-trigger with its largest sample at the top's end: the record's
+    level before that sample is the top's, nothing stands out of it, and the contact shows only once a baseline
+    is fitted through the whole record, its own samples included. No check ran on it: that is a problem (it was
+    none, and bench/saturation_map.py trace 2:320 came out ok with TC -19 % and kCAL +100 %)."""
+    fs = 50e3
+    v = np.concatenate([np.zeros(50), np.linspace(0.0, 2.0, 16)[1:], np.full(150, 2.0), np.linspace(2.0, 0.0, 16)[1:],
+                        np.zeros(2000)])
+    v = v + np.random.default_rng(seed).normal(0.0, 1e-3, v.size)
+    v[50 + 15 + 149] += 0.01  # the largest sample at the top's end
+    cond = condition_voltage(v, fs, polarity=1, mains_hz=None, tau_s=math.inf)
+    assert cond.contact.found and cond.n_iterations == 0
+    unstable = [p for p in cond.problems if p.kind is ProblemKind.CONTACT_UNSTABLE]
+    assert unstable and "baseline under the contact is unknown" in unstable[0].message

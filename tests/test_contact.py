@@ -13,7 +13,8 @@ from numpy.testing import assert_allclose
 from tracekit import DIRTY, make_trace
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import contact_samples, detect_clipping, detect_contact, quantization_step, robust_noise
+from ballimpact.contact import (contact_samples, detect_clipping, detect_contact, detect_saturation, quantization_step,
+                               robust_noise)
 
 RATES_HZ = [66964.3, 50000.0]
 
@@ -759,3 +760,68 @@ def test_a_ramp_whose_first_sample_is_low_keeps_the_hinge_start():
     c = detect_contact(f, fs, noise_rms_V=2e-3, curve=True, step=True)
     assert "start_step" not in c.flags and "start_jump" not in c.flags, c.flags
     assert_allclose(c.start_s, ta, atol=1e-9)
+
+
+# ------------------------------------------------------------------ a stage saturating below the ADC's rails
+
+#: The top band over the band under it for a parabola: counts go as sqrt(depth), sqrt(4) / (sqrt(12) - sqrt(4)).
+PARABOLA_RATIO = 2.0 / (math.sqrt(12.0) - 2.0)
+
+
+def _half_sine(fs, tc=4e-3, peak=3.0, noise=0.0, seed=0):
+    t = np.arange(int(round(2 * tc * fs))) / fs
+    v = np.where(t < tc, peak * np.sin(np.pi * np.clip(t / tc, 0.0, 1.0)), 0.0)
+    return v + np.random.default_rng(seed).normal(0.0, noise, t.size), t
+
+
+def test_saturation_counts_of_a_parabolas_top():
+    """Noise-free and finely sampled, a smooth top holds 1 / (sqrt(3) - 1) times as many samples in the top band as
+    in the band under it (the docstring's 1.4); a triangle's straight flanks 0.5: neither is saturated."""
+    sigma = 1e-3
+    v, _ = _half_sine(5e6)
+    sat = detect_saturation(v[v > 0], sigma)
+    assert_allclose(sat.ratio, PARABOLA_RATIO, rtol=0.02)
+    assert not sat.saturated
+    u = np.linspace(-1.0, 1.0, 200_001)
+    tri = detect_saturation(3.0 * (1.0 - np.abs(u)), sigma)
+    assert_allclose(tri.ratio, 0.5, rtol=0.05)
+    assert not tri.saturated
+
+
+@pytest.mark.parametrize("fs", [20e3, 66964.3, 200e3])
+@pytest.mark.parametrize("noise", [0.3e-3, 3e-3, 15e-3])
+@pytest.mark.parametrize("seed", range(3))
+def test_a_smooth_noisy_top_is_not_saturated(fs, noise, seed):
+    v, _ = _half_sine(fs, noise=noise, seed=seed)
+    n = int(round(4e-3 * fs))
+    assert not detect_saturation(v[:n], noise).saturated
+
+
+@pytest.mark.parametrize("fs", [20e3, 66964.3, 200e3])
+@pytest.mark.parametrize("level, noise_after", [(0.6, 0.0), (0.8, 0.5), (0.9, 0.3)])
+def test_a_half_sine_cut_flat_is_saturated_at_its_level(fs, level, noise_after):
+    """The output held at ``level`` of the peak (the amplifier's noise cut with it, the DAQ's added after):
+    saturated, at that level to within the noise."""
+    noise, peak = 3e-3, 3.0
+    v, _ = _half_sine(fs, peak=peak, noise=noise * math.sqrt(1.0 - noise_after), seed=1)
+    v = np.minimum(v, level * peak) + np.random.default_rng(2).normal(0.0, noise * math.sqrt(noise_after), v.size)
+    n = int(round(4e-3 * fs))
+    sat = detect_saturation(v[:n], noise)
+    assert sat.saturated
+    assert_allclose(sat.level_V, level * peak, atol=noise)
+
+
+def test_a_sharp_spike_above_a_smooth_hump_is_not_saturated():
+    """A few samples above the rest (the model's pre-buckling spike) are no flat top, however many lie under."""
+    fs, noise = 100e3, 1e-3
+    v, _ = _half_sine(fs, peak=2.0, noise=noise, seed=3)
+    x = v[:int(round(4e-3 * fs))]
+    x[20:23] = [3.0, 2.8, 2.6]  # a spike falling over three samples, above the hump's 2 V
+    sat = detect_saturation(x, noise)
+    assert not sat.saturated and sat.n_top >= 8  # the top band is the hump's, and the hump is smooth
+
+
+@pytest.mark.parametrize("noise", [0.0, -1e-3, math.nan, math.inf])
+def test_saturation_needs_a_positive_noise(noise):
+    with pytest.raises(ValueError, match="noise_rms_V must be positive and finite"):
+        detect_saturation(np.ones(10), noise)

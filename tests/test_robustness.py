@@ -19,6 +19,7 @@ NOTE TO THE ALGORITHM ENGINEER (issue 9)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -75,6 +76,7 @@ FAULT_WORDS = {
     "second contact": ("second contact", "more than one impact"),
     "truncated": ("truncated", "not entirely inside"),
     "clipped": ("clipping", "clipped"),
+    "saturated": ("clipping below the ADC rails",),
 }
 
 
@@ -784,6 +786,51 @@ def test_zoo_two_mode_plate_case(name, seed, index, named_in_reason, what, tmp_p
     assert_invariant(trace, result, judgement, excluded_with=named_in_reason)
 
 
+#: Traces of bench/saturation_map.py, faulty but ok on 1a036a8: the amplifier's output saturated at 51-85 % of the
+#: peak, well inside the ADC's range, and the flat top passed for the force's (kCAL high by the impulse cut off, the
+#: peak low, TC right). The recorded top now holds many times the samples of the band just under it, where a smooth
+#: force's holds about 1.4 times (``contact.detect_saturation``) (name, seed, index, what).
+SATURATED_STAGE = [
+    ("saturated-at-51pc-plate-14kHz-97.7kHz", 1, 0, "faulty but ok on 1a036a8: kCAL +50.6 %, peak -22.4 %"),
+    ("saturated-at-54pc-tau-0.05s-25.1kHz", 1, 16, "faulty but ok on 1a036a8: kCAL +48.7 %, peak -16.0 %"),
+    ("saturated-at-56pc-plate-4.6kHz-negative", 1, 59, "faulty but ok on 1a036a8: kCAL +44.5 %, peak -16.9 %"),
+    ("saturated-at-83pc-175kHz-tau-estimated", 1, 50, "faulty but ok on 1a036a8: kCAL +5.9 %, peak -9.2 %"),
+    ("saturated-at-85pc-24.8kHz-noise-after", 1, 60, "faulty but ok on 1a036a8: kCAL +7.0 %, peak -7.4 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", named(SATURATED_STAGE))
+def test_zoo_saturated_stage_case(name, seed, index, what, tmp_path):
+    trace, level, _ = bench_module("saturation_map").trace_for(seed, index)
+    assert trace.truth.fault == "saturated" and level < 0.9, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with="clipping below the ADC rails")
+
+
+def test_a_flat_top_under_a_short_pretrigger_is_not_passed_unchecked(tmp_path):
+    """bench/saturation_map.py trace 2:320, faulty but ok on 1a036a8 with TC -18.9 % and kCAL +99.9 %: saturated at
+    58 % of the peak under a 1.2 ms pre-trigger, the record's level before its largest sample was the flat top's, no
+    contact stood out of it before the baseline fit, and the contact found after a fit through the whole record went
+    unchecked (with a noise estimate 15 times the truth the saturation test could not see the top either)."""
+    trace, level, _ = bench_module("saturation_map").trace_for(2, 320)
+    assert trace.truth.fault == "saturated" and trace.rig.pre_s < 1.5e-3
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert judgement.category == "excluded_faulty", (judgement, result.reason)
+    assert result.reason.startswith("contact window not stable: no contact stands out of the record"), result.reason
+
+
+def test_a_flat_top_under_hum_picked_up_after_the_amplifier_is_seen_with_the_hum_removed(tmp_path):
+    """30 mV of 60 Hz hum added after the saturated stage tilts the flat top by more than the noise (0.5 mV): as
+    recorded it is no flat top, with the fitted hum removed it is (the first saturation map trace, so altered)."""
+    trace, _, _ = bench_module("saturation_map").trace_for(1, 0)
+    rig = dataclasses.replace(trace.rig, hum_V=0.03, noise_V=0.5e-3, hum_after_saturation=True, mains_known=True,
+                              mains_hz=60.0, plate_hz=None)
+    trace = zoo.render(rig, np.random.default_rng(7), "hum after the saturated stage")
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with="clipping below the ADC rails: the recorded signal "
+                                                           "(with the hum removed")
+
+
 #: Traces of bench/adc_map.py recorded by a 12-bit ADC over +-10 V (a step of 4.9 mV) under noise far below the step,
 #: ok but wrong on d90f51e: the quiet record moved in whole steps, its noise was estimated at a fraction of one, and
 #: a step before the contact passed for a foot of force (1:26: start 157 us early, TC +3.8 %) or the end was read off
@@ -981,8 +1028,6 @@ def test_step_within_a_contact_taken_for_the_decay_is_excluded_by_the_sessions_t
     """bench/step_map.py trace 2:249: a step of -2.7 % of the peak at 0.89 TC, the time constant (5.7 s) estimated.
     Alone, the fit takes the step for the amplifier's undershoot (0.082 s) and the trace is ok with kCAL -2.8 %. In a
     session with five more shots on the same rig (no step) the session time-constant check excludes it, and only it."""
-    import dataclasses
-
     from ballimpact.processing import apply_time_constant_check
 
     trace, _, _ = bench_module("step_map").trace_for(2, 249)

@@ -174,6 +174,23 @@ def test_clipped_trace_reaches_the_rail():
     assert tr.truth.fault == "clipped"
 
 
+@pytest.mark.parametrize("level", [0.6, 0.9])
+def test_a_saturating_amplifier_holds_the_record_at_its_level_and_is_a_fault(level):
+    """bench/saturation_map.py's stage: the amplifier's output held at +-saturation_V (the noise all added after
+    it, so the top is that level to within the noise's mean), far inside the ADC's range; not reached, no fault."""
+    kw = dict(polarity=1, noise_V=1e-3)
+    free = ideal(5, **kw)
+    sat_V = level * float(np.max(free.voltage_V))
+    tr = ideal(5, saturation_V=sat_V, daq_noise_fraction=1.0, **kw)
+    top = tr.voltage_V[tr.voltage_V > sat_V - 6e-3]
+    assert top.size > 20
+    assert_allclose(np.median(top), sat_V, atol=4e-3 / math.sqrt(top.size) + lsb(tr))
+    assert tr.truth.fault == "saturated" and not tr.truth.measurable
+    assert np.max(np.abs(tr.voltage_V)) < 0.9 * tr.rig.adc_range_v[1]
+    untouched = ideal(5, saturation_V=9.9, daq_noise_fraction=1.0, **kw)
+    assert untouched.truth.fault == "" and untouched.truth.measurable
+
+
 @pytest.mark.parametrize("fraction, fault", [(0.02, ""), (0.3, "second contact"), (1.0, "second contact")])
 def test_second_contact_size_and_fault(fraction, fault):
     tr = ideal(6, second=(0.008, fraction, 12.0), post_s=0.08)
@@ -286,3 +303,24 @@ def test_map_command_line_and_summary():
                                                        "ok_right"])
     assert line == "5 rigs (seed 3, ideal plate): excluded_measurable 1, ok_right 3, ok_wrong 1"
     assert zoo.category_summary(1, 1, "", ["ok_right"]) == "1 rigs (seed 1): ok_right 1"
+
+
+def test_map_report_lines():
+    """The report a map prints: the summary, a line per band, the extra lines, the first reasons of the measurable
+    traces excluded, then each ok-but-wrong or faulty-ok trace with its own text and errors."""
+    rig = ideal(1).rig
+    err = {"tc": 1.5, "kcal": -0.2, "peak": 0.0}
+    rows = [(0, rig, 0.2, "ok_right", err, ""), (1, rig, 0.7, "ok_wrong", err, ""),
+            (2, rig, 0.8, "excluded_measurable", err, "no contact found: nothing"), (3, rig, 0.9, "faulty_ok", err, "")]
+    lines = zoo.map_report(rows, 4, "a draw", [r[2] for r in rows], (0.5,), lambda band: f"  x {band}",
+                           lambda r: f"x = {r[2]}", extra=["  an extra line"])
+    assert lines[:5] == [
+        "4 rigs (seed 4, a draw): excluded_measurable 1, faulty_ok 1, ok_right 1, ok_wrong 1",
+        "  x < 0.5: ok_right 1",
+        "  x >= 0.5: ok_wrong 1, faulty_ok 1, excluded_measurable 1",
+        "  an extra line",
+        "  first reasons of the 1 measurable excluded: no contact found 1",
+    ]
+    assert len(lines) == 7
+    assert lines[5].startswith("  ok_wrong 4:1: ") and "x = 0.7: TC +1.50 %, kCAL -0.20 %" in lines[5]
+    assert lines[6].startswith("  faulty_ok 4:3: ") and "x = 0.9" in lines[6]

@@ -196,6 +196,16 @@ class Rig:
         Further modes of the plate, each (resonance [Hz], damping ratio [-], residue [-]); the sensed force is
         the modal sum, the ``plate_hz`` mode's residue being 1 less theirs (unit static gain). The zoo draws
         none (bench/two_mode_map.py does).
+    saturation_V : float or None
+        The amplifier's output saturates at +-this [V] (offset and drift included, and the hum unless
+        ``hum_after_saturation``; the DAQ's noise added after); a trace it cuts is faulty ("saturated").
+        None (the zoo's): no saturation (bench/saturation_map.py draws it).
+    daq_noise_fraction : float
+        With ``saturation_V``: the share of the noise's variance the DAQ adds after the amplifier (the rest is
+        the amplifier's own, cut with its output) [-].
+    hum_after_saturation : bool
+        With ``saturation_V``: the hum is picked up after the amplifier (in the cable to the DAQ) and rides on
+        the flat top, instead of at its input, cut with its output.
     """
 
     ball: str
@@ -227,6 +237,9 @@ class Rig:
     mode: str = "random"
     adc_bits: int = ADC_BITS
     plate_modes: tuple = ()
+    saturation_V: float | None = None
+    daq_noise_fraction: float = 1.0
+    hum_after_saturation: bool = False
 
 
 @dataclass
@@ -324,6 +337,24 @@ def first_reasons(categories, reasons, k: int = 8) -> str:
                     for c, r in zip(categories, reasons) if c == "excluded_measurable")
     return (f"  first reasons of the {sum(heads.values())} measurable excluded: "
             + ", ".join(f"{head} {n}" for head, n in heads.most_common(k)))
+
+
+def map_report(rows, seed: int, what: str, values, edges, label, offender, *, scale: float = 1.0, unit: str = "",
+               extra=()) -> list[str]:
+    """A map's printed report, line by line: its categories (``what`` the draw), their counts per band of
+    ``values`` (``edges``, ``scale`` and ``unit`` as :func:`band_counts` takes them; ``label(band)`` heads each
+    line), the ``extra`` lines, the first reasons of its exclusions of measurable traces, and a line per ok-but-wrong
+    or faulty-ok trace (``offender(row)`` its text). ``rows`` are the map's ``run_one`` results, each
+    ``(index, rig, ..., category, errors [%], reason)``."""
+    categories = [r[-3] for r in rows]
+    out = [category_summary(len(rows), seed, what, categories)]
+    out += [f"{label(band)}: {counts}" for band, counts in band_counts(values, categories, edges, scale=scale,
+                                                                      unit=unit)]
+    out += list(extra)
+    out.append(first_reasons(categories, [r[-1] for r in rows]))
+    out += [map_offender(r[-3], seed, r[0], r[1], offender(r), r[-2]) for r in rows
+            if r[-3] in ("ok_wrong", "faulty_ok")]
+    return out
 
 
 def map_offender(category: str, seed: int, index: int, rig: Rig, what: str, errors_pct: dict, *,
@@ -569,11 +600,23 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     v = rig.polarity * amp[take] / kcal
     v = v + rig.offset_V + rig.drift_V_s * t
     f_m = rig.mains_hz + rig.mains_dev_hz
+    hum_after = rig.saturation_V is not None and rig.hum_after_saturation
+    v_amp, v = v, (np.zeros(n) if hum_after else v)
     if rig.hum_V > 0:
         v = v + rig.hum_V * np.sin(2 * np.pi * f_m * t + float(rng.uniform(0, 2 * np.pi)))
         for k, rel, ph in rig.harmonics:
             v = v + rel * rig.hum_V * np.sin(2 * np.pi * k * f_m * t + ph)
-    v = v + rng.normal(0.0, rig.noise_V, size=n)
+    hum, v = (v, v_amp) if hum_after else (None, v)
+    saturated = False
+    if rig.saturation_V is None:
+        v = v + rng.normal(0.0, rig.noise_V, size=n)
+    else:  # the amplifier's noise is cut with its output, the DAQ's (and hum picked up after it) added after
+        q = min(max(float(rig.daq_noise_fraction), 0.0), 1.0)
+        v = v + rng.normal(0.0, rig.noise_V * math.sqrt(1.0 - q), size=n)
+        saturated = bool(np.any(np.abs(v) >= rig.saturation_V))
+        v = np.clip(v, -rig.saturation_V, rig.saturation_V) + rng.normal(0.0, rig.noise_V * math.sqrt(q), size=n)
+        if hum is not None:
+            v = v + hum
     lsb = (hi_v - lo_v) / 2**rig.adc_bits
     clipped = bool(np.any(v >= hi_v - 0.5 * lsb) or np.any(v <= lo_v + 0.5 * lsb))
     for where, amp_v in rig.spikes:
@@ -589,6 +632,8 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
         faults.append("truncated")
     if clipped:
         faults.append("clipped")
+    if saturated:
+        faults.append("saturated")
     second_fraction = 0.0
     if second_knots is not None:
         vis = second_knots[0][0] <= t_end_trace

@@ -49,6 +49,8 @@ __all__ = [
     "ContactResult",
     "detect_contact",
     "detect_clipping",
+    "detect_saturation",
+    "Saturation",
     "robust_noise",
     "quantization_step",
     "contact_samples",
@@ -94,6 +96,10 @@ NOISE_FLOOR_FRACTION = 1e-6  # lower bound of the noise estimate, fraction of th
 QUANTUM_MIN_STEPS = 20  # a grid of values is looked for only among at least this many distinct steps [-]
 QUANTUM_ON_GRID = 0.95  # ... and found when this fraction of them are whole multiples of the least one ... [-]
 QUANTUM_TOLERANCE = 0.02  # ... to within this fraction of it (a printed or float32 value's rounding) [-]
+SATURATION_TOP_SIGMA = 4.0  # the contact's top: samples within this many noise deviations of its largest [-]
+SATURATION_NEXT_SIGMA = 12.0  # ... the band below it reaches this many noise deviations under the largest [-]
+SATURATION_MIN_SAMPLES = 8  # a flat top is judged from this many samples in the top band on [samples]
+SATURATION_RATIO = 3.0  # ... and is a saturated one when the top band holds this many times the band below [-]
 
 
 @dataclass(frozen=True)
@@ -293,6 +299,90 @@ def detect_clipping(raw_voltage_V, adc_range_V, *, adc_bits: int = 16, tolerance
         if starts.size and np.max(ends - starts + 1) >= min_run:
             return True
     return False
+
+
+@dataclass(frozen=True)
+class Saturation:
+    """What :func:`detect_saturation` saw at the top of a contact.
+
+    Attributes
+    ----------
+    saturated : bool
+        The top is flat: the signal was cut at a level below the ADC's rails.
+    level_V : float
+        Median of the samples in the top band [V].
+    n_top : int
+        Samples within SATURATION_TOP_SIGMA noise deviations of the largest [-].
+    n_below : int
+        Samples in the band from there down to SATURATION_NEXT_SIGMA deviations [-].
+    ratio : float
+        n_top / max(n_below, 1) [-].
+    """
+
+    saturated: bool
+    level_V: float
+    n_top: int
+    n_below: int
+    ratio: float
+
+
+def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
+    """Whether the top of a contact is flat: a charge amplifier (or any stage before the ADC) saturated below the
+    ADC's rails, which :func:`detect_clipping` cannot see. Not in the paper.
+
+    A saturated stage holds its output at one level while the force goes on rising above it: the samples pile
+    up at that level and the force reaches it, and leaves it, with its full slope. A smooth force's top holds
+    few samples near its maximum for the samples just below it: where it is a parabola, the samples within
+    ``d`` of the maximum go as ``sqrt(d)``, and the top band (0 to SATURATION_TOP_SIGMA noise deviations under
+    the largest sample) holds about 1.4 times the band under it (down to SATURATION_NEXT_SIGMA deviations); a
+    sharp peak, as the model's pre-buckling spike, holds fewer. A saturated top holds all its flat samples in
+    the top band and only the few of its steep flanks in the band under it. The top is called saturated when
+    it holds at least SATURATION_MIN_SAMPLES samples and SATURATION_RATIO times the band under it. On the
+    zoo's measurable traces (tests/zoo.py, seeds 0-3) with at least 8 samples in the top band the ratio was at
+    most 2.7; on the traces of ``bench/saturation_map.py`` (a stage saturating at 50-95 % of the peak) see
+    that map for how many it finds.
+
+    The voltage is the one recorded, polarity applied (positive force), over the contact: saturation flattens
+    the amplifier's output, not the corrected signal (the amplifier's decay, undone, tilts it).
+
+    Parameters
+    ----------
+    voltage_V : array_like
+        Recorded voltage over the contact, polarity applied, offset (and, where it is added after the
+        amplifier, hum) removed or not [V].
+    noise_rms_V : float
+        Noise standard deviation of the quiet baseline [V].
+
+    Returns
+    -------
+    Saturation
+
+    Raises
+    ------
+    ValueError
+        If noise_rms_V is not positive and finite.
+    """
+    if not (math.isfinite(noise_rms_V) and noise_rms_V > 0):
+        raise ValueError(f"noise_rms_V must be positive and finite, got {noise_rms_V!r}")
+    x = np.asarray(voltage_V, dtype=float).ravel()
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return Saturation(False, math.nan, 0, 0, math.nan)
+    # the reference: the SATURATION_MIN_SAMPLES-th largest sample, not the largest (over a flat top's hundreds of
+    # samples the largest is the noise's maximum, 3 deviations above the level, and a band from it misses the
+    # flat samples that the noise took below the level)
+    top = float(np.partition(x, x.size - k)[x.size - k]) if (k := min(SATURATION_MIN_SAMPLES, x.size)) else math.nan
+    in_top = x >= top - SATURATION_TOP_SIGMA * noise_rms_V
+    n_top = int(np.count_nonzero(in_top))
+    n_below = int(np.count_nonzero(~in_top & (x >= top - SATURATION_NEXT_SIGMA * noise_rms_V)))
+    ratio = n_top / max(n_below, 1)
+    # a flat top's largest samples lie within the noise of one another; a peak's fall away from the largest
+    flat = float(np.max(x)) - top <= SATURATION_TOP_SIGMA * noise_rms_V
+    # the band below counted generously (about two Poisson deviations more): a few samples in either band
+    # say little, and a smooth top's ratio scatters up to 5 over 10 and 2 samples
+    saturated = (flat and n_top >= SATURATION_MIN_SAMPLES
+                 and n_top >= SATURATION_RATIO * (n_below + 2.0 * math.sqrt(n_below + 1.0) + 1.0))
+    return Saturation(bool(saturated), float(np.median(x[in_top])), n_top, n_below, float(ratio))
 
 
 def contact_samples(time_s, values, start_s: float, end_s: float, *, include_ends: bool = True):

@@ -119,7 +119,7 @@ _MESSAGE_STARTS = {
     ProblemKind.TRACE_NOT_A_FILE: r"trace path is not a file",
     ProblemKind.TRACE_UNREADABLE: r"unreadable trace",
     ProblemKind.TRACE_UNUSABLE: r"unusable trace",
-    ProblemKind.CLIPPING: r"clipping at the ADC rails",
+    ProblemKind.CLIPPING: r"clipping (at|below) the ADC rails",
     ProblemKind.POLARITY: r"pulse is (negative|positive): plate\.polarity",
     ProblemKind.NO_CONTACT: r"no contact found",
     ProblemKind.MULTIPLE_IMPACTS: r"more than one impact",

@@ -21,7 +21,8 @@ import numpy as np
 
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
 from .conditioning import condition_voltage
-from .contact import contact_samples, detect_clipping
+from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_samples, detect_clipping,
+                      detect_saturation)
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import kelvin_voigt_parameters
@@ -281,6 +282,35 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
     return t, raw, cond
 
 
+def _saturation_problem(res: ImpactResult, raw, cond, polarity: int) -> None:
+    """Exclude an impact whose contact has a flat top in the recorded voltage (contact.detect_saturation): a stage
+    before the ADC saturated below its rails. Judged on the recorded voltage with single-sample spikes replaced,
+    as it is (hum picked up before the amplifier is cut with it) and with the fitted hum removed (hum added after
+    it rides on the flat top)."""
+    c = cond.contact
+    sigma = cond.noise_rms_V
+    if not (c.found and math.isfinite(sigma) and sigma > 0):
+        return
+    i0, i1 = max(int(c.start_index), 0), min(int(c.end_index), raw.size - 1)
+    if i1 - i0 < 2:
+        return
+    a, b = max(i0 - 1, 0), min(i1 + 2, raw.size)  # the contact and a neighbour each side, for its spikes
+    x = polarity * np.asarray(raw[a:b], dtype=float)
+    for i in cond.spike_indices:
+        if a < i < b - 1:
+            x[i - a] = 0.5 * (x[i - a - 1] + x[i - a + 1])
+    for what, y in (("as recorded", x), ("with the hum removed", x - cond.baseline_V[a:b])):
+        sat = detect_saturation(y[i0 - a:i1 + 1 - a], sigma)
+        if sat.saturated:
+            res.exclude(Problem(ProblemKind.CLIPPING, (
+                f"clipping below the ADC rails: the recorded signal ({what}, polarity applied) is flat at the "
+                f"contact's top, {sat.n_top} samples within {SATURATION_TOP_SIGMA:g} noise deviations of its largest "
+                f"against {sat.n_below} in the {SATURATION_NEXT_SIGMA - SATURATION_TOP_SIGMA:g} deviations below "
+                f"(a smooth force's top holds about 1.4 times as many): the charge amplifier or another stage "
+                f"before the ADC saturated, and the force above it is lost (use a less sensitive range)")))
+            return
+
+
 def _tau_standard_error(cond, fs: float, t0_s: float) -> float:
     """Standard error [s] of a time constant estimated from the trace (NaN when it was given or not estimated).
 
@@ -340,6 +370,8 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         res.exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
         return None
     res.raw_time_s = t - contact.start_s
+    if not has_kind(res.problems, ProblemKind.CLIPPING):  # a pulse of the right sign, found: is its top flat?
+        _saturation_problem(res, raw, cond, meta.polarity)
     if contact.n_impacts > 1:
         seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
                          f"{100 * frac:.0f} % of the peak" for k, (dt, frac) in enumerate(contact.other_impacts))
