@@ -304,7 +304,7 @@ def _saturation_problem(res: ImpactResult, raw, cond, polarity: int) -> None:
         if sat.saturated:
             res.exclude(Problem(ProblemKind.CLIPPING, (
                 f"clipping below the ADC rails: the recorded signal ({what}, polarity applied) is flat at the "
-                f"contact's top, {sat.n_top} samples within {SATURATION_TOP_SIGMA:g} noise deviations of its largest "
+                f"contact's top, {sat.n_top} samples within {SATURATION_TOP_SIGMA:g} noise deviations of its top "
                 f"against {sat.n_below} in the {SATURATION_NEXT_SIGMA - SATURATION_TOP_SIGMA:g} deviations below "
                 f"(a smooth force's top holds about 1.4 times as many): the charge amplifier or another stage "
                 f"before the ADC saturated, and the force above it is lost (use a less sensitive range)")))
