@@ -41,14 +41,7 @@ LEVEL_BANDS = (0.7, 0.85)  # bands of the saturation level [fraction of the peak
 def trace_for(seed: int, index: int):
     """One map trace: (ZooTrace, saturation level [fraction of the peak], DAQ noise share [-])."""
     rng = np.random.default_rng([seed, index, 5015])
-    fs = zoo._loguniform(rng, 20e3, 200e3)
-    pre = zoo._loguniform(rng, 1e-3, 0.1)
-    post = zoo._loguniform(rng, 5e-3, 1.0)
-    plate = bool(rng.uniform() < 0.3)
-    fn = zoo._loguniform(rng, 3e3, min(30e3, 0.45 * fs))
-    zeta = float(rng.uniform(0.01, 0.3))
-    tau = zoo._loguniform(rng, 0.01, 100.0)
-    known = bool(rng.uniform() < 0.5)
+    chain = zoo.map_chain(rng)
     polarity = 1 if rng.uniform() < 0.5 else -1
     level = float(rng.uniform(0.5, 0.95))
     daq = float(rng.uniform(0.0, 1.0))
@@ -59,10 +52,9 @@ def trace_for(seed: int, index: int):
     shot = zoo.map_shot(rng)
     offset = zoo._BENIGN["offset_V"]
     peak = zoo._BENIGN["peak_volts"]
-    rig = zoo.Rig(**dict(zoo._BENIGN, ball=BALLS[index % 4], mode="saturation", sample_rate_hz=fs, pre_s=pre,
-                         post_s=post, tau_s=tau, tau_known=known, plate_hz=fn if plate else None, plate_zeta=zeta,
-                         polarity=polarity, saturation_V=level * peak + polarity * offset, daq_noise_fraction=daq,
-                         hum_V=hum, mains_hz=mains, mains_known=mains_known, hum_after_saturation=hum_after, **shot))
+    rig = zoo.Rig(**dict(zoo._BENIGN, ball=BALLS[index % 4], mode="saturation", **chain, polarity=polarity,
+                         saturation_V=level * peak + polarity * offset, daq_noise_fraction=daq, hum_V=hum,
+                         mains_hz=mains, mains_known=mains_known, hum_after_saturation=hum_after, **shot))
     return zoo.render(rig, rng, f"saturation {seed}:{index}"), level, daq
 
 

@@ -48,21 +48,12 @@ def trace_for(seed: int, index: int, wander: bool = True):
     """One map trace with its wander: (ZooTrace, corner frequency [Hz], wander's RMS over the white noise's [-]);
     without ``wander`` the same rig and shot with the white noise alone (the wander still drawn, not added)."""
     rng = np.random.default_rng([seed, index, 1729])
-    fs = zoo._loguniform(rng, 20e3, 200e3)
-    pre = zoo._loguniform(rng, 1e-3, 0.1)
-    post = zoo._loguniform(rng, 5e-3, 1.0)
-    plate = bool(rng.uniform() < 0.3)
-    fn = zoo._loguniform(rng, 3e3, min(30e3, 0.45 * fs))
-    zeta = float(rng.uniform(0.01, 0.3))
-    tau = zoo._loguniform(rng, 0.01, 100.0)
-    known = bool(rng.uniform() < 0.5)
+    chain = zoo.map_chain(rng)
     corner = zoo._loguniform(rng, 1.0, 2e3)
     shot = zoo.map_shot(rng)
-    rig = zoo.Rig(**dict(zoo._BENIGN, ball=BALLS[index % 4], mode="wander", sample_rate_hz=fs, pre_s=pre,
-                         post_s=post, tau_s=tau, tau_known=known, plate_hz=fn if plate else None, plate_zeta=zeta,
-                         **shot))
+    rig = zoo.Rig(**dict(zoo._BENIGN, ball=BALLS[index % 4], mode="wander", **chain, **shot))
     trace = zoo.render(rig, rng, f"wander {seed}:{index}")
-    wander_on, wander = wander, pink_noise(trace.voltage_V.size, fs, rig.noise_V, corner, rng)
+    wander_on, wander = wander, pink_noise(trace.voltage_V.size, rig.sample_rate_hz, rig.noise_V, corner, rng)
     ratio = float(np.std(wander)) / rig.noise_V
     return (dataclasses.replace(trace, voltage_V=trace.voltage_V + wander) if wander_on else trace), corner, ratio
 

@@ -368,6 +368,23 @@ def map_offender(category: str, seed: int, index: int, rig: Rig, what: str, erro
             f"peak {errors_pct['peak']:+.2f} %")
 
 
+def map_chain(rng: np.random.Generator) -> dict:
+    """Rig fields of the recording chain for the maps of bench/ that draw it whole (the wander and saturation
+    maps): a sample rate of 20-200 kHz, a pre-trigger of 1-100 ms and a record of 5 ms to 1 s after the contact
+    (log-uniform, as the zoo draws them), three in ten on a plate of 3 kHz to 0.45 fs (damping 0.01-0.3; drawn
+    for all), and the amplifier's time constant of 0.01-100 s (log-uniform), given for half (drawn in that order)."""
+    fs = _loguniform(rng, 20e3, 200e3)
+    pre = _loguniform(rng, 1e-3, 0.1)
+    post = _loguniform(rng, 5e-3, 1.0)
+    plate = bool(rng.uniform() < 0.3)
+    fn = _loguniform(rng, 3e3, min(30e3, 0.45 * fs))
+    zeta = float(rng.uniform(0.01, 0.3))
+    tau = _loguniform(rng, 0.01, 100.0)
+    known = bool(rng.uniform() < 0.5)
+    return dict(sample_rate_hz=fs, pre_s=pre, post_s=post, plate_hz=fn if plate else None, plate_zeta=zeta,
+                tau_s=tau, tau_known=known)
+
+
 def map_shot(rng: np.random.Generator) -> dict:
     """Rig fields of one shot for the maps of bench/ (rigs apart from the zoo's seeds): an inbound speed of
     10-35 m/s, the ball's Table 2 parameters scaled by 0.95-1.05 or 0.8-1.2 each, and white noise of 0.1-0.5 % of
