@@ -66,9 +66,9 @@ def run_one(args):
 
 
 def margin_one(args):
-    """The bounded ratio of ``contact.detect_saturation`` on zoo trace (seed, index) over its true contact, the
+    """The evidence of ``contact.detect_saturation`` on zoo trace (seed, index) over its true contact, the
     noise floored at the ADC step's error as the pipeline floors it; None for a faulty trace."""
-    from ballimpact.contact import (SATURATION_MIN_SAMPLES, SATURATION_TOP_SIGMA, detect_saturation,
+    from ballimpact.contact import (SATURATION_MIN_SAMPLES, detect_saturation,
                                     quantization_step)  # here: the map itself runs on commits without the test
 
     seed, index = args
@@ -83,9 +83,7 @@ def margin_one(args):
     if x.size < SATURATION_MIN_SAMPLES:
         return None
     sat = detect_saturation(x, sigma)
-    flat = x.max() - np.sort(x)[-SATURATION_MIN_SAMPLES] <= SATURATION_TOP_SIGMA * sigma
-    bounded = sat.n_top / (sat.n_below + 2.0 * np.sqrt(sat.n_below + 1.0) + 1.0)
-    return trace.label, sat.saturated, flat, sat.n_top, sat.n_below, bounded
+    return trace.label, sat.saturated, sat.flat, sat.n_top, sat.n_below, sat.evidence
 
 
 def margin(seed: int, n: int, workers: int) -> None:

@@ -99,8 +99,8 @@ NOISE_FLOOR_FRACTION = 1e-6  # lower bound of the noise estimate, fraction of th
 QUANTUM_MIN_STEPS = 20  # a grid of values is looked for only among at least this many distinct steps [-]
 QUANTUM_ON_GRID = 0.95  # ... and found when this fraction of them are whole multiples of the least one ... [-]
 QUANTUM_TOLERANCE = 0.02  # ... to within this fraction of it (a printed or float32 value's rounding) [-]
-SATURATION_TOP_SIGMA = 4.0  # the contact's top: samples within this many noise deviations of its largest [-]
-SATURATION_NEXT_SIGMA = 12.0  # ... the band below it reaches this many noise deviations under the largest [-]
+SATURATION_TOP_SIGMA = 4.0  # the contact's top: samples within this many noise deviations of its 8th largest [-]
+SATURATION_NEXT_SIGMA = 12.0  # ... the band below it reaches this many noise deviations under that sample [-]
 SATURATION_MIN_SAMPLES = 8  # a flat top is judged from this many samples in the top band on [samples]
 SATURATION_RATIO = 3.0  # ... and is a saturated one when the top band holds this many times the band below [-]
 
@@ -315,11 +315,16 @@ class Saturation:
     level_V : float
         Median of the samples in the top band [V].
     n_top : int
-        Samples within SATURATION_TOP_SIGMA noise deviations of the largest [-].
+        Samples within SATURATION_TOP_SIGMA noise deviations of the SATURATION_MIN_SAMPLES-th largest [-].
     n_below : int
         Samples in the band from there down to SATURATION_NEXT_SIGMA deviations [-].
     ratio : float
         n_top / max(n_below, 1) [-].
+    flat : bool
+        The SATURATION_MIN_SAMPLES largest samples lie within SATURATION_TOP_SIGMA noise deviations of one another.
+    evidence : float
+        n_top over the band below counted about two Poisson deviations high, n_below + 2 sqrt(n_below + 1) + 1
+        [-]: a flat top with at least SATURATION_MIN_SAMPLES samples is saturated from SATURATION_RATIO on.
     """
 
     saturated: bool
@@ -327,6 +332,8 @@ class Saturation:
     n_top: int
     n_below: int
     ratio: float
+    flat: bool = False
+    evidence: float = math.nan
 
 
 def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
@@ -339,11 +346,15 @@ def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
     ``d`` of the maximum go as ``sqrt(d)``, and the top band (0 to SATURATION_TOP_SIGMA noise deviations under
     the largest sample) holds about 1.4 times the band under it (down to SATURATION_NEXT_SIGMA deviations); a
     sharp peak, as the model's pre-buckling spike, holds fewer. A saturated top holds all its flat samples in
-    the top band and only the few of its steep flanks in the band under it. The top is called saturated when
-    it holds at least SATURATION_MIN_SAMPLES samples and SATURATION_RATIO times the band under it. On the
-    zoo's measurable traces (tests/zoo.py, seeds 0-3) with at least 8 samples in the top band the ratio was at
-    most 2.7; on the traces of ``bench/saturation_map.py`` (a stage saturating at 50-95 % of the peak) see
-    that map for how many it finds.
+    the top band and only the few of its steep flanks in the band under it. The bands are counted from the
+    SATURATION_MIN_SAMPLES-th largest sample, not the largest: over a flat top's hundreds of samples the
+    largest is the noise's maximum. The top is called saturated when its SATURATION_MIN_SAMPLES largest
+    samples lie within the top band's depth of one another (a peak's fall away from its largest), it holds at
+    least SATURATION_MIN_SAMPLES samples, and SATURATION_RATIO times the band under it counted about two
+    Poisson deviations high (``evidence``: a few samples in either band say little). On the zoo's traces that
+    are not faulty (tests/zoo.py, seeds 0-3, their true contacts) the evidence was at most 1.62
+    (``python bench/saturation_map.py --margin --seed S --n 2000``); that map itself says how many saturated
+    traces it finds.
 
     The voltage is the one recorded, polarity applied (positive force), over the contact: saturation flattens
     the amplifier's output, not the corrected signal (the amplifier's decay, undone, tilts it).
@@ -371,21 +382,19 @@ def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
     x = x[np.isfinite(x)]
     if x.size == 0:
         return Saturation(False, math.nan, 0, 0, math.nan)
-    # the reference: the SATURATION_MIN_SAMPLES-th largest sample, not the largest (over a flat top's hundreds of
-    # samples the largest is the noise's maximum, 3 deviations above the level, and a band from it misses the
-    # flat samples that the noise took below the level)
-    top = float(np.partition(x, x.size - k)[x.size - k]) if (k := min(SATURATION_MIN_SAMPLES, x.size)) else math.nan
+    # the reference: over a flat top's hundreds of samples the largest is the noise's maximum, 3 deviations above
+    # the level, and a band from it misses the flat samples that the noise took below the level
+    k = min(SATURATION_MIN_SAMPLES, x.size)
+    top = float(np.partition(x, x.size - k)[x.size - k])
     in_top = x >= top - SATURATION_TOP_SIGMA * noise_rms_V
     n_top = int(np.count_nonzero(in_top))
     n_below = int(np.count_nonzero(~in_top & (x >= top - SATURATION_NEXT_SIGMA * noise_rms_V)))
-    ratio = n_top / max(n_below, 1)
-    # a flat top's largest samples lie within the noise of one another; a peak's fall away from the largest
     flat = float(np.max(x)) - top <= SATURATION_TOP_SIGMA * noise_rms_V
-    # the band below counted generously (about two Poisson deviations more): a few samples in either band
-    # say little, and a smooth top's ratio scatters up to 5 over 10 and 2 samples
-    saturated = (flat and n_top >= SATURATION_MIN_SAMPLES
-                 and n_top >= SATURATION_RATIO * (n_below + 2.0 * math.sqrt(n_below + 1.0) + 1.0))
-    return Saturation(bool(saturated), float(np.median(x[in_top])), n_top, n_below, float(ratio))
+    # a smooth top's plain ratio scatters up to 5 over 10 and 2 samples
+    evidence = n_top / (n_below + 2.0 * math.sqrt(n_below + 1.0) + 1.0)
+    saturated = flat and n_top >= SATURATION_MIN_SAMPLES and evidence >= SATURATION_RATIO
+    return Saturation(bool(saturated), float(np.median(x[in_top])), n_top, n_below, n_top / max(n_below, 1),
+                      bool(flat), float(evidence))
 
 
 def contact_samples(time_s, values, start_s: float, end_s: float, *, include_ends: bool = True):
