@@ -86,6 +86,40 @@ def test_voltage_impulse_exact_for_linear_voltage():
     assert_allclose(voltage_impulse(t, v, a, b), exact, rtol=1e-12)
 
 
+def _step_then_fall(t, t0, height, duration):
+    """A force that jumps from zero to ``height`` at t0 and falls linearly back to zero at t0 + duration."""
+    return np.where((t >= t0) & (t <= t0 + duration), height * (1.0 - (t - t0) / duration), 0.0)
+
+
+@pytest.mark.parametrize("start_jump, bias", [(True, 0.0), (False, -0.125)])
+def test_voltage_impulse_after_a_jump_between_two_samples(start_jump, bias):
+    """Analytic: a jump of h anywhere (uniformly) between two samples, the start put at the middle.
+
+    The exact integral is h D / 2 whatever the jump's place. Held back to the start, the first
+    sample's value covers the interval as the jump does on average (h T / 2, less the fall's slope
+    over it, h T^2 / (6 D)); the line from the quiet sample (the default) covers 3/8 of it: 1/8 of
+    a sample times h low (section 3.2.4 in Goodwill & Haake 2004: the force jumps at 2 mm of
+    compression).
+    """
+    h, duration = 2.0, 50.3  # [V], [samples] (one sample per unit of time)
+    t = np.arange(80.0)
+    offsets = (np.arange(400) + 0.5) / 400  # the jump's place in (9, 10), evenly: the uniform's mean
+    errors = [voltage_impulse(t, _step_then_fall(t, 9.0 + u, h, duration), 9.5, 9.0 + u + duration,
+                              start_jump=start_jump) - h * duration / 2.0 for u in offsets]
+    # measured -1.7e-3 held (the fall's slope over the held interval, the end piece's interpolation
+    # to the sample after it) and -0.249 by the line, against the bias of -0.25
+    assert_allclose(np.mean(errors), bias * h, atol=5e-3)
+
+
+def test_contact_samples_hold_the_first_sample_after_a_jump():
+    t = np.arange(10.0)
+    v = np.array([0, 0, 0, 5.0, 4.0, 3.0, 2.0, 1.0, 0, 0])
+    _, held = contact_samples(t, v, 2.5, 7.5, start_jump=True)
+    _, line = contact_samples(t, v, 2.5, 7.5)
+    assert_allclose(held, [5.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.5], rtol=0, atol=1e-12)
+    assert_allclose(line, [2.5, 5.0, 4.0, 3.0, 2.0, 1.0, 0.5], rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("fs", [66964.3, 50000.0])
 @pytest.mark.parametrize("phase", [0.2, 0.7])
 def test_calibration_factor_half_sine(fs, phase):

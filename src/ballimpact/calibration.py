@@ -49,12 +49,14 @@ def _time_and_values(time_s, values, name: str):
     return t, y
 
 
-def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float) -> float:
+def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float, *, start_jump: bool = False) -> float:
     """Trapezium integral of the voltage over the contact [start, end].
 
     The pieces between the sub-sample start (end) and the neighbouring sample
-    use the linearly interpolated voltage at the start (end). The paper's
-    integral of V dt from 0 to TC (section 2 in Goodwill & Haake 2004).
+    use the linearly interpolated voltage at the start (end); after a jump at
+    the start, the first sample's voltage held back to it
+    (:func:`ballimpact.contact.contact_samples`). The paper's integral of V dt
+    from 0 to TC (section 2 in Goodwill & Haake 2004).
 
     Parameters
     ----------
@@ -64,6 +66,9 @@ def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float) -> float:
         Conditioned voltage [V].
     start_s, end_s : float
         Contact start and end, inside the trace [s].
+    start_jump : bool
+        The force jumps from zero between two samples at the start (the
+        contact's ``start_jump`` flag).
 
     Returns
     -------
@@ -71,12 +76,12 @@ def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float) -> float:
         Integral of V over the contact [V s].
     """
     t, v = _time_and_values(time_s, voltage_V, "voltage_V")
-    t_rel, v_in = contact_samples(t, v, float(start_s), float(end_s), include_ends=True)
+    t_rel, v_in = contact_samples(t, v, float(start_s), float(end_s), include_ends=True, start_jump=start_jump)
     return float(trapezoid(v_in, t_rel))
 
 
 def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg: float,
-                       vin_m_s: float, vout_m_s: float) -> float:
+                       vin_m_s: float, vout_m_s: float, *, start_jump: bool = False) -> float:
     """Calibration factor kCAL of one impact from its impulse.
 
     kCAL = m (VB + VB') / integral of V dt over the contact, trapezium rule with
@@ -96,6 +101,9 @@ def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg:
         Ball mass [kg].
     vin_m_s, vout_m_s : float
         Inbound speed VB and rebound speed VB' (both positive) [m/s].
+    start_jump : bool
+        The force jumps from zero between two samples at the start (the
+        contact's ``start_jump`` flag; see :func:`voltage_impulse`).
 
     Returns
     -------
@@ -113,7 +121,7 @@ def calibration_factor(time_s, voltage_V, start_s: float, end_s: float, mass_kg:
     vout = float(vout_m_s)
     if not math.isfinite(vout) or vout < 0:
         raise ValueError(f"vout_m_s must be non-negative and finite, got {vout_m_s!r}")
-    integral = voltage_impulse(time_s, voltage_V, start_s, end_s)
+    integral = voltage_impulse(time_s, voltage_V, start_s, end_s, start_jump=start_jump)
     if not integral > 0:
         raise ValueError(f"the voltage integral over the contact is not positive ({integral:.3g} V s)")
     return m * (vin + vout) / integral

@@ -397,7 +397,8 @@ def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
                       bool(flat), float(evidence))
 
 
-def contact_samples(time_s, values, start_s: float, end_s: float, *, include_ends: bool = True):
+def contact_samples(time_s, values, start_s: float, end_s: float, *, include_ends: bool = True,
+                    start_jump: bool = False):
     """The samples of a signal inside a contact, with time from the contact start.
 
     Parameters
@@ -412,6 +413,18 @@ def contact_samples(time_s, values, start_s: float, end_s: float, *, include_end
         When True, the signal linearly interpolated at the start and the end
         is added as first and last point, so that trapezium sums cover exactly
         [start, end].
+    start_jump : bool
+        The force jumps from zero between the last quiet sample and the first
+        one inside (the contact's ``start_jump`` flag; the start is the middle
+        of that interval): with ``include_ends``, the first point holds the
+        first inside sample's value instead of the line to zero. A jump
+        anywhere in the interval, uniformly, holds that value over half a
+        sample on average, and the trapezium sum then covers it so; the line
+        from the quiet sample covers 3/8 of a sample, a bias of 1/8 of a
+        sample times the jump (zoo traces at 20-25 kHz: kCAL +0.17 % on
+        average over the ok ones, up to +0.8 % on a noiseless 20 kHz trace).
+        The model's force jumps at 2 mm of compression (section 3.2.4 in
+        Goodwill & Haake 2004).
 
     Returns
     -------
@@ -436,8 +449,9 @@ def contact_samples(time_s, values, start_s: float, end_s: float, *, include_end
     inside = (t > start_s) & (t < end_s)
     ts, vs = t[inside], v[inside]
     if include_ends:
+        first = vs[0] if start_jump and vs.size else np.interp(start_s, t, v)
         ts = np.concatenate([[start_s], ts, [end_s]])
-        vs = np.concatenate([[np.interp(start_s, t, v)], vs, [np.interp(end_s, t, v)]])
+        vs = np.concatenate([[first], vs, [np.interp(end_s, t, v)]])
     return ts - start_s, vs
 
 

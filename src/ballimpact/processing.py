@@ -391,7 +391,8 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:
     """kCAL from the impulse, force, velocity, displacement, peak and Kelvin-Voigt kB, cB (Eqs. 2, 3)."""
-    t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s)
+    jump = "start_jump" in contact.flags  # the force held back to the start over its jump's interval
+    t_rel, v_contact = contact_samples(t, cond.voltage_V, contact.start_s, contact.end_s, start_jump=jump)
     res.time_s = t_rel
     res.voltage_V = v_contact
     # every contact series as long as time_s: NaN until the calibration gives a force
@@ -400,7 +401,7 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
         return res  # excluded above: no calibration without speeds and mass
     try:
         kcal = calibration_factor(t, cond.voltage_V, contact.start_s, contact.end_s, row.mass_kg,
-                                  res.vin_m_s, res.vout_m_s)
+                                  res.vin_m_s, res.vout_m_s, start_jump=jump)
     except ValueError as exc:
         return res.exclude(Problem(ProblemKind.NO_CALIBRATION, f"no calibration: {exc}"))
     # A positive but vanishing (or overflowing) voltage integral gives kCAL = inf (or 0),
