@@ -362,7 +362,10 @@ def test_baseline_step_after_contact_is_a_problem():
 def test_plate_ringing_in_the_contact_is_a_problem():
     v, fs, truth = make_trace(seed=10, ringing_fraction=0.1, ringing_hz=8000.0, ringing_decay_s=1.5e-3, **CHAIN)
     c = condition_voltage(v, fs, undo_plate=False)
-    assert any(p.kind is ProblemKind.PLATE_RINGING and p.message.startswith("plate ringing at 8") for p in c.problems)
+    # its frequency read within 5 % of the 8 kHz put in (7.98 and 8.01 kHz as the contact's end moves by a sample)
+    seen = [float(m.group(1)) for p in c.problems if p.kind is ProblemKind.PLATE_RINGING
+            for m in [re.match(r"plate ringing at ([0-9.]+) kHz", p.message)] if m]
+    assert seen and all(abs(f / 8.0 - 1.0) < 0.05 for f in seen), [p.message for p in c.problems]
     # with the resonance undone (the default): excluded, or right (this additive ringing is no plate's
     # response to the force, so the guards of the undoing may refuse it)
     c = condition_voltage(v, fs)

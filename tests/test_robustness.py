@@ -641,10 +641,12 @@ def test_zoo_contact_front_ringing_near_half_the_sample_rate(name, seed, overrid
 #: is judged by half a rise and passes: a strict xfail, so a fix shows (judging the whole rise excluded 168 right
 #: traces of seeds 0-3, README "Robustness (issue 9)").
 ZOO_SPIKE_TOP = [
+    # with the end's bent hinge (contact._bent_corner) excluded for its end (TC known to +-1 % only; the line's
+    # end had it +1.13 %), not for its peak, still -5.8 %: the class stands (README, "What remains")
     ("spike-lower-maximum-at-23.9kHz", 5,
      dict(ball="pressurised", scale=(0.9567, 1.166, 1.023, 1.014, 1.089), vin_m_s=29.28, sample_rate_hz=23854.0,
           noise_V=0.01616, mode="noise"), "ok but wrong on ffc2770: peak -5.7 % (the spike's top between samples)",
-     False),
+     True),
     ("spike-ramp-after-a-swing-12.9kHz-plate-at-35.5kHz", 30,
      dict(ball="pressurised", scale=(0.9537, 1.025, 1.016, 1.041, 1.138), vin_m_s=29.58, sample_rate_hz=35450.0,
           plate_hz=12940.0, plate_zeta=0.294, noise_V=0.0159, mode="plate"),
@@ -665,10 +667,12 @@ def test_zoo_spike_top_between_samples(name, seed, fields, what, tmp_path):
 
 #: Traces of the zoo's chain, a rig drawn in "plate" mode (seed) with these overrides (the rig of
 #: ``python bench/overshoot_map.py --n 400 --seed 5`` trace 5:210, ok but wrong there), ok but wrong on main at
-#: ffc2770 (a strict xfail, so a fix shows): the resonance is identified near the truth, but the force undone with it
-#: fails its checks; refined (least content near fn in the undone force, the ball's drop at buckling included), it
-#: moves to a plate about 9 % higher and half as damped, whose undone force passes them with its pre-buckling spike
-#: low (name, seed, overrides, what).
+#: ffc2770 and up to 7ce5de8: the resonance was identified near the truth, but the force undone with it failed its
+#: checks; refined (least content near fn in the undone force, the ball's drop at buckling included), it moved to a
+#: plate about 9 % higher and half as damped, whose undone force passed them with its pre-buckling spike low. With
+#: the contact's end read by the bent hinge (``contact._bent_corner``), seed 4's force undone at the identified
+#: plate (10.58 kHz, damping 0.144; true 10.53 kHz, 0.146) passes its checks: ok and right, peak -0.2 %; seed 6's
+#: plate is not undone: excluded, its peak on the ringing (name, seed, overrides, what).
 _MAP_5_210 = dict(ball="punctured", scale=(0.9745, 1.1043, 0.9424, 1.0135, 1.0417), vin_m_s=27.03,
                   sample_rate_hz=57489.6, plate_hz=10534.6, plate_zeta=0.1461, noise_V=0.004571)
 ZOO_REFINED_SPIKE = [
@@ -677,10 +681,8 @@ ZOO_REFINED_SPIKE = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, overrides, what", [
-    pytest.param(*c, id=c[0], marks=pytest.mark.xfail(strict=True, raises=AssertionError, reason=f"issue 9: {c[3]}"))
-    for c in ZOO_REFINED_SPIKE])
-def test_zoo_refined_resonance_that_flattens_the_spike_still_wrong(name, seed, overrides, what, tmp_path):
+@pytest.mark.parametrize("name, seed, overrides, what", named(ZOO_REFINED_SPIKE))
+def test_zoo_refined_resonance_that_flattened_the_spike(name, seed, overrides, what, tmp_path):
     trace = zoo.make_trace(np.random.default_rng(seed), "plate", **overrides)
     assert trace.truth.measurable and trace.truth.peak_is_spike, name
     result, judgement = zoo.run_trace(trace, tmp_path)

@@ -1809,7 +1809,9 @@ def _foot_sigma(seg, noise) -> float:
 def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, scale, curve=False):
     """Contact ends that hold no force, are located to half a sample only or move when fitted again; with
     ``curve``, also an end that the force's curve before it (``contact.curve_end_s``) puts more than
-    CURVE_LATE_FRACTION of TC later: the force flattens into its end (a convex fade), its last part is below
+    CURVE_LATE_FRACTION of TC later than the straight line through the last samples (``contact.line_end_s``;
+    the end itself is the bent hinge's, earlier where the force's slope eases into its end): the force flattens
+    into its end (a convex fade), its last part is below
     the noise, and the line through the samples above it meets zero early (zoo trace 2:1489: TC -1.1 %, its
     refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC); not after an end
     flagged as a jump (located to half a sample, there is no line through a fade there: the curve meets zero up to
@@ -1868,7 +1870,9 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
                                f"contact {where} not determined: the corrected signal in the "
                                f"{1e3 * FOOT_CHECK_S:.2g} ms {side} it stands {sigma:.3g} standard errors out of the "
                                f"noise ({seen}, or a baseline wrong there): the force may {may}"))
-    late = contact.curve_end_s - contact.end_s
+    # against the straight line's end (the bent hinge's sits earlier on an end whose slope eases; the threshold
+    # was set on the line's)
+    late = contact.curve_end_s - (contact.line_end_s if math.isfinite(contact.line_end_s) else contact.end_s)
     if "end_jump" in contact.flags:  # a jump's end is the middle of its interval: no line through a fade to judge
         late = math.nan
     if curve and late > CURVE_LATE_FRACTION * contact.contact_time_s:  # NaN: no curve, no problem
