@@ -912,14 +912,14 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     grid = np.arange(float(wl), float(min(i0, wr - 3)) + 0.5 * BENT_STEP, BENT_STEP)
     if grid.size < 3:
         return ts_line, math.nan
-    sse = _bent_sse(u, yw, grid)
+    sse, straight = _bent_sse(u, yw, grid)
     k = int(np.argmin(sse))
     # the bend must be seen: it lowers the least residual by BEND_CHI2 noise variances (a few noisy samples bend
     # a parabola as they like: zoo long-record trace 1:188, 5 rising samples at 22 kHz, TC -1.2 %)
-    if not float(sse[k]) < float(np.min(_bent_sse(u, yw, grid, straight=True))) - BEND_CHI2 * noise * noise:
+    if not float(sse[k]) < float(np.min(straight)) - BEND_CHI2 * noise * noise:
         return ts_line, math.nan
     lo, hi = float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)])
-    best = optimize.minimize_scalar(lambda v: float(_bent_sse(u, yw, np.array([v]))[0]), bounds=(lo, hi),
+    best = optimize.minimize_scalar(lambda v: float(_bent_sse(u, yw, np.array([v]))[0][0]), bounds=(lo, hi),
                                     method="bounded", options={"xatol": 1e-9})
     ts = float(best.x) if best.success and best.fun <= sse[k] else float(grid[k])
     level = float(sse[k]) + CURVE_CHI2 * noise * noise
@@ -931,10 +931,10 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     return ts, max(half, float(flat[-1] - flat[0]) / math.sqrt(12.0))
 
 
-def _bent_sse(u: np.ndarray, yw: np.ndarray, corners: np.ndarray, straight: bool = False) -> np.ndarray:
+def _bent_sse(u: np.ndarray, yw: np.ndarray, corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Residual sums of squares of the bent hinge (:func:`_bent_corner`) at each corner, b and c solved exactly,
-    c <= 0 (else the straight hinge's); inf where b <= 0 or fewer than 3 samples are right of the corner. With
-    ``straight``, the straight hinge's at every corner."""
+    c <= 0 (else the straight hinge's), and of the straight hinge; inf where b <= 0 or fewer than 3 samples are
+    right of the corner."""
     g = np.maximum(u[None, :] - corners[:, None], 0.0)
     g2 = g * g
     s2, s3, s4 = np.sum(g2, axis=1), np.sum(g2 * g, axis=1), np.sum(g2 * g2, axis=1)
@@ -949,7 +949,7 @@ def _bent_sse(u: np.ndarray, yw: np.ndarray, corners: np.ndarray, straight: bool
     # a slope that eases only (c <= 0): a bend the other way is a fade into the end, the straight hinge's (the
     # curve's end and the spread judge it), and with it a tangent corner anywhere left of the rise would fit
     line = np.where(ok & (y1 > 0), yy - np.maximum(y1, 0.0) ** 2 / np.where(s2 > 0, s2, 1.0), np.inf)
-    return line if straight else np.where(c > 0, line, sse)
+    return np.where(c > 0, line, sse), line
 
 
 def _hinge_se(y, ts: float, window, jump: bool) -> float:
