@@ -894,13 +894,15 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
 
     Read from the contact's end, the ball's force rises from its corner with a slope that eases (c <= 0; where
     the least squares bend it the other way the straight hinge is taken at that corner): it falls
-    faster the nearer it is to its end (Eq. (14) in Goodwill & Haake 2004 with the damping of Eq. (13)). A
+    faster the nearer it is to its end, as the model's force (Eq. (14) in Goodwill & Haake 2004) does for
+    the four balls of Table 2 at 10-35 m/s. A
     straight hinge through such a rise lies above it at the corner and meets zero after the end: TC long by
     +0.2 to +0.6 % of TC on the model's ends at noise of 0.1-0.3 % of the peak, more the more samples the
     noise lets the window take, and more still when fitted again from twice the threshold (the spread check).
     The bent hinge takes the curvature: the corners are profiled on a BENT_STEP grid between wl and i0
     (b and c solved exactly at each, :func:`_bent_sse`), the least refined between its neighbours by a bounded
-    scalar minimisation (exact, to 1e-9 samples, where the samples lie on such a hinge). The uncertainty
+    scalar minimisation. The bend is taken only where it lowers the least residual sum of squares by
+    BEND_CHI2 noise variances (AIC's price of a parameter); else the straight corner stands. The uncertainty
     is :func:`_hinge_se`'s rule on this profile: half the width of the corners within CURVE_CHI2 noise
     variances of the least over its root (inf when that reaches wl), or a uniform's over those within one.
     """
