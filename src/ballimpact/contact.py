@@ -895,7 +895,7 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     Read from the contact's end, the ball's force rises from its corner with a slope that eases (c <= 0; where
     the least squares bend it the other way the straight hinge is taken at that corner): it falls
     faster the nearer it is to its end, as the model's force (Eq. (14) in Goodwill & Haake 2004) does for
-    the four balls of Table 2 at 10-35 m/s. A
+    the four balls of Table 2 at 12 and 30 m/s (tests/zoo.py model_force, looked at). A
     straight hinge through such a rise lies above it at the corner and meets zero after the end: TC long by
     +0.2 to +0.6 % of TC on the model's ends at noise of 0.1-0.3 % of the peak, more the more samples the
     noise lets the window take, and more still when fitted again from twice the threshold (the spread check).
