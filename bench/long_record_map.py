@@ -38,8 +38,8 @@ POST_BANDS_S = (2.0, 3.5)  # bands of the record after the contact [s]
 
 
 def trace_for(seed: int, index: int, cut_s: float | None = None):
-    """One map trace (a ZooTrace), its record after the contact cut to ``cut_s`` [s] when given (the rig's
-    ``post_s`` is then the cut one; ``drawn_post_s`` the drawn)."""
+    """One map trace: (ZooTrace, record drawn after the contact [s]), the trace's record cut to ``cut_s`` [s]
+    when given (its rig's ``post_s`` is then the cut one)."""
     rng = np.random.default_rng([seed, index, 5000])
     fs = zoo._loguniform(rng, 20e3, 200e3)
     pre = zoo._loguniform(rng, 1e-3, 0.1)
@@ -54,17 +54,14 @@ def trace_for(seed: int, index: int, cut_s: float | None = None):
     rig = zoo.Rig(**dict(zoo._BENIGN, ball=BALLS[index % 4], mode="long record", sample_rate_hz=fs, pre_s=pre,
                          post_s=post if cut_s is None else min(post, cut_s), tau_s=tau, tau_known=known,
                          hum_V=hum, mains_known=mains_known, mains_dev_hz=deviation, drift_V_s=drift, **shot))
-    trace = zoo.render(rig, rng, f"long record {seed}:{index}")
-    trace.drawn_post_s = post
-    return trace
+    return zoo.render(rig, rng, f"long record {seed}:{index}"), post
 
 
 def run_one(args):
     seed, index, cut_s = args
-    trace = trace_for(seed, index, cut_s)
+    trace, post = trace_for(seed, index, cut_s)
     result, j = zoo.run_trace(trace)
-    return (index, trace.rig, trace.drawn_post_s, j.category, {k: 100 * v for k, v in j.errors.items()},
-            result.reason)
+    return index, trace.rig, post, j.category, {k: 100 * v for k, v in j.errors.items()}, result.reason
 
 
 def main(argv=None):

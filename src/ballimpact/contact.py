@@ -835,13 +835,15 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
     # the end's spread is the straight line's: how far its end depends on the samples near the noise (its bend's
     # corner moves less, and the checks on the spread were set on the line's)
     u_line = windows.get("line_end", math.nan)
-    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_line if math.isfinite(u_line) else u_end,
-                       step) if spread else (math.nan, math.nan)
+    if not math.isfinite(u_line):
+        u_line = u_end
+    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_line, step) if spread else (math.nan, math.nan)
     # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
     # just before (after) the contact that the merging of runs joined to it is no force on the ball.
     run_a, run_b = _unbroken_run(xs, peak_index, sigma, thr, run_a, run_b)
     u_start = min(max(u_start, 0.0), float(run_a))
     u_end = max(min(u_end, n - 1.0), float(run_b))
+    u_line = max(min(u_line, n - 1.0), float(run_b))
     u_edge_start = min(max(u_edge_start, u_start), float(run_a))
     u_edge_end = max(min(u_edge_end, u_end), float(run_b))
     ses = (math.nan, math.nan)
@@ -882,8 +884,7 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         curve_end_se_s=by_curve[1] / fs,
         start_se_s=ses[0] / fs,
         end_se_s=ses[1] / fs,
-        line_end_s=t0_s + min(max(windows.get("line_end", u_end), float(run_b)), n - 1.0) / fs
-        if math.isfinite(windows.get("line_end", math.nan)) else t0_s + u_end / fs,
+        line_end_s=t0_s + u_line / fs,
     )
 
 
