@@ -504,46 +504,70 @@ def _line_zero(u: np.ndarray, y: np.ndarray) -> float:
     return float(um - ym / b)
 
 
-def _hinge_fit(u: np.ndarray, y: np.ndarray, lower: float, upper: float):
-    """Exact least-squares hinge y = b * max(u - ts, 0), b >= 0, ts in [lower, upper]: (ts, b).
+def _hinge_fits(u: np.ndarray, y: np.ndarray, lower: float, upper: float, first: int):
+    """Exact least-squares hinges y = b * max(u - ts, 0), b >= 0, ts in [lower, upper], of the windows
+    ``u[:e + 1]`` for every e from ``first`` on: arrays (ts, b, sse), one entry per window.
 
     Between two sample times the samples right of the corner are fixed, so the
     hinge is the straight line through them and the optimum there is that
     line's zero crossing when it falls inside the interval; otherwise it is at
-    a sample time or a bound. All candidates are evaluated at once.
+    a sample time or a bound. All candidates of all windows are evaluated at
+    once (running sums along the window), and the residual sum of squares of
+    each window's best hinge is summed directly. Every sample before
+    ``upper`` must be inside the first window (the corner's candidates are then
+    the same for every window).
     """
     shift = float(u[0])
     u = np.asarray(u, dtype=float) - shift
     y = np.asarray(y, dtype=float)
     lower, upper = lower - shift, upper - shift
-    yy = float(y @ y)
+    n = u.size
+    m = int(np.count_nonzero(u < upper))  # samples left of the upper bound: the lines' intervals
+    if not m <= first + 1 <= n:
+        raise ValueError(f"first window must hold every sample before the upper bound, got first={first}")
+    ends = np.arange(first, n)
+    yy = np.cumsum(y * y)[first:]
     # corners at the bounds and at the sample times
     cand = np.concatenate([[lower, upper], u[(u > lower) & (u < upper)]])
     g = np.maximum(u[None, :] - cand[:, None], 0.0)
-    gy = np.maximum(g @ y, 0.0)
-    gg = np.sum(g * g, axis=1)
+    gy = np.maximum(np.cumsum(g * y, axis=1)[:, first:], 0.0)
+    gg = np.cumsum(g * g, axis=1)[:, first:]
     ok = gg > 0
     b = np.where(ok, gy / np.where(ok, gg, 1.0), 0.0)
     sse = yy - b * gy
-    # corners inside the interval before sample k: line through the samples k, k+1, ...
-    r = slice(None, None, -1)
-    s0 = np.cumsum(np.ones_like(u)[r])[r]
-    s1, s2 = np.cumsum(u[r])[r], np.cumsum((u * u)[r])[r]
-    sy, suy, syy = np.cumsum(y[r])[r], np.cumsum((u * y)[r])[r], np.cumsum((y * y)[r])[r]
+    ts = np.broadcast_to(cand[:, None], b.shape)
+    # corners inside the interval before sample k (k = 0 .. m; before the first, any time from lower on):
+    # the line through the samples k .. e
+    k = np.arange(0, m + 1)
+    left = np.concatenate([[-np.inf], u])[k]
+    p = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), u, u * u, y, u * y, y * y)]
+    s0, s1, s2, sy, suy, syy = (q[None, ends + 1] - q[k, None] for q in p)
     den = s0 * s2 - s1 * s1
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = (s0 * suy - s1 * sy) / den
         alpha = (sy - beta * s1) / s0
         ts_line = -alpha / beta
-        sse_line = (yy - syy) + (syy - alpha * sy - beta * suy)
-    left = np.concatenate([[-np.inf], u[:-1]])
-    inside = (s0 >= 2) & (den > 0) & (beta > 0) & (ts_line > left) & (ts_line < u)
+        sse_line = (yy[None, :] - syy) + (syy - alpha * sy - beta * suy)
+    inside = (s0 >= 2) & (den > 0) & (beta > 0) & (ts_line > left[:, None]) & (ts_line < u[np.minimum(k, n - 1), None])
     inside &= (ts_line >= lower) & (ts_line <= upper)
-    cand = np.concatenate([cand, ts_line[inside]])
-    b = np.concatenate([b, beta[inside]])
-    sse = np.concatenate([sse, sse_line[inside]])
-    k = int(np.argmin(sse))
-    return float(cand[k] + shift), float(b[k])
+    ts = np.concatenate([ts, np.where(inside, ts_line, 0.0)])
+    b = np.concatenate([b, np.where(inside, beta, 0.0)])
+    sse = np.concatenate([sse, np.where(inside, sse_line, np.inf)])
+    best = np.argmin(sse, axis=0)
+    cols = np.arange(ends.size)
+    ts, b = ts[best, cols], b[best, cols]
+    resid = (y[None, :] - b[:, None] * np.maximum(u[None, :] - ts[:, None], 0.0)) ** 2
+    sse = np.cumsum(resid, axis=1)[cols, ends]
+    return ts + shift, b, sse
+
+
+def _hinge_fit(u: np.ndarray, y: np.ndarray, lower: float, upper: float):
+    """Exact least-squares hinge y = b * max(u - ts, 0), b >= 0, ts in [lower, upper] [u's unit]: (ts, b).
+
+    The one window of :func:`_hinge_fits`.
+    """
+    ts, b, _ = _hinge_fits(u, y, lower, upper, len(u) - 1)
+    return float(ts[0]), float(b[0])
 
 
 def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
@@ -640,7 +664,6 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
     """The hinge-fit start of :func:`_foot_start` [samples]; i0 is the first sample above FOOT_SIGMA noise;
     ``split``: the start from the hinge's first straight segment where the rise bends (:func:`_first_segment`);
     a list ``window`` receives the first and last sample of the fit that gave it and i0."""
-    u = np.arange(xs.size, dtype=float)
     n_pre = max(FOOT_PRE_SAMPLES, int(math.ceil(FOOT_PRE_S * fs)))
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
     # no foot reaches back to a lone sample above the contact threshold between quiet ones: that is a
@@ -650,42 +673,50 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
     wl = max(i0 - n_pre, floor)
     last = min(i0 + k_max - 1, peak_index)
     wr = min(i0 + FOOT_MIN_SAMPLES - 1, last)
-    ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
+
+    def fits_from(left: int):
+        # the hinges of every window from left to an end from i0 (or wr, when the window cannot reach i0)
+        # to last, fitted at once; index e - min(i0, wr)
+        return _hinge_fits(np.arange(left, last + 1, dtype=float), xs[left:last + 1], float(left), float(i0),
+                           min(i0, wr) - left)
+
+    fits = fits_from(wl)
     # Slow foot (a gentle rise at low SNR, e.g. an 8 ms half-sine only 50x above the
     # noise takes > FOOT_PRE_S to reach FOOT_SIGMA): the pre window then holds no quiet
     # samples and the corner sticks to its first sample, giving a late start (TC up to
     # 4 % short). Widen the window back, a pre window at a time, until the corner is
     # free of it. A steep rise never sticks, so it is fitted exactly as before.
     n_widen = 0
-    while ts < wl + 1.0 and wl > floor and n_widen < FOOT_MAX_WIDENINGS:
+    while fits[0][wr - min(i0, wr)] < wl + 1.0 and wl > floor and n_widen < FOOT_MAX_WIDENINGS:
         wl = max(wl - n_pre, floor)
         n_widen += 1
-        ts, b = _hinge_fit(u[wl:wr + 1], xs[wl:wr + 1], float(wl), float(i0))
+        fits = fits_from(wl)
+    if last < i0:  # the peak itself is within FOOT_SIGMA noise: nothing rises to grow the window with
+        if window is not None:
+            window[:] = [wl, wr, i0]
+        return float(fits[0][0])
+    uw, yw = np.arange(wl, last + 1, dtype=float), xs[wl:last + 1]
+    ts, b, sse = (float(v[wr - i0]) for v in fits)
+    limit = (FOOT_RESIDUAL_SIGMA * sigma) ** 2
     if wr > i0:
         # Is the second rising sample already on the steep rise after a faint
         # foot? Then the hinge through it misses the sub-threshold foot samples
         # that the hinge through the first rising sample alone explains.
-        ts1, b1 = _hinge_fit(u[wl:i0 + 1], xs[wl:i0 + 1], float(wl), float(i0))
-        sse1 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts1, b1)
-        sse2 = _hinge_sse(u[wl:i0 + 1], xs[wl:i0 + 1], ts, b)
-        if sse2 - sse1 > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
+        sse2 = _hinge_sse(uw[:i0 - wl + 1], yw[:i0 - wl + 1], ts, b)
+        if sse2 - fits[2][0] > limit:
             if window is not None:
                 window[:] = [wl, i0, i0]
-            return ts1
-    sse = _hinge_sse(u[wl:wr + 1], xs[wl:wr + 1], ts, b)
-    while wr < last:
-        nxt = wr + 1
-        ts_n, b_n = _hinge_fit(u[wl:nxt + 1], xs[wl:nxt + 1], float(wl), float(i0))
-        sse_n = _hinge_sse(u[wl:nxt + 1], xs[wl:nxt + 1], ts_n, b_n)
-        if sse_n - sse > (FOOT_RESIDUAL_SIGMA * sigma) ** 2:
-            break
-        wr, ts, b, sse = nxt, ts_n, b_n, sse_n
+            return float(fits[0][0])
+    # grow the window while the hinge predicts the next rising sample within FOOT_RESIDUAL_SIGMA
+    while wr < last and fits[2][wr + 1 - i0] - sse <= limit:
+        wr += 1
+        ts, sse = float(fits[0][wr - i0]), float(fits[2][wr - i0])
     if window is not None:
         window[:] = [wl, wr, i0]
-    return _first_segment(u, xs, wl, wr, i0, ts, sse, sigma, window) if split else ts
+    return _first_segment(uw, yw, wl, wr, i0, fits, sigma, window) if split else ts
 
 
-def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigma: float, window=None) -> float:
+def _first_segment(uw, yw, wl: int, wr: int, i0: int, fits, sigma: float, window=None) -> float:
     """The hinge's start again from its first straight segment when the rise bends [samples].
 
     The growth of the hinge window stops at the first sample the hinge predicts
@@ -698,22 +729,33 @@ def _first_segment(u, xs, wl: int, wr: int, i0: int, ts: float, sse: float, sigm
     start is that split's hinge. A rise that steepens (a cloth foot, a force
     smoothed by a low-pass) keeps the single line: its foot is what the hinge
     and the spread check were built for.
+
+    ``uw``, ``yw``: sample times [samples] and values from wl on; ``fits``: the
+    hinges (ts, b, sse) of the windows from wl to every end from i0 on
+    (:func:`_hinge_fits`).
     """
-    best, k_best = sse, None
-    for k in range(i0 + FOOT_MIN_SAMPLES - 1, wr - 1):
-        ts_k, b_k = _hinge_fit(u[wl:k + 1], xs[wl:k + 1], float(wl), float(i0))
-        tail_u, tail_y = u[k + 1:wr + 1], xs[k + 1:wr + 1]
-        um, ym = tail_u.mean(), tail_y.mean()
-        suu = float(np.sum((tail_u - um) ** 2))
-        slope = float(np.sum((tail_u - um) * (tail_y - ym)) / suu) if suu > 0 else 0.0
-        sse_k = _hinge_sse(u[wl:k + 1], xs[wl:k + 1], ts_k, b_k) + float(
-            np.sum((tail_y - ym - slope * (tail_u - um)) ** 2))
-        if sse_k < best and b_k > slope:  # the rise flattens after the split: a drop from a low plateau
-            best, k_best, ts_best = sse_k, k, ts_k
-    if k_best is not None and sse - best > (KINK_SIGMA * sigma) ** 2:
+    ts_all, b_all, sse_all = fits
+    ts, sse = float(ts_all[wr - i0]), float(sse_all[wr - i0])
+    ks = np.arange(i0 + FOOT_MIN_SAMPLES - 1, wr - 1)  # the hinge's last sample; the line takes k+1 .. wr
+    if not ks.size:
+        return ts
+    tail_u, tail_y = uw[ks[0] + 1 - wl:wr + 1 - wl], yw[ks[0] + 1 - wl:wr + 1 - wl]
+    on = tail_u[None, :] > ks[:, None]
+    count = on.sum(axis=1)
+    du = np.where(on, tail_u[None, :] - (on * tail_u).sum(axis=1, keepdims=True) / count[:, None], 0.0)
+    dy = np.where(on, tail_y[None, :] - (on * tail_y).sum(axis=1, keepdims=True) / count[:, None], 0.0)
+    suu = np.sum(du * du, axis=1)
+    slope = np.where(suu > 0, np.sum(du * dy, axis=1) / np.where(suu > 0, suu, 1.0), 0.0)
+    sse_k = sse_all[ks - i0] + np.sum((dy - slope[:, None] * du) ** 2, axis=1)
+    # the rise flattens after the split (a drop from a low plateau), and the split fits better
+    better = (sse_k < sse) & (b_all[ks - i0] > slope)
+    if not better.any():
+        return ts
+    j = int(np.argmin(np.where(better, sse_k, np.inf)))
+    if sse - float(sse_k[j]) > (KINK_SIGMA * sigma) ** 2:
         if window is not None:
-            window[:] = [wl, k_best, i0]
-        return ts_best
+            window[:] = [wl, int(ks[j]), i0]
+        return float(ts_all[ks[j] - i0])
     return ts
 
 
