@@ -852,3 +852,45 @@ def test_a_slow_wander_above_the_threshold_is_no_second_impact_but_a_pulse_on_it
         c2 = detect_contact(contact + wander + bump + noise, fs)
         assert c2.n_impacts == 2 and "multiple_impacts" in c2.flags
 
+
+
+def _brute_hinge(u, y, lower, upper, step=1e-3):
+    """The least-squares hinge b * max(u - ts, 0), b >= 0, by scanning ts on a fine grid (the truth for _hinge_fits)."""
+    grid = np.linspace(lower, upper, int(round((upper - lower) / step)) + 1)
+    g = np.maximum(u[None, :] - grid[:, None], 0.0)
+    gg = np.sum(g * g, axis=1)
+    b = np.where(gg > 0, np.maximum(g @ y, 0.0) / np.where(gg > 0, gg, 1.0), 0.0)
+    sse = np.sum((y[None, :] - b[:, None] * g) ** 2, axis=1)
+    k = int(np.argmin(sse))
+    return grid[k], b[k], sse[k]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_hinge_fits_of_every_window_match_a_scan_of_the_corner(seed):
+    """_hinge_fits solves every window's hinge at once; each must be the least squares a fine scan of the corner finds:
+    no larger residual, and the same corner and slope to the scan's step."""
+    from ballimpact.contact import _hinge_fits
+
+    rng = np.random.default_rng(seed)
+    wl, i0, last = 100, 112, 130
+    u = np.arange(wl, last + 1, dtype=float)
+    true_ts = rng.uniform(wl + 3, i0)
+    y = 0.05 * np.maximum(u - true_ts, 0.0) ** rng.uniform(0.8, 1.6) + 0.01 * rng.standard_normal(u.size)
+    ts, b, sse = _hinge_fits(u, y, float(wl), float(i0), i0 - wl)
+    assert ts.shape == b.shape == sse.shape == (last - i0 + 1,)
+    for e in range(i0, last + 1):
+        n = e - wl + 1
+        bts, bb, bsse = _brute_hinge(u[:n], y[:n], float(wl), float(i0))
+        j = e - i0
+        assert sse[j] <= bsse * (1 + 1e-12) + 1e-15
+        assert_allclose(ts[j], bts, atol=2e-3)
+        assert_allclose(b[j], bb, rtol=2e-3)
+        assert_allclose(sse[j], np.sum((y[:n] - b[j] * np.maximum(u[:n] - ts[j], 0.0)) ** 2), rtol=1e-9)
+
+
+def test_hinge_fits_needs_every_corner_candidate_in_its_first_window():
+    from ballimpact.contact import _hinge_fits
+
+    u = np.arange(10.0)
+    with pytest.raises(ValueError, match="first window must hold every sample before the upper bound"):
+        _hinge_fits(u, u, 0.0, 6.0, 3)
