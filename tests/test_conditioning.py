@@ -1950,3 +1950,29 @@ def test_a_contact_found_only_after_a_baseline_through_it_is_unchecked_and_a_pro
     assert cond.contact.found and cond.n_iterations == 0
     unstable = [p for p in cond.problems if p.kind is ProblemKind.CONTACT_UNSTABLE]
     assert unstable and "baseline under the contact is unknown" in unstable[0].message
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(seed):
+    """The residual's first and second derivatives in kappa (Newton's refinement of the decay rate) against central
+    differences of the residual itself, and the refined kappa against a fine scan of the residual."""
+    from ballimpact.conditioning import _normal_equations, _refine_kappa, _rss_slope, _solve_kappa
+
+    rng = np.random.default_rng(seed)
+    n, p = 400, 4
+    phi = rng.standard_normal((n, p))
+    big_phi = np.cumsum(rng.standard_normal((n, p)), axis=0) / n
+    iv = np.cumsum(rng.standard_normal(n)) / n
+    y = phi @ rng.standard_normal(p) - 3.0 * (iv - big_phi @ rng.standard_normal(p)) + 0.1 * rng.standard_normal(n)
+    ne = _normal_equations(phi, big_phi, y, iv, np.ones(n, dtype=bool))
+    for k in (-2.0, 0.5, 3.0):
+        h = 1e-4
+        r = _solve_kappa(ne, np.array([k - h, k, k + h]))[0]
+        d1, d2 = _rss_slope(ne, k)
+        assert_allclose(d1, (r[2] - r[0]) / (2 * h), rtol=1e-5, atol=1e-9)
+        assert_allclose(d2, (r[2] - 2 * r[1] + r[0]) / h ** 2, rtol=1e-4)
+    scan = np.linspace(0.0, 10.0, 200001)
+    least = scan[int(np.argmin(_solve_kappa(ne, scan)[0]))]
+    k = _refine_kappa(ne, least - 0.5, least + 0.5, least - 0.3, 1e-10)
+    assert_allclose(k, least, atol=1e-4)
+    assert abs(_rss_slope(ne, k)[0]) < 1e-9 * max(1.0, abs(_rss_slope(ne, least - 0.5)[0]))

@@ -81,7 +81,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
-from scipy.optimize import minimize_scalar
 
 from .calibration import force_top
 from .contact import ContactResult, detect_contact, quantization_step, robust_noise
@@ -104,6 +103,7 @@ SHORT_POST_GUARD_S = 0.5e-3  # a record too short for MIN_POST_S after POST_GUAR
 SHORT_MIN_POST_S = 0.5e-3  # ... when it is at least this long (the decay's standard error then decides) [s]
 UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
 TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
+KAPPA_REFINE_ITERATIONS = 100  # most Newton or bisection steps refining kappa between two grid points [-]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
 BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
 MAX_ITERATIONS = 8  # contact window / baseline iterations [-]
@@ -621,8 +621,63 @@ def _solve_kappa(ne, k):
     return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
 
 
+def _rss_slope(ne, k: float) -> tuple[float, float]:
+    """First and second derivative of the residual sum of squares in kappa at kappa = k [V^2 s, V^2 s^2].
+
+    With A(k) = p0 + k p1 + k^2 p2, q(k) = q0 + k q1 + k^2 q2, r(k) = r0 + k r1 + k^2 r2 and
+    theta = A^-1 q, rss = r - q.theta, so rss' = r' - 2 q'.theta + theta.A'.theta, and with
+    theta' = A^-1 (q' - A' theta), rss'' = r'' - 2 q''.theta - 2 q'.theta' + 2 theta'.A'.theta + theta.A''.theta.
+    """
+    p0, p1, p2, q0, q1, q2, r0, r1, r2 = ne
+    a, a1 = p0 + k * p1 + k * k * p2, p1 + 2.0 * k * p2
+    q, dq = q0 + k * q1 + k * k * q2, q1 + 2.0 * k * q2
+    try:
+        theta = np.linalg.solve(a, q)
+        dtheta = np.linalg.solve(a, dq - a1 @ theta)
+    except np.linalg.LinAlgError:
+        inv = np.linalg.pinv(a, rcond=1e-12, hermitian=True)
+        theta = inv @ q
+        dtheta = inv @ (dq - a1 @ theta)
+    a1_theta = a1 @ theta
+    d1 = r1 + 2.0 * k * r2 - 2.0 * float(dq @ theta) + float(theta @ a1_theta)
+    d2 = (2.0 * r2 - 4.0 * float(q2 @ theta) - 2.0 * float(dq @ dtheta) + 2.0 * float(dtheta @ a1_theta)
+          + 2.0 * float(theta @ p2 @ theta))
+    return d1, d2
+
+
+def _refine_kappa(ne, lo: float, hi: float, k0: float, xatol: float) -> float:
+    """The least residual sum of squares in kappa between lo and hi [1/s], from k0: Newton's steps on its slope
+    (:func:`_rss_slope`), kept inside the bracket the slope's sign narrows, bisecting where a step would leave it
+    or not shrink it fast enough (``rtsafe``, Press et al., Numerical Recipes, section 9.4), to xatol [1/s]; the
+    bound where the slope does not change sign between them."""
+    f_lo, f_hi = _rss_slope(ne, lo)[0], _rss_slope(ne, hi)[0]
+    if not f_lo < 0.0:
+        return lo
+    if not f_hi > 0.0:
+        return hi
+    k = min(max(k0, lo), hi)
+    dx_old = dx = hi - lo
+    for _ in range(KAPPA_REFINE_ITERATIONS):
+        f, df = _rss_slope(ne, k)
+        if f == 0.0:
+            return k
+        if f < 0.0:
+            lo = k
+        else:
+            hi = k
+        if not df > 0.0 or not lo < k - f / df < hi or abs(2.0 * f) > abs(dx_old * df):
+            dx_old, dx = dx, 0.5 * (hi - lo)
+            k = lo + dx
+        else:
+            dx_old, dx = dx, f / df
+            k -= dx
+        if abs(dx) < xatol or hi - lo < xatol:
+            break
+    return k
+
+
 def _best_kappa(ne, kappa_given, use_post):
-    """kappa = 1 / tau [1/s] of least residual (grid, then bounded refinement) and the curvature there."""
+    """kappa = 1 / tau [1/s] of least residual (grid, then Newton's refinement) and the curvature there."""
     if kappa_given is not None or not use_post:
         return (kappa_given if use_post else 0.0), math.nan
     k_max = 2.0 / TAU_BOUNDS_S[0]
@@ -631,9 +686,9 @@ def _best_kappa(ne, kappa_given, use_post):
     rss = _solve_kappa(ne, grid)[0]
     j = int(np.argmin(rss))
     lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
-    res = minimize_scalar(lambda k: _solve_kappa(ne, k)[0], bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-9 * max(abs(grid[j]), 1e-3)})
-    k = float(res.x) if res.fun <= rss[j] else float(grid[j])
+    k = _refine_kappa(ne, float(lo), float(hi), float(grid[j]), 1e-9 * max(abs(grid[j]), 1e-3))
+    if not _solve_kappa(ne, k)[0] <= rss[j]:
+        k = float(grid[j])
     h = max(1e-3 * abs(k), 1e-5)
     r3 = _solve_kappa(ne, np.array([k - h, k, k + h]))[0]
     curv = (r3[0] - 2.0 * r3[1] + r3[2]) / (h * h)

@@ -50,7 +50,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
 
 __all__ = [
     "ContactResult",
@@ -88,6 +87,8 @@ CURVE_RATE_HZ = 50.0e3  # faster: the search and the slope per CURVE_RATE_HZ sam
 CURVE_CHI2 = 9.0  # its uncertainty: half the ends within this many noise variances of the least, over its root [-]
 HINGE_SE_STEP = 0.1  # the hinge's corner profiled on a grid this fine for the ends' uncertainties [samples]
 BENT_STEP = 0.02  # the end's bent hinge profiled on a grid this fine, then its least refined [samples]
+BENT_REFINE_LEVELS = 3  # ... its least refined on this many finer grids [-]
+BENT_REFINE_POINTS = 41  # ... of this many corners each [-]
 BEND_CHI2 = 2.0  # ... and taken where its bend lowers the least residual sum of squares by this many noise variances [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 STEP_FRACTION = 0.03  # the first sample out of the noise above this fraction of the peak: the force stepped up to it [-]
@@ -943,10 +944,10 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     +0.2 to +0.6 % of TC on the model's ends at noise of 0.1-0.3 % of the peak, more the more samples the
     noise lets the window take, and more still when fitted again from twice the threshold (the spread check).
     The bent hinge takes the curvature: the corners are profiled on a BENT_STEP grid between wl and i0
-    (b and c solved exactly at each, :func:`_bent_sse`), the least refined between its neighbours by a bounded
-    scalar minimisation. The bend is taken only where it lowers the least residual sum of squares by
-    BEND_CHI2 noise variances (AIC's price of a parameter); else the straight corner stands. The uncertainty
-    is :func:`_hinge_se`'s rule on this profile: half the width of the corners within CURVE_CHI2 noise
+    (b and c solved exactly at each, :func:`_bent_sse`), the least refined between its neighbours on finer
+    grids (BENT_REFINE_LEVELS of BENT_REFINE_POINTS corners, to 2.5e-6 samples). The bend is taken only where it
+    lowers the least residual sum of squares by BEND_CHI2 noise variances (AIC's price of a parameter); else the
+    straight corner stands. The uncertainty is :func:`_hinge_se`'s rule on this profile: half the width of the corners within CURVE_CHI2 noise
     variances of the least over its root (inf when that reaches wl), or a uniform's over those within one.
     """
     wl, wr, i0 = (int(v) for v in window[:3])
@@ -963,10 +964,17 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     # a parabola as they like: zoo long-record trace 1:188, 5 rising samples at 22 kHz, TC -1.2 %)
     if not float(sse[k]) < float(np.min(straight)) - BEND_CHI2 * noise * noise:
         return ts_line, math.nan
+    # refined between its neighbours: BENT_REFINE_LEVELS finer grids of BENT_REFINE_POINTS, each between the
+    # neighbours of the last one's least (to BENT_STEP * (2 / (BENT_REFINE_POINTS - 1))**BENT_REFINE_LEVELS)
     lo, hi = float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)])
-    best = optimize.minimize_scalar(lambda v: float(_bent_sse(u, yw, np.array([v]))[0][0]), bounds=(lo, hi),
-                                    method="bounded", options={"xatol": 1e-9})
-    ts = float(best.x) if best.success and best.fun <= sse[k] else float(grid[k])
+    ts, least = float(grid[k]), float(sse[k])
+    for _ in range(BENT_REFINE_LEVELS):
+        fine = np.linspace(lo, hi, BENT_REFINE_POINTS)
+        fine_sse = _bent_sse(u, yw, fine)[0]
+        j = int(np.argmin(fine_sse))
+        if fine_sse[j] <= least:
+            ts, least = float(fine[j]), float(fine_sse[j])
+        lo, hi = float(fine[max(j - 1, 0)]), float(fine[min(j + 1, fine.size - 1)])
     level = float(sse[k]) + CURVE_CHI2 * noise * noise
     inside = np.flatnonzero(sse <= level)
     if inside[0] == 0:
