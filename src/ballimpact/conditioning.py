@@ -477,7 +477,7 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     freqs = list(frequencies) if frequencies and span * min(frequencies) >= 1.0 else []
     t_mid = 0.5 * (tq[0] + tq[-1]) if tq.size else 0.0
     trig = _trig(n, fs, tuple(freqs))
-    phi, norms, big_phi, iv = _design(v, fs, t, t_mid, trig, qi, post[qi], start_u, use_post)
+    phi, norms, big_phi, iv = _design(v, fs, t, t_mid, trig, tuple(freqs), qi, post[qi], start_u, use_post)
     y = v[qi]
     p = phi.shape[1]
     keep = np.ones(qi.size, dtype=bool)
@@ -571,19 +571,19 @@ def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_deca
     return pre, post, quiet, has_post, use_post, no_post
 
 
-def _design(v, fs, t, t_mid, trig, qi, post_q, start_u, use_post):
+def _design(v, fs, t, t_mid, trig, freqs, qi, post_q, start_u, use_post):
     """Normalised model columns at the quiet samples and, after the contact, their running integrals and v's.
 
     Returns (phi, norms, big_phi, iv): columns offset, drift, cos/sin per hum
-    frequency, scaled to unit norm (``norms``); their integrals from the contact
-    start and that of v at the post-contact quiet samples (zero elsewhere).
+    frequency (``trig``'s columns, of ``freqs`` [Hz]), scaled to unit norm
+    (``norms``); their trapezoid integrals from the contact start and that of v
+    at the post-contact quiet samples (zero elsewhere). The columns' integrals
+    are the trapezoid rule's sums in closed form: exact for the offset and the
+    drift, and for cos and sin of w t at step h, (h / 2) cot(w h / 2) times the
+    change of sin (and minus that of cos) from the start, as the sum of the
+    trapezoids telescopes; v's is summed.
     """
-
-    def design(sel):
-        tt = t[sel]
-        return np.column_stack([np.ones(tt.size), tt - t_mid, trig[sel]])
-
-    phi = design(qi)
+    phi = np.column_stack([np.ones(qi.size), t[qi] - t_mid, trig[qi]])
     norms = np.sqrt(np.sum(phi * phi, axis=0))
     norms[norms == 0] = 1.0
     phi = phi / norms
@@ -591,11 +591,16 @@ def _design(v, fs, t, t_mid, trig, qi, post_q, start_u, use_post):
     iv = np.zeros(qi.size)
     if use_post and post_q.any():
         i0 = max(int(math.floor(start_u)) - 1, 0)
-        last = int(qi[post_q][-1])
-        at = qi[post_q] - i0
-        big_phi[post_q] = cumulative_trapezoid(design(slice(i0, last + 1)) / norms, dx=1.0 / fs, axis=0,
-                                               initial=0.0)[at]
-        iv[post_q] = cumulative_trapezoid(v[i0:last + 1], dx=1.0 / fs, initial=0.0)[at]
+        j = qi[post_q]
+        h = 1.0 / fs
+        cols = [t[j] - t[i0], 0.5 * ((t[j] - t_mid) ** 2 - (t[i0] - t_mid) ** 2)]
+        for i, f in enumerate(freqs):
+            half = math.pi * f * h
+            k = 0.5 * h * math.cos(half) / math.sin(half)
+            cols.append(k * (trig[j, 2 * i + 1] - trig[i0, 2 * i + 1]))
+            cols.append(-k * (trig[j, 2 * i] - trig[i0, 2 * i]))
+        big_phi[post_q] = np.column_stack(cols) / norms
+        iv[post_q] = cumulative_trapezoid(v[i0:int(j[-1]) + 1], dx=h, initial=0.0)[j - i0]
     return phi, norms, big_phi, iv
 
 
