@@ -1971,7 +1971,7 @@ def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(se
         d1, d2 = _rss_slope(ne, k)
         assert_allclose(d1, (r[2] - r[0]) / (2 * h), rtol=1e-5, atol=1e-9)
         assert_allclose(d2, (r[2] - 2 * r[1] + r[0]) / h ** 2, rtol=1e-4)
-    scan = np.linspace(0.0, 10.0, 200001)
+    scan = np.linspace(-20.0, 20.0, 400001)
     least = scan[int(np.argmin(_solve_kappa(ne, scan)[0]))]
     k = _refine_kappa(ne, least - 0.5, least + 0.5, least - 0.3, 1e-10)
     assert_allclose(k, least, atol=1e-4)
