@@ -894,3 +894,33 @@ def test_hinge_fits_needs_every_corner_candidate_in_its_first_window():
     u = np.arange(10.0)
     with pytest.raises(ValueError, match="first window must hold every sample before the upper bound"):
         _hinge_fits(u, u, 0.0, 6.0, 3)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    n_pre=st.integers(1, 12),
+    n_rise=st.integers(0, 12),
+    slope=st.floats(-0.2, 2.0),
+    corner=st.floats(0.0, 1.0),
+    noise=st.sampled_from([0.0, 1e-3, 0.05]),
+    seed=st.integers(0, 2**16),
+)
+def test_hinge_fits_property_no_corner_fits_better(n_pre, n_rise, slope, corner, noise, seed):
+    """Whatever the samples (flat, falling, noiseless, a corner on a sample or between two), no corner of a fine scan
+    fits any window better than _hinge_fits's hinge, whose residual is its own."""
+    from ballimpact.contact import _hinge_fits
+
+    rng = np.random.default_rng(seed)
+    wl = 40
+    i0 = wl + n_pre
+    last = i0 + n_rise
+    u = np.arange(wl, last + 1, dtype=float)
+    ts_true = wl + corner * n_pre
+    y = slope * np.maximum(u - ts_true, 0.0) + noise * rng.standard_normal(u.size)
+    ts, b, sse = _hinge_fits(u, y, float(wl), float(i0), i0 - wl)
+    assert np.all((ts >= wl) & (ts <= i0)) and np.all(b >= 0)
+    for j, e in enumerate(range(i0, last + 1)):
+        n = e - wl + 1
+        _, _, bsse = _brute_hinge(u[:n], y[:n], float(wl), float(i0), step=2e-3)
+        assert sse[j] <= bsse + 1e-12 * max(1.0, float(y[:n] @ y[:n]))
+        assert_allclose(sse[j], np.sum((y[:n] - b[j] * np.maximum(u[:n] - ts[j], 0.0)) ** 2), rtol=1e-9, atol=1e-14)
