@@ -1976,3 +1976,6 @@ def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(se
     k = _refine_kappa(ne, least - 0.5, least + 0.5, least - 0.3, 1e-10)
     assert_allclose(k, least, atol=1e-4)
     assert abs(_rss_slope(ne, k)[0]) < 1e-9 * max(1.0, abs(_rss_slope(ne, least - 0.5)[0]))
+    # a bracket the least is not in: its bound nearer the least, where the residual is least within it
+    assert _refine_kappa(ne, least + 0.5, least + 1.0, least + 0.7, 1e-10) == least + 0.5
+    assert _refine_kappa(ne, least - 1.0, least - 0.5, least - 0.7, 1e-10) == least - 0.5
