@@ -103,6 +103,7 @@ SHORT_POST_GUARD_S = 0.5e-3  # a record too short for MIN_POST_S after POST_GUAR
 SHORT_MIN_POST_S = 0.5e-3  # ... when it is at least this long (the decay's standard error then decides) [s]
 UNDERSHOOT_SIGNIFICANCE = 5.0  # kappa must exceed this many standard errors [-]
 TAU_BOUNDS_S = (0.005, 1.0e4)  # plausible charge-amplifier time constants [s]
+KAPPA_CORRELATION_S = 2e-3  # kappa's standard error allows for residuals correlated over this long [s]
 KAPPA_REFINE_ITERATIONS = 100  # most Newton or bisection steps refining kappa between two grid points [-]
 BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the impulse by more [-]
 BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
@@ -498,6 +499,11 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     baseline = coef[0] + coef[1] * (t - t_mid) + trig @ coef[2:]
     if use_post and kappa_given is None:
         kappa_se = math.sqrt(2.0 * s2 / curv) if curv > 0 else math.inf
+        if math.isfinite(kappa_se):
+            # residuals that are not white (hum over less than a period, left to the drift and the decay) carry
+            # less information on kappa than their number says
+            kappa_se *= math.sqrt(_correlation_factor((phi + kappa * big_phi)[keep], (iv - big_phi @ theta)[keep],
+                                                      resid[keep], max(1, int(round(KAPPA_CORRELATION_S * fs)))))
     elif kappa_given is not None:
         kappa, kappa_se = float(kappa_given), 0.0
     else:
@@ -624,6 +630,31 @@ def _solve_kappa(ne, k):
     kk = k[:, 0, 0]
     rss = np.maximum(r0 + kk * r1 + kk * kk * r2 - np.sum(q[:, :, 0] * theta, axis=1), 0.0)
     return (float(rss[0]), theta[0]) if rss.size == 1 else (rss, theta)
+
+
+def _correlation_factor(x: np.ndarray, d: np.ndarray, r: np.ndarray, lag: int) -> float:
+    """How much correlated residuals widen kappa's variance [-]: at least 1.
+
+    kappa's least-squares estimate moves with the sum of its scores ``r * w``,
+    the residuals r [V] times w, the residual's derivative in kappa ``d`` [V s]
+    with the other columns ``x`` projected out. Its variance is the scores'
+    long-run variance, estimated with a Bartlett window of ``lag`` samples
+    (Newey & West 1987) over the quiet samples in their order; the fit's own
+    standard error takes the scores' variance at lag 0 (white residuals). The
+    factor is their ratio, never below 1.
+    """
+    if r.size < 3:
+        return 1.0
+    w = d - x @ np.linalg.lstsq(x, d, rcond=None)[0]
+    scores = r * w
+    n = scores.size
+    spectrum = np.fft.rfft(scores, 2 * n)
+    acov = np.fft.irfft(spectrum * np.conj(spectrum), 2 * n)[:min(lag, n)]
+    if not acov[0] > 0:
+        return 1.0
+    window = 1.0 - np.arange(acov.size) / (lag + 1.0)
+    long_run = acov[0] + 2.0 * float(np.sum(window[1:] * acov[1:]))
+    return max(1.0, long_run / float(acov[0]))
 
 
 def _rss_slope(ne, k: float) -> tuple[float, float]:
