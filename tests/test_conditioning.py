@@ -1979,3 +1979,22 @@ def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(se
     # a bracket the least is not in: its bound nearer the least, where the residual is least within it
     assert _refine_kappa(ne, least + 0.5, least + 1.0, least + 0.7, 1e-10) == least + 0.5
     assert _refine_kappa(ne, least - 1.0, least - 0.5, least - 0.7, 1e-10) == least - 0.5
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_correlation_factor_is_one_for_white_residuals_and_large_for_unmodelled_hum(seed):
+    """kappa's standard error is widened by the scores' long-run variance over their white variance: about 1 for
+    white residuals (never below), near the window's length for a hum the model left out (correlated over it)."""
+    from ballimpact.conditioning import _correlation_factor
+
+    rng = np.random.default_rng(seed)
+    fs, n, lag = 66964.3, 4000, 134
+    t = np.arange(n) / fs
+    x = np.column_stack([np.ones(n), t - t.mean()])
+    d = np.cumsum(np.exp(-t / 0.01)) / fs  # a running integral, as kappa's column is
+    white = _correlation_factor(x, d, 1e-3 * rng.standard_normal(n), lag)
+    assert 1.0 <= white < 1.3
+    hum = 1e-3 * np.sin(2 * np.pi * 50.0 * t + rng.uniform(0, 2 * np.pi)) + 1e-5 * rng.standard_normal(n)
+    assert _correlation_factor(x, d, hum, lag) > 0.5 * (lag + 1)
+    assert _correlation_factor(x, d, np.zeros(n), lag) == 1.0
+    assert _correlation_factor(x[:2], d[:2], np.ones(2), lag) == 1.0
