@@ -169,8 +169,9 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (
-        "s", "standard error of the time constant estimated from the trace, from the noise and the contact's "
-             "sampling (not the choice of hum model on a record of about a mains period); NaN when given or none"),
+        "s", "standard error of the time constant estimated from the trace, from the noise (and its correlation "
+             "over 2 ms) and the contact's sampling (not the choice of hum model on a record of about a mains "
+             "period); NaN when given or none"),
     "amplifier_time_constant_source": (
         "1", "where the time constant came from: given (plate.time_constant_s), estimated or none"),
     "plate_resonance_hz": ("Hz", "plate resonance identified from its ringing and undone (NaN when none was)"),
