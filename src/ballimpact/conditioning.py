@@ -645,11 +645,13 @@ def _correlation_factor(x: np.ndarray, d: np.ndarray, r: np.ndarray, lag: int) -
     """
     if r.size < 3:
         return 1.0
-    w = d - x @ np.linalg.lstsq(x, d, rcond=None)[0]
+    try:
+        w = d - x @ np.linalg.solve(x.T @ x, x.T @ d)
+    except np.linalg.LinAlgError:
+        w = d - x @ np.linalg.lstsq(x, d, rcond=None)[0]
     scores = r * w
     n = scores.size
-    spectrum = np.fft.rfft(scores, 2 * n)
-    acov = np.fft.irfft(spectrum * np.conj(spectrum), 2 * n)[:min(lag, n)]
+    acov = np.fft.irfft(np.abs(np.fft.rfft(scores, 2 * n)) ** 2, 2 * n)[:min(lag, n)]
     if not acov[0] > 0:
         return 1.0
     window = 1.0 - np.arange(acov.size) / (lag + 1.0)
