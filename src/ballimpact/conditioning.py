@@ -651,7 +651,8 @@ def _correlation_factor(x: np.ndarray, d: np.ndarray, r: np.ndarray, lag: int) -
         w = d - x @ np.linalg.lstsq(x, d, rcond=None)[0]
     scores = r * w
     n = scores.size
-    acov = np.fft.irfft(np.abs(np.fft.rfft(scores, 2 * n)) ** 2, 2 * n)[:min(lag, n)]
+    n_fft = 1 << (2 * n - 1).bit_length()  # zero-padded to a power of two: no wrap-around, and a fast transform
+    acov = np.fft.irfft(np.abs(np.fft.rfft(scores, n_fft)) ** 2, n_fft)[:min(lag, n)]
     if not acov[0] > 0:
         return 1.0
     window = 1.0 - np.arange(acov.size) / (lag + 1.0)
