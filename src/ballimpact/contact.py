@@ -527,7 +527,11 @@ def _hinge_fits(u: np.ndarray, y: np.ndarray, lower: float, upper: float, first:
     if not m <= first + 1 <= n:
         raise ValueError(f"first window must hold every sample before the upper bound, got first={first}")
     ends = np.arange(first, n)
-    yy = np.cumsum(y * y)[first:]
+    # running sums of 1, u, u^2, y, u y and y^2 from the window's start (a leading zero: sums over k .. e are
+    # p[:, e + 1] - p[:, k])
+    p = np.zeros((6, n + 1))
+    np.cumsum(np.stack([np.ones(n), u, u * u, y, u * y, y * y]), axis=1, out=p[:, 1:])
+    yy = p[5, first + 1:]
     # corners at the bounds and at the sample times
     cand = np.concatenate([[lower, upper], u[(u > lower) & (u < upper)]])
     g = np.maximum(u[None, :] - cand[:, None], 0.0)
@@ -541,8 +545,7 @@ def _hinge_fits(u: np.ndarray, y: np.ndarray, lower: float, upper: float, first:
     # the line through the samples k .. e
     k = np.arange(0, m + 1)
     left = np.concatenate([[-np.inf], u])[k]
-    p = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), u, u * u, y, u * y, y * y)]
-    s0, s1, s2, sy, suy, syy = (q[None, ends + 1] - q[k, None] for q in p)
+    s0, s1, s2, sy, suy, syy = p[:, None, ends + 1] - p[:, k, None]
     den = s0 * s2 - s1 * s1
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = (s0 * suy - s1 * sy) / den
