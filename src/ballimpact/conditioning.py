@@ -486,7 +486,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         ne = _normal_equations(phi, big_phi, y, iv, keep)
         kappa, curv = _best_kappa(ne, kappa_given, use_post)
         rss, theta = _solve_kappa(ne, kappa)
-        resid = (y + kappa * iv) - (phi + kappa * big_phi) @ theta
+        columns = phi + kappa * big_phi  # the model's columns at this kappa
+        resid = (y + kappa * iv) - columns @ theta
         s = robust_noise(resid[keep])
         new_keep = np.abs(resid) <= ROBUST_SIGMA * max(s, 1e-300)
         if np.count_nonzero(new_keep) < max(0.8 * qi.size, p + 3) or np.array_equal(new_keep, keep):
@@ -502,8 +503,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         if math.isfinite(kappa_se):
             # residuals that are not white (hum over less than a period, left to the drift and the decay) carry
             # less information on kappa than their number says
-            kappa_se *= math.sqrt(_correlation_factor((phi + kappa * big_phi)[keep], (iv - big_phi @ theta)[keep],
-                                                      resid[keep], max(1, int(round(KAPPA_CORRELATION_S * fs)))))
+            kappa_se *= math.sqrt(_correlation_factor(columns[keep], (iv - big_phi @ theta)[keep], resid[keep],
+                                                      max(1, int(round(KAPPA_CORRELATION_S * fs)))))
     elif kappa_given is not None:
         kappa, kappa_se = float(kappa_given), 0.0
     else:

@@ -552,8 +552,8 @@ def _hinge_fits(u: np.ndarray, y: np.ndarray, lower: float, upper: float, first:
         alpha = (sy - beta * s1) / s0
         ts_line = -alpha / beta
         sse_line = (yy[None, :] - syy) + (syy - alpha * sy - beta * suy)
-    inside = (s0 >= 2) & (den > 0) & (beta > 0) & (ts_line > left[:, None]) & (ts_line < u[np.minimum(k, n - 1), None])
-    inside &= (ts_line >= lower) & (ts_line <= upper)
+    inside = (s0 >= 2) & (den > 0) & (beta > 0) & (ts_line >= lower) & (ts_line <= upper)
+    inside &= (ts_line > left[:, None]) & (ts_line < u[np.minimum(k, n - 1), None])
     ts = np.concatenate([ts, np.where(inside, ts_line, 0.0)])
     b = np.concatenate([b, np.where(inside, beta, 0.0)])
     sse = np.concatenate([sse, np.where(inside, sse_line, np.inf)])
@@ -563,15 +563,6 @@ def _hinge_fits(u: np.ndarray, y: np.ndarray, lower: float, upper: float, first:
     resid = (y[None, :] - b[:, None] * np.maximum(u[None, :] - ts[:, None], 0.0)) ** 2
     sse = np.cumsum(resid, axis=1)[cols, ends]
     return ts + shift, b, sse
-
-
-def _hinge_fit(u: np.ndarray, y: np.ndarray, lower: float, upper: float):
-    """Exact least-squares hinge y = b * max(u - ts, 0), b >= 0, ts in [lower, upper] [u's unit]: (ts, b).
-
-    The one window of :func:`_hinge_fits`.
-    """
-    ts, b, _ = _hinge_fits(u, y, lower, upper, len(u) - 1)
-    return float(ts[0]), float(b[0])
 
 
 def _edge_zero(xs: np.ndarray, peak_index: int, lo: float, hi: float):
@@ -950,8 +941,9 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     (b and c solved exactly at each, :func:`_bent_sse`), the least refined between its neighbours on finer
     grids (BENT_REFINE_LEVELS of BENT_REFINE_POINTS corners, to 2.5e-6 samples). The bend is taken only where it
     lowers the least residual sum of squares by BEND_CHI2 noise variances (AIC's price of a parameter); else the
-    straight corner stands. The uncertainty is :func:`_hinge_se`'s rule on this profile: half the width of the corners within CURVE_CHI2 noise
-    variances of the least over its root (inf when that reaches wl), or a uniform's over those within one.
+    straight corner stands. The uncertainty is :func:`_hinge_se`'s rule on this profile: half the width of the
+    corners within CURVE_CHI2 noise variances of the least over its root (inf when that reaches wl), or a
+    uniform's over those within one.
     """
     wl, wr, i0 = (int(v) for v in window[:3])
     if not (noise > 0) or wr - i0 < 3:  # a bend is read from 4 rising samples at least
