@@ -84,6 +84,8 @@ def run_one(args):
         "tau_true_s": tr.rig.tau_s, "tau_given": tr.rig.tau_known, "tau_s": getattr(result, "tau_s", math.nan),
         "tau_se_s": getattr(result, "tau_se_s", math.nan), "tau_source": getattr(result, "tau_source", ""),
         "kinds": " ".join(dict.fromkeys(p.kind.value for p in getattr(result, "problems", []))),
+        "bandwidth_given": tr.rig.bandwidth_known and tr.rig.bandwidth_hz is not None,
+        "peak_note": getattr(result, "peak_note", ""),
     }
 
 
@@ -279,6 +281,11 @@ def main(argv=None):
                f"{sum(r['process_s'] for r in records) / n * 1e3:.0f} ms per trace on average "
                f"({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU: writing, reading and processing "
                "the trace, less sensitive to other load)")
+    withheld = [r for r in records if r["category"].startswith("ok_") and r["peak_note"]]
+    summary += (f"\nok with the peak withheld (daq.bandwidth_hz given, a problem of the peak alone): {len(withheld)} "
+                f"({sum(r['category'] == 'ok_right' for r in withheld)} of them right: TC and kCAL within 1 %); "
+                "excluded because daq.bandwidth_hz is above fs/2: "
+                f"{sum('aliasing' in r['kinds'].split() for r in records)}")
     alone, alone_right, alone_wrong = peak_alone(records)
     summary += (f"\nexcluded measurable for the peak alone (every problem {' or '.join(sorted(PEAK_KINDS))}): "
                 f"{alone}, {alone_right} of them with TC and kCAL within 1 % and {alone_wrong} not (a verdict per "

@@ -96,7 +96,7 @@ _AK_COMMENT = (
 )
 #: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
 _CONTENT_TYPES = (
-    (("status", "reason", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
+    (("status", "reason", "peak_note", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
@@ -166,6 +166,8 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "hum_amplitude_V": ("V", "peak amplitude of the mains hum's fundamental removed (0 when none was fitted)"),
     "mains_frequency_hz": ("Hz", "mains frequency whose hum was removed (0 when none was)"),
     "mains_source": ("1", "where the mains frequency came from: given (daq.mains_hz), detected or none"),
+    "peak_note": ("1", "why peak_force_N and time_to_peak_ms are withheld (NaN) on an ok impact: a problem of the "
+                       "peak alone, with aliasing ruled out by daq.bandwidth_hz; else empty"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (
@@ -266,6 +268,7 @@ _CONDITIONING_TEXT = [
     # (archive name, ImpactResult attribute)
     ("mains_source", "mains_source"),
     ("amplifier_time_constant_source", "tau_source"),
+    ("peak_note", "peak_note"),
 ]
 
 

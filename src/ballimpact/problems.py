@@ -21,6 +21,7 @@ __all__ = [
     "Problem",
     "GATE_TIME_KINDS",
     "TRACE_FILE_KINDS",
+    "PEAK_KINDS",
     "has_kind",
     "kind_of_message",
 ]
@@ -63,6 +64,7 @@ class ProblemKind(enum.Enum):
     NEGATIVE_FORCE = "negative_force"  # force below zero after the contact
     PEAK_ON_RINGING = "peak_on_ringing"  # the peak is a swing of plate ringing
     PEAK_BETWEEN_SAMPLES = "peak_between_samples"  # the force may rise above the largest sample by > 10 %
+    ALIASING = "aliasing"  # daq.bandwidth_hz above half the sample rate: ringing sampled through its alias
     # physical bounds and calibration (ballimpact.processing)
     SPEED_OUT_OF_BOUNDS = "speed_out_of_bounds"
     COR_OUT_OF_BOUNDS = "cor_out_of_bounds"
@@ -80,6 +82,11 @@ TRACE_FILE_KINDS = frozenset({
     ProblemKind.TRACE_PATH_MISSING, ProblemKind.TRACE_PATH_ESCAPES, ProblemKind.TRACE_PATH_UNRESOLVABLE,
     ProblemKind.TRACE_NOT_FOUND, ProblemKind.TRACE_NOT_A_FILE,
 })
+
+#: Problems of the peak force alone: where aliasing is ruled out (daq.bandwidth_hz at most half the sample
+#: rate) they withhold the peak (impacts.csv ``peak_note``) instead of excluding the impact, whose TC and kCAL
+#: every other check judges.
+PEAK_KINDS = frozenset({ProblemKind.PEAK_ON_RINGING, ProblemKind.PEAK_BETWEEN_SAMPLES})
 
 
 @dataclass(frozen=True)
@@ -138,6 +145,7 @@ _MESSAGE_STARTS = {
     ProblemKind.NEGATIVE_FORCE: r"force below zero after the contact",
     ProblemKind.PEAK_ON_RINGING: r"peak force on plate ringing",
     ProblemKind.PEAK_BETWEEN_SAMPLES: r"peak force between samples",
+    ProblemKind.ALIASING: r"signal bandwidth .* above half the sample rate",
     ProblemKind.SPEED_OUT_OF_BOUNDS: r"inbound speed \S+ m/s outside physical bounds",
     ProblemKind.COR_OUT_OF_BOUNDS: r"COR \S+ outside physical bounds",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: r"contact time \S+ ms outside physical bounds",

@@ -26,7 +26,7 @@ from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_sampl
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import kelvin_voigt_parameters
-from .problems import GATE_TIME_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
+from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import ImpactRow, Session
 from .traces import TraceError, read_trace
 
@@ -42,6 +42,7 @@ __all__ = [
     "apply_time_constant_check",
     "exclude_time_constant_outliers",
     "flag_time_constant_outliers",
+    "alias_free",
 ]
 
 #: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
@@ -50,6 +51,7 @@ IMPACT_COLUMNS = [
     "kcal_N_per_V", "impulse_N_s", "peak_force_N", "time_to_peak_ms", "max_displacement_mm",
     "kv_stiffness_kN_m", "kv_damping_N_s_m",
     "vin_gate_m_s", "vout_gate_m_s",  # v1.1: speeds at the gates (= vin/vout without gates.distance_to_plate_m)
+    "peak_note",  # v1.1: why peak_force_N and time_to_peak_ms are withheld on an ok impact, else empty
 ]
 
 #: Plausible ranges for a tennis ball fired at a force plate; outside = excluded.
@@ -113,6 +115,8 @@ class ImpactResult:
     mains_source: str = ""  # "given" (daq.mains_hz), "detected" or "none"
     plate_resonance_hz: float = math.nan  # the plate resonance undone (ballimpact.plate); NaN when none was
     plate_damping_ratio: float = math.nan
+    peak_note: str = ""  # why the peak force is withheld on an ok impact (the messages of ``peak_problems``)
+    peak_problems: list = field(default_factory=list)  # problems of the peak alone (PEAK_KINDS), withheld
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
     force_N: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -128,6 +132,28 @@ class ImpactResult:
         self.status = "excluded"
         self.problems.append(problem)
         self.reason = f"{self.reason}; {problem.message}" if self.reason else problem.message
+        return self
+
+    def withhold_peak(self, problem: Problem) -> "ImpactResult":
+        """Keep ``problem``, one of the peak force alone (PEAK_KINDS), for :meth:`settle_peak`."""
+        if not isinstance(problem, Problem) or problem.kind not in PEAK_KINDS:
+            raise TypeError(f"problem must be a ballimpact.problems.Problem of {sorted(k.value for k in PEAK_KINDS)}, "
+                            f"got {problem!r}")
+        self.peak_problems.append(problem)
+        return self
+
+    def settle_peak(self) -> "ImpactResult":
+        """The withheld peak problems: on an ok impact the peak force and its time are withheld (NaN) and
+        ``peak_note`` says why; on an excluded one they join its reason, like every other problem."""
+        problems, self.peak_problems = self.peak_problems, []
+        if not problems:
+            return self
+        if self.status == "ok":
+            self.peak_force_N = self.time_to_peak_ms = math.nan
+            self.peak_note = "; ".join(p.message for p in problems)
+        else:
+            for p in problems:
+                self.exclude(p)
         return self
 
     def row(self) -> dict:
@@ -206,10 +232,47 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     if read is None:
         return res
     t, raw, cond = read
+    _aliasing_problem(res, meta)
     contact = _contact(res, t, raw, cond, meta)
     if contact is None:
-        return res
-    return _calibrated(res, row, t, cond, contact, meta)
+        return res.settle_peak()
+    return _calibrated(res, row, t, cond, contact, meta).settle_peak()
+
+
+def alias_free(bandwidth_hz: float | None, sample_rate_hz: float) -> bool:
+    """Whether the rig rules out aliasing: the highest frequency reaching the ADC is at most half the sample rate.
+
+    Parameters
+    ----------
+    bandwidth_hz : float or None
+        ``daq.bandwidth_hz`` [Hz]: the anti-aliasing filter's cut-off, or without one the plate's highest
+        resonance; None when not given (unknown: aliasing not ruled out).
+    sample_rate_hz : float
+        Sample rate of the trace [Hz].
+
+    Returns
+    -------
+    bool
+    """
+    return bandwidth_hz is not None and bandwidth_hz <= 0.5 * sample_rate_hz
+
+
+def _aliasing_problem(res: ImpactResult, meta) -> None:
+    """Exclude an impact sampled slower than twice the rig's stated bandwidth (``daq.bandwidth_hz``).
+
+    A plate resonance above fs / 2 reaches the samples as its alias: near fs (0.65-1.3 fs in the zoo) it folds
+    near zero frequency, a slow swing no check can tell from the force, and it moves the impulse's sum of samples
+    (so kCAL) and the ends and peak fitted through them. The zoo's only ok but wrong traces are of this kind
+    (``python bench/robustness.py --n 2000 --seed 0``: 0:1236, kCAL -1.14 %); only the rig's bandwidth tells it.
+    """
+    fs, bw = res.sample_rate_hz, meta.bandwidth_hz
+    if bw is None or not math.isfinite(fs) or alias_free(bw, fs):
+        return
+    res.exclude(Problem(ProblemKind.ALIASING, (
+        f"signal bandwidth {bw / 1e3:.4g} kHz (daq.bandwidth_hz) above half the sample rate ({fs / 2e3:.4g} kHz): "
+        f"the plate's ringing is sampled through its alias, which no check can tell from the force and which can "
+        f"move TC, kCAL and the peak unseen (sample at {2 * bw / 1e3:.4g} kHz or faster, or low-pass below "
+        f"{fs / 2e3:.4g} kHz before the ADC)")))
 
 
 def _gate_speeds(res: ImpactResult, row: ImpactRow, session: Session) -> None:
@@ -379,8 +442,12 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
                             f"more than one impact in the trace ({contact.n_impacts} found: {seen})"))
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
         res.exclude(Problem(ProblemKind.CONTACT_TRUNCATED, "contact not entirely inside the trace (truncated trace?)"))
+    peak_alone = alias_free(meta.bandwidth_hz, res.sample_rate_hz)  # no alias behind a peak problem
     for problem in cond.problems:
-        res.exclude(problem)
+        if peak_alone and problem.kind in PEAK_KINDS:
+            res.withhold_peak(problem)
+        else:
+            res.exclude(problem)
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):

@@ -53,7 +53,7 @@ MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: w
 
 _KNOWN_SECTION_KEYS = {
     "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
-    "daq": {"sample_rate_hz", "adc_range_v", "mains_hz"},
+    "daq": {"sample_rate_hz", "adc_range_v", "mains_hz", "bandwidth_hz"},
     "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
     "rig": {"orientation", "air_density_kg_m3"},
 }
@@ -151,6 +151,7 @@ class SessionMeta:
     rig_orientation: str = "horizontal"  # optional `rig.orientation` (v1.1): horizontal or vertical
     air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
     time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
+    bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency reaching the ADC; None = unknown
 
 
 @dataclass
@@ -469,7 +470,7 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
     return int(polarity_number), kcal_range, time_constant_s
 
 
-def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None]:
+def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None, float | None]:
     daq = _section(data, "daq", file)
     sample_rate_hz = _number(
         _require(daq, "sample_rate_hz", "daq.sample_rate_hz", file), "daq.sample_rate_hz", file, positive=True
@@ -483,8 +484,11 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     mains_hz = DEFAULT_MAINS_HZ
     if daq.get("mains_hz") is not None:
         mains_hz = _number(daq["mains_hz"], "daq.mains_hz", file, positive=True)
+    bandwidth_hz = None
+    if daq.get("bandwidth_hz") is not None:
+        bandwidth_hz = _number(daq["bandwidth_hz"], "daq.bandwidth_hz", file, positive=True)
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
-    return sample_rate_hz, (adc[0], adc[1]), mains_hz
+    return sample_rate_hz, (adc[0], adc[1]), mains_hz, bandwidth_hz
 
 
 def _parse_gates(data: dict, file: str) -> tuple[float, float, float | None]:
@@ -624,7 +628,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
             _raise_collected(collect.problems)
         return None
     polarity, kcal_range, time_constant_s = plate
-    sample_rate_hz, adc, mains_hz = daq
+    sample_rate_hz, adc, mains_hz, bandwidth_hz = daq
     spacing_m, resolution_s, distance_to_plate_m = gates
     orientation, air_density = rig
     return SessionMeta(
@@ -646,6 +650,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         rig_orientation=orientation,
         air_density_kg_m3=air_density,
         time_constant_s=time_constant_s,
+        bandwidth_hz=bandwidth_hz,
     )
 
 

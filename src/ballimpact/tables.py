@@ -29,6 +29,7 @@ IMPACT_COLUMNS = [
     "fit_note",
     "vin_gate_m_s",
     "vout_gate_m_s",
+    "peak_note",
 ]
 
 #: Columns of results/<session>/parameters.csv, in order: identification (ball,
@@ -102,7 +103,7 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
             if "used_in_fit" in ds.variables:
                 ok &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
             data[col] = np.where(ok, "true", "false")
-        elif col == "fit_note":
+        elif col in ("fit_note", "peak_note"):
             data[col] = _column(ds, col, n, text=True)
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)
