@@ -167,6 +167,63 @@ def test_excluded_result_row_has_reason():
     assert r.row()["reason"] == "no contact found; clipping at the ADC rails"
 
 
+_PEAK_MESSAGE = "peak force between samples: the force rises by 14 % of the peak in the 43 us before the largest sample"
+
+
+def test_a_problem_of_the_peak_alone_withholds_the_peak_of_an_ok_impact():
+    r = ImpactResult(impact_id="x", ball="b", peak_force_N=1500.0, time_to_peak_ms=0.1, contact_time_ms=4.0)
+    r.withhold_peak(Problem(ProblemKind.PEAK_BETWEEN_SAMPLES, _PEAK_MESSAGE)).settle_peak()
+    row = r.row()
+    assert (row["status"], row["reason"], row["peak_note"]) == ("ok", "", _PEAK_MESSAGE)
+    assert np.isnan(row["peak_force_N"]) and np.isnan(row["time_to_peak_ms"])
+    assert row["contact_time_ms"] == 4.0
+    assert r.problems == [] and r.peak_problems == []
+
+
+def test_a_withheld_peak_problem_joins_the_reason_of_an_excluded_impact():
+    r = ImpactResult(impact_id="x", ball="b", peak_force_N=1500.0)
+    r.withhold_peak(Problem(ProblemKind.PEAK_ON_RINGING, "peak force on plate ringing: ..."))
+    r.exclude(Problem(ProblemKind.NO_CALIBRATION, "no calibration: x")).settle_peak()
+    assert r.reason == "no calibration: x; peak force on plate ringing: ..."
+    assert r.peak_note == "" and r.peak_force_N == 1500.0
+    assert [p.kind for p in r.problems] == [ProblemKind.NO_CALIBRATION, ProblemKind.PEAK_ON_RINGING]
+
+
+@pytest.mark.parametrize("kind", [ProblemKind.NO_CONTACT, ProblemKind.PLATE_RINGING, ProblemKind.ALIASING])
+def test_only_a_problem_of_the_peak_alone_can_be_withheld(kind):
+    with pytest.raises(TypeError, match="must be a ballimpact.problems.Problem of"):
+        ImpactResult(impact_id="x", ball="b").withhold_peak(Problem(kind, "something"))
+
+
+@pytest.mark.parametrize("bandwidth_hz, fs, free", [
+    (None, 50e3, False), (25e3, 50e3, True), (24.9e3, 50e3, True), (25.1e3, 50e3, False), (30e3, 20e3, False),
+])
+def test_alias_free_needs_a_bandwidth_of_at_most_half_the_sample_rate(bandwidth_hz, fs, free):
+    assert processing.alias_free(bandwidth_hz, fs) is free
+
+
+@pytest.mark.parametrize("factor, excluded", [(0.4, False), (0.6, True)])
+def test_bandwidth_above_half_the_sample_rate_excludes_every_impact(synth_session, tmp_path, factor, excluded):
+    import shutil
+
+    session_dir, truth = synth_session
+    copy = tmp_path / session_dir.name
+    shutil.copytree(session_dir, copy)
+    fs = read_session(copy).meta.sample_rate_hz
+    text = (copy / "session.yaml").read_text(encoding="utf-8")
+    (copy / "session.yaml").write_text(text.replace("daq:\n", f"daq:\n  bandwidth_hz: {factor * fs!r}\n", 1),
+                                       encoding="utf-8")
+    session = read_session(copy)
+    assert session.meta.bandwidth_hz == pytest.approx(factor * fs, rel=1e-12)
+    good = [r for r in iter_process(session) if truth.loc[r.impact_id].fault == ""]
+    if excluded:
+        assert all(r.status == "excluded" and any(p.kind is ProblemKind.ALIASING for p in r.problems)
+                   and "above half the sample rate" in r.reason for r in good), [r.reason for r in good]
+    else:
+        assert all(r.status == "ok" and r.peak_note == "" and np.isfinite(r.peak_force_N) for r in good), \
+            [r.reason for r in good]
+
+
 @pytest.mark.parametrize("kcal_range, excluded", [("[100, 300]", False), ("[250, 400]", True)])
 def test_plate_kcal_range_from_session_yaml(synth_session, tmp_path, kcal_range, excluded):
     import shutil

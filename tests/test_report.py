@@ -92,6 +92,26 @@ def test_summary_page_text_fits(ds):
     assert _text_inside_page(fig) == []
 
 
+def _page_texts(fig):
+    from matplotlib.text import Text
+
+    return [t.get_text() for t in fig.findobj(match=Text) if t.get_text()]
+
+
+def test_summary_page_counts_the_good_impacts_whose_peak_is_withheld(ds):
+    withheld = ds.copy()
+    ok = np.flatnonzero(np.asarray(withheld["status"].values).astype(str) == "ok")
+    notes = np.array([""] * withheld.sizes["impact"], dtype=object)
+    notes[ok[:2]] = "peak force between samples: ..."
+    notes[np.flatnonzero(np.asarray(withheld["status"].values).astype(str) != "ok")[:1]] = "ignored: not ok"
+    withheld["peak_note"] = ("impact", notes)
+    text = " ".join(_page_texts(report._summary_page(withheld, report._session_info(withheld))))
+    assert re.search(r"The\s+peak\s+force\s+of\s+2\s+good\s+impacts\s+is\s+withheld", text), text
+    plain = " ".join(_page_texts(report._summary_page(ds, report._session_info(ds))))
+    assert "withheld" not in plain
+    assert _text_inside_page(report._summary_page(withheld, report._session_info(withheld))) == []
+
+
 def test_long_exclusion_list_paginates(ds):
     many = ds.copy()
     n = many.sizes["impact"]

@@ -126,6 +126,7 @@ def test_read_good_session(tmp_path):
     assert meta.gate_resolution_s == pytest.approx(1e-6, rel=1e-12)
     assert meta.mains_hz is None  # v1.1: absent = find it in each trace
     assert meta.time_constant_s is None
+    assert meta.bandwidth_hz is None  # absent: aliasing not ruled out
     assert meta.synthetic is False
     assert list(meta.balls) == ["pressurised", "pressureless"]
     ball = meta.balls["pressurised"]
@@ -155,6 +156,7 @@ def test_read_good_session(tmp_path):
 def test_optional_keys_and_unknown_keys_kept(tmp_path):
     meta = copy.deepcopy(BASE_META)
     meta["daq"]["mains_hz"] = 60
+    meta["daq"]["bandwidth_hz"] = 20000
     meta["plate"]["time_constant_s"] = 0.02
     meta["synthetic"] = True
     meta["rig"] = {"plate": "Kistler 9281", "notes": [1, 2]}
@@ -162,6 +164,7 @@ def test_optional_keys_and_unknown_keys_kept(tmp_path):
         session = read_session(make_session(tmp_path, meta=meta))
     assert session.meta.mains_hz == 60.0
     assert session.meta.time_constant_s == 0.02
+    assert session.meta.bandwidth_hz == 20000.0
     assert session.meta.synthetic is True
     assert session.meta.raw["rig"] == {"plate": "Kistler 9281", "notes": [1, 2]}
 
@@ -264,6 +267,8 @@ BAD_VALUES = [
     ("daq.adc_range_v", [-1.0, "x"], r"key 'daq\.adc_range_v' must be two numbers"),
     ("daq.adc_range_v", 10, r"key 'daq\.adc_range_v' must be two numbers"),
     ("daq.mains_hz", -50, r"key 'daq\.mains_hz' must be a positive number, got -50"),
+    ("daq.bandwidth_hz", 0, r"key 'daq\.bandwidth_hz' must be a positive number, got 0"),
+    ("daq.bandwidth_hz", "25 kHz", r"key 'daq\.bandwidth_hz' must be a positive number, got '25 kHz'"),
     ("gates.spacing_m", "abc", r"key 'gates\.spacing_m' must be a positive number, got 'abc'"),
     ("gates.spacing_m", -0.1, r"key 'gates\.spacing_m' must be a positive number, got -0\.1"),
     ("gates.resolution_s", 0, r"key 'gates\.resolution_s' must be a positive number, got 0"),

@@ -237,8 +237,8 @@ def test_session_folder_reads_back(tmp_path, fmt):
     assert ("time_constant_s" in session.meta.raw["plate"]) == (tr.rig.tau_known and math.isfinite(tr.rig.tau_s))
 
 
-def _result(status="ok", tc_ms=4.0, kcal=200.0, peak=1000.0, reason=""):
-    r = ImpactResult(impact_id="x", ball="b", status=status, reason=reason)
+def _result(status="ok", tc_ms=4.0, kcal=200.0, peak=1000.0, reason="", peak_note=""):
+    r = ImpactResult(impact_id="x", ball="b", status=status, reason=reason, peak_note=peak_note)
     r.contact_time_ms, r.kcal_N_per_V, r.peak_force_N = tc_ms, kcal, peak
     return r
 
@@ -259,6 +259,11 @@ def _truth(fault="", marginal="", spike=False):
     (_result(peak=1000 * 1.04), _truth(spike=True), "ok_right", []),
     (_result(peak=1000 * 0.94), _truth(spike=True), "ok_wrong", ["peak"]),
     (_result(tc_ms=math.nan), _truth(), "ok_wrong", ["tc"]),
+    (_result(peak=math.nan), _truth(), "ok_wrong", ["peak"]),  # a missing peak without its reason
+    (_result(peak=math.nan, peak_note="peak force between samples: ..."), _truth(), "ok_right", []),  # withheld
+    (_result(tc_ms=4.0 * 1.011, peak=math.nan, peak_note="peak force between samples: ..."), _truth(), "ok_wrong",
+     ["tc"]),
+    (_result(peak=1000 * 1.04, peak_note="peak force between samples: ..."), _truth(), "ok_wrong", ["peak"]),
     (_result(), _truth(fault="second contact"), "faulty_ok", []),
     (_result(tc_ms=5.0), _truth(marginal="plate resonance 900 Hz below 3000 Hz"), "ok_wrong", ["tc"]),
     (_result("excluded", reason="no contact found"), _truth(), "excluded_measurable", []),

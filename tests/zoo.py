@@ -822,7 +822,8 @@ def describe(rig: Rig) -> str:
 # ------------------------------------------------------------------ session folder
 
 
-def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", impact_id: str = "zoo-1") -> Path:
+def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", impact_id: str = "zoo-1",
+                         daq_extra: dict | None = None) -> Path:
     """Write a zoo trace as a one-impact raw session (raw-format.md v1.1).
 
     Parameters
@@ -835,6 +836,9 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
         "csv" (spec CSV with a ``# sample_rate_hz`` header) or "tdms" (fast, exact).
     impact_id : str
         The impact's id.
+    daq_extra : dict, optional
+        Keys of session.yaml's ``daq`` to set besides the rig's (e.g. ``{"bandwidth_hz": 10e3}``: a DAQ that
+        states an anti-aliasing filter the zoo's chain does not have).
 
     Returns
     -------
@@ -879,6 +883,7 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
         daq["mains_hz"] = float(rig.mains_hz)
     if rig.bandwidth_known and rig.bandwidth_hz is not None:
         daq["bandwidth_hz"] = rig.bandwidth_hz
+    daq.update(daq_extra or {})
     doc = {
         "session_id": out.name, "date": "2026-11-22", "description": f"zoo trace {trace.label}: {describe(rig)}",
         "plate": plate, "daq": daq,
@@ -889,7 +894,7 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
     return out
 
 
-def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms"):
+def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms", daq_extra: dict | None = None):
     """Process a zoo trace with the real ``process_impact``.
 
     Parameters
@@ -901,6 +906,8 @@ def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms"):
         folder written into it is removed afterwards.
     trace_format : str
         "tdms" (default, fast) or "csv".
+    daq_extra : dict, optional
+        Further ``daq`` keys of session.yaml (:func:`write_session_folder`).
 
     Returns
     -------
@@ -914,7 +921,7 @@ def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms"):
     base = Path(tempfile.mkdtemp(prefix="zoo-")) if own else Path(workdir)
     folder = Path(tempfile.mkdtemp(prefix="zoo-", dir=base))  # its name is the session id
     try:
-        write_session_folder(trace, folder, trace_format=trace_format)
+        write_session_folder(trace, folder, trace_format=trace_format, daq_extra=daq_extra)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             session = read_session(folder)

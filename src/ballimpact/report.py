@@ -416,8 +416,16 @@ def _counts_block(fig, cur, ds) -> None:
     n_total = ds.sizes.get("impact", 0)
     n_ok = ar.impacts(ds, status="ok").size if n_total else 0
     cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
-    cur.text(x0, f"{n_total} impacts in the raw impacts.csv: {n_ok} good, {n_total - n_ok} excluded "
-             "(listed with their reasons after the figures).", size=9.5)
+    withheld = 0
+    if n_total and "peak_note" in ds:
+        ok = np.asarray(ar.text_values(ds["status"].values)) == "ok"
+        withheld = int(sum(bool(_text(note)) for note, good in zip(ar.text_values(ds["peak_note"].values), ok)
+                           if good))
+    peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
+             "the peak alone, aliasing ruled out by daq.bandwidth_hz: impacts.csv peak_note)." if withheld else "")
+    cur.text(x0, "\n".join(textwrap.wrap(f"{n_total} impacts in the raw impacts.csv: {n_ok} good, "
+                                         f"{n_total - n_ok} excluded (listed with their reasons after the figures)."
+                                         + peaks, 110)), size=9.5)
     cur.skip(0.08)
     cells = [["Ball type", "Impacts", "Good", "Excluded", "Used in fit"]]
     for ball, total, ok, excl, used in _counts(ds):
