@@ -169,6 +169,30 @@ def test_optional_keys_and_unknown_keys_kept(tmp_path):
     assert session.meta.raw["rig"] == {"plate": "Kistler 9281", "notes": [1, 2]}
 
 
+@pytest.mark.parametrize("rate_hz, bandwidth_hz, warned", [
+    (50_000.0, None, True), (20_000.0, None, True), (50_000.0, 20_000.0, False), (50_000.0, 40_000.0, False),
+    (60_000.0, None, False), (66_964.3, None, False),
+])
+def test_slow_daq_without_its_bandwidth_is_warned_of_aliasing(tmp_path, rate_hz, bandwidth_hz, warned):
+    import warnings
+
+    meta = copy.deepcopy(BASE_META)
+    meta["daq"]["sample_rate_hz"] = rate_hz
+    if bandwidth_hz is not None:
+        meta["daq"]["bandwidth_hz"] = bandwidth_hz
+    folder = make_session(tmp_path, meta=meta)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        session = read_session(folder)
+    aliasing = [str(w.message) for w in caught if "through its alias" in str(w.message)]
+    assert bool(aliasing) is warned, aliasing
+    if warned:
+        assert issubclass(caught[0].category, SessionWarning)
+        assert re.search(rf"session\.yaml: key 'daq\.bandwidth_hz' not given, and at {rate_hz / 1e3:g} kHz a plate "
+                         rf"resonance between {rate_hz / 2e3:g} and 30 kHz", aliasing[0]), aliasing[0]
+    assert session.meta.bandwidth_hz == bandwidth_hz
+
+
 def test_unquoted_date_and_exponent_without_dot(tmp_path):
     # YAML 1.1 reads `1e-6` as a string and `2026-11-21` as a date: both must work.
     text = yaml.safe_dump(patched("gates.resolution_s", DELETE), sort_keys=False)

@@ -48,6 +48,9 @@ MASS_MAX_G = 1000.0  # [g] exclusive upper bound of a plausible ball mass
 MASS_TYPICAL_MIN_G = 40.0  # [g] below this a warning (tennis balls are 56-59.4 g)
 MASS_TYPICAL_MAX_G = 70.0  # [g] above this a warning
 DEFAULT_MAINS_HZ = None  # `daq.mains_hz` absent: found in each trace (v1.1)
+#: The highest plate resonance labs have (raw-format v1.1: "plate resonances from below 1 kHz to 30 kHz") [Hz]:
+#: slower than twice this, without `daq.bandwidth_hz`, a plate's ringing may reach the samples through its alias.
+PLATE_RESONANCE_MAX_HZ = 30_000.0
 FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the timer sanity bound
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
@@ -487,6 +490,15 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     bandwidth_hz = None
     if daq.get("bandwidth_hz") is not None:
         bandwidth_hz = _number(daq["bandwidth_hz"], "daq.bandwidth_hz", file, positive=True)
+    elif sample_rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
+        warnings.warn(
+            f"{file}: key 'daq.bandwidth_hz' not given, and at {sample_rate_hz / 1e3:g} kHz a plate resonance "
+            f"between {sample_rate_hz / 2e3:g} and {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to "
+            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g}) reaches the samples through its alias, which no check can tell from "
+            "the force: give the anti-aliasing filter's cut-off, or the plate's highest resonance (docs/raw-format.md)",
+            SessionWarning,
+            stacklevel=3,
+        )
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
     return sample_rate_hz, (adc[0], adc[1]), mains_hz, bandwidth_hz
 
