@@ -465,15 +465,14 @@ def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
     assert trace.rig.tau_known is False, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     if name in PEAK_REFUSED:  # the decay is measured: no baseline or decay problem is left
-        result, judgement = zoo.run_trace(dataclasses.replace(trace, rig=dataclasses.replace(
-            trace.rig, bandwidth_known=False)), tmp_path)  # without daq.bandwidth_hz: excluded for its peak
+        without = zoo.trace_for(seed, index, bandwidth_known=False)  # no daq.bandwidth_hz: excluded for its peak
+        result, judgement = zoo.run_trace(without, tmp_path)
         assert_invariant(trace, result, judgement)
         assert not {p.kind for p in result.problems} & BASELINE_KINDS, result.reason
         assert result.problems, result.reason
         assert all(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in result.problems), result.reason
         # its plate (6.1 kHz at 40 kHz) stated: no alias behind the peak's problem, ok with the peak withheld
-        result, judgement = zoo.run_trace(dataclasses.replace(trace, rig=dataclasses.replace(
-            trace.rig, bandwidth_known=True)), tmp_path)
+        result, judgement = zoo.run_trace(zoo.trace_for(seed, index, bandwidth_known=True), tmp_path)
         assert judgement.category == "ok_right", (judgement.errors, result.reason)
         assert result.peak_note.startswith("peak force between samples"), result.peak_note
     else:
