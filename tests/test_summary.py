@@ -105,6 +105,18 @@ def test_session_summary_counts_exclusions_by_reason_and_shows_warnings(tmp_path
                for line in lines)
 
 
+def test_session_summary_counts_the_ok_impacts_whose_peak_is_withheld(tmp_path):
+    folder = _results(tmp_path)
+    table = pd.read_csv(folder / "impacts.csv", keep_default_na=False)
+    table["peak_note"] = ["peak force between samples: the force rises by 14 % of the peak ...",
+                          "peak force on plate ringing: not counted, the impact is excluded", "", ""]
+    table.to_csv(folder / "impacts.csv", index=False)
+    lines = session_summary(folder)
+    assert "    ok, peak withheld   1 x peak force between samples" in lines, lines
+    assert not any("plate ringing" in line for line in lines)
+    assert not any("withheld" in line for line in session_summary(_results(tmp_path / "plain")))
+
+
 def test_session_level_error_and_stale_results(tmp_path):
     folder = _results(tmp_path)
     (folder / "work" / "session.json").unlink()  # Snakemake removes the output of the failed job
