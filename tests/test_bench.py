@@ -111,3 +111,18 @@ def test_wander_map_noise_is_one_over_f_meeting_the_white_at_the_corner():
         band = (f >= lo) & (f < hi)
         assert_allclose(np.mean(power[band] * f[band]) / (n * white**2 * corner), 1.0, rtol=0.1)
     assert power[0] == pytest.approx(0.0, abs=1e-20)  # no mean: the zoo's offset stays the rig's
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_antialias_map_states_a_bandwidth_below_half_the_sample_rate_and_runs_each_trace_twice():
+    from ballimpact.processing import alias_free
+
+    antialias = bench_module("antialias_map")
+    for index in range(20):
+        rig, _ = antialias.rig_for(1, index)
+        assert 20e3 <= rig.sample_rate_hz <= 100e3 and rig.plate_hz is None
+        assert antialias.CUTOFF_FS[0] <= rig.antialias_hz / rig.sample_rate_hz <= antialias.CUTOFF_FS[1]
+        assert rig.bandwidth_hz == rig.antialias_hz and alias_free(rig.bandwidth_hz, rig.sample_rate_hz)
+    index, rig, _, runs = antialias.run_one((1, 0))
+    assert index == 0 and [len(r) for r in runs] == [4, 4]
+    assert runs[0][3] == ""  # without the key no peak is withheld

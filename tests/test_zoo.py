@@ -49,6 +49,21 @@ def test_plate_keeps_the_impulse(seed):
     assert_allclose(impulse_V_s * t.kcal_N_per_V, t.mass_kg * (t.vin_m_s + t.vout_m_s), rtol=1e-3)
 
 
+@pytest.mark.parametrize("fs", [20e3, 67e3])
+def test_antialias_filter_keeps_the_impulse_and_passes_only_below_its_stopband(fs):
+    # the sigma-delta decimation filter of bench/antialias_map.py: unit DC gain, flat to its cut-off, 100 dB down
+    # from 0.55 fs (the map's truth is the ball's force, so the filter must not change the impulse)
+    tr = ideal(1, antialias_hz=0.45 * fs, post_s=0.05, sample_rate_hz=fs)
+    t = tr.truth
+    impulse_V_s = np.sum(tr.voltage_V) / tr.sample_rate_hz * tr.rig.polarity
+    assert_allclose(impulse_V_s * t.kcal_N_per_V, t.mass_kg * (t.vin_m_s + t.vout_m_s), rtol=2e-4)
+    h = 1.0 / (50 * fs)
+    time = np.arange(40_000) * h
+    for f_hz, gain in [(0.3 * fs, 1.0), (0.44 * fs, 1.0), (0.56 * fs, 0.0), (0.9 * fs, 0.0)]:
+        out = zoo._antialias(np.sin(2 * np.pi * f_hz * time), 0.45 * fs, fs, h)[10_000:30_000]
+        assert_allclose(np.sqrt(2 * np.mean(out**2)), gain, atol=2e-3, err_msg=f"{f_hz / fs:g} fs")
+
+
 @pytest.mark.parametrize("residue", [-0.45, 0.3])
 def test_plate_of_two_modes_keeps_the_impulse_and_rings_at_both(residue):
     # bench/two_mode_map.py's plates: a modal sum of unit static gain still only redistributes the force in time,

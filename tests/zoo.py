@@ -207,8 +207,12 @@ class Rig:
         With ``saturation_V``: the hum is picked up after the amplifier (in the cable to the DAQ) and rides on
         the flat top, instead of at its input, cut with its output.
     bandwidth_known : bool
-        session.yaml states ``daq.bandwidth_hz``: the plate's highest resonance (the zoo's DAQ has no
-        anti-aliasing filter). Only for a resonant plate; an ideal plate has no bandwidth to state.
+        session.yaml states ``daq.bandwidth_hz``: the plate's highest resonance, or the anti-aliasing filter's
+        cut-off when ``antialias_hz`` is set. An ideal plate without that filter has no bandwidth to state.
+    antialias_hz : float or None
+        The DAQ's anti-aliasing filter: linear-phase, flat to this cut-off and at least 100 dB down from 0.55 fs,
+        as a sigma-delta ADC's decimation filter (its constant delay left out) [Hz]. None (the zoo's): no filter
+        (bench/antialias_map.py draws it).
     """
 
     ball: str
@@ -244,10 +248,14 @@ class Rig:
     daq_noise_fraction: float = 1.0
     hum_after_saturation: bool = False
     bandwidth_known: bool = False
+    antialias_hz: float | None = None
 
     @property
     def bandwidth_hz(self) -> float | None:
-        """The highest frequency reaching the ADC [Hz]: the plate's highest mode; None for an ideal plate."""
+        """The highest frequency reaching the ADC [Hz]: the anti-aliasing filter's cut-off, else the plate's highest
+        mode; None for an ideal plate without a filter."""
+        if self.antialias_hz is not None:
+            return float(self.antialias_hz)
         if self.plate_hz is None:
             return None
         return float(max([self.plate_hz] + [fn for fn, *_ in self.plate_modes]))
@@ -552,6 +560,23 @@ def _highpass(q, tau_s, h):
     return q - w
 
 
+#: The anti-aliasing filter's stopband: from this fraction of the sample rate, at least ANTIALIAS_STOP_DB down.
+ANTIALIAS_STOP_FS = 0.55
+ANTIALIAS_STOP_DB = 100.0
+
+
+def _antialias(q, cutoff_hz, fs, h):
+    """A sigma-delta ADC's linear-phase decimation filter, centred (its constant delay left out): a Kaiser-window
+    FIR on the fine grid, flat to ``cutoff_hz``, ANTIALIAS_STOP_DB down from ANTIALIAS_STOP_FS fs, unit DC gain."""
+    nyq = 0.5 / h
+    width = (ANTIALIAS_STOP_FS * fs - cutoff_hz) / nyq
+    numtaps, beta = signal.kaiserord(ANTIALIAS_STOP_DB, width)
+    numtaps |= 1  # odd: a whole number of fine steps of delay, taken out
+    taps = signal.firwin(numtaps, 0.5 * (cutoff_hz + ANTIALIAS_STOP_FS * fs), window=("kaiser", beta), fs=1.0 / h)
+    taps /= taps.sum()
+    return signal.fftconvolve(q, taps, mode="same")
+
+
 def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     """The recorded trace and the truth of a rig (noise, hum phases and spikes from ``rng``).
 
@@ -623,6 +648,8 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
             b, a = _plate_filter(fn_k, zeta_k, h)
             sensed = sensed + r_k * signal.lfilter(b, a, force)
     amp = _highpass(sensed, rig.tau_s, h)
+    if rig.antialias_hz is not None:
+        amp = _antialias(amp, rig.antialias_hz, fs, h)
     take = (np.arange(n) - i0) * m
     t = np.arange(n) / fs
     v = rig.polarity * amp[take] / kcal
