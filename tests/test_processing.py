@@ -202,6 +202,19 @@ def test_alias_free_needs_a_bandwidth_of_at_most_half_the_sample_rate(bandwidth_
     assert processing.alias_free(bandwidth_hz, fs) is free
 
 
+@pytest.mark.parametrize("bandwidth_hz, fs, tc_s, withheld", [
+    (None, 100e3, 4e-3, False),  # aliasing not ruled out
+    (60e3, 100e3, 4e-3, False),  # above fs/2
+    (25e3, 50e3, 4e-3, True),  # rounds the front over 20 us = 0.5 % of TC
+    (24e3, 50e3, 4e-3, False),  # 20.8 us: more
+    (10e3, 21.5e3, 3.3e-3, False),  # bench/antialias_map.py 2:339's kind: 1.5 % of TC
+    (25e3, 50e3, float("nan"), False),
+])
+def test_peak_withheld_only_without_alias_and_with_a_front_rounded_over_little_of_tc(bandwidth_hz, fs, tc_s,
+                                                                                       withheld):
+    assert processing.peak_can_be_withheld(bandwidth_hz, fs, tc_s) is withheld
+
+
 @pytest.mark.parametrize("factor, excluded", [(0.4, False), (0.6, True)])
 def test_bandwidth_above_half_the_sample_rate_excludes_every_impact(synth_session, tmp_path, factor, excluded):
     import shutil

@@ -336,23 +336,35 @@ def test_zoo_aliased_plate_excluded_when_the_bandwidth_is_given(name, seed, inde
     assert ProblemKind.ALIASING in {p.kind for p in result.problems}
 
 
-#: Measurable traces excluded for their peak alone: the pre-buckling spike's top between samples at 21-31 kHz
-#: (``python bench/robustness.py --n 2000 --seed 0`` and ``--seed 1`` on 7a75a4b), an ideal plate. With
-#: ``daq.bandwidth_hz`` at most fs/2 (an anti-aliasing filter stated) they are ok with the peak withheld
-#: (name, seed, index, what).
+#: Measurable traces excluded for their peak alone: the pre-buckling spike's top between samples, an ideal plate
+#: (``python bench/robustness.py --n 2000 --seed S`` on 7a75a4b). With ``daq.bandwidth_hz`` at fs/2 (an
+#: anti-aliasing filter stated) the peak is withheld where that band limit rounds the front over at most 0.5 % of
+#: TC (the 50 kHz cases, long contacts of punctured balls), and the impact is still excluded where it rounds it
+#: more (the 21.5 kHz case, 1.3 %: on such a rounded front a peak problem was the only sign of a TC too long,
+#: bench/antialias_map.py) (name, seed, index, withheld, what).
 ZOO_PEAK_ALONE = [
-    ("spike-top-between-samples-21.5kHz", 0, 1653, "excluded on 7a75a4b: peak between samples; TC -0.28 %"),
-    ("spike-top-between-samples-31.4kHz", 1, 561, "excluded on 7a75a4b: peak between samples; TC +0.15 %"),
+    ("spike-top-between-samples-50kHz-a", 2, 1045, True, "excluded on 7a75a4b: peak between samples; TC +0.06 %"),
+    ("spike-top-between-samples-50kHz-b", 2, 1309, True, "excluded on 7a75a4b: peak between samples; TC +0.06 %"),
+    ("spike-top-between-samples-21.5kHz", 0, 1653, False, "excluded on 7a75a4b: peak between samples; TC -0.28 %"),
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", named(ZOO_PEAK_ALONE))
-def test_zoo_peak_alone_withheld_when_aliasing_is_ruled_out(name, seed, index, what, tmp_path):
+@pytest.mark.parametrize("name, seed, index, withheld, what", named(ZOO_PEAK_ALONE))
+def test_zoo_peak_alone_withheld_when_aliasing_and_rounding_are_ruled_out(name, seed, index, withheld, what,
+                                                                           tmp_path):
+    from ballimpact.processing import peak_can_be_withheld
+
     trace = zoo.trace_for(seed, index)
     assert trace.rig.plate_hz is None and trace.truth.measurable, name
     excluded, _ = zoo.run_trace(trace, tmp_path)  # bandwidth unknown: an alias is not ruled out
     assert excluded.status == "excluded" and {p.kind for p in excluded.problems} == {ProblemKind.PEAK_BETWEEN_SAMPLES}
-    result, judgement = zoo.run_trace(trace, tmp_path, daq_extra={"bandwidth_hz": 0.5 * trace.sample_rate_hz})
+    fs = trace.sample_rate_hz
+    assert peak_can_be_withheld(0.5 * fs, fs, trace.truth.tc_s) is withheld, name
+    result, judgement = zoo.run_trace(trace, tmp_path, daq_extra={"bandwidth_hz": 0.5 * fs})
+    if not withheld:
+        assert result.status == "excluded" and result.peak_note == "", result.reason
+        assert {p.kind for p in result.problems} == {ProblemKind.PEAK_BETWEEN_SAMPLES}, result.reason
+        return
     assert judgement.category == "ok_right", (judgement.errors, result.reason)
     assert result.peak_note.startswith("peak force between samples") and np.isnan(result.peak_force_N)
     assert abs(judgement.errors["tc"]) <= zoo.TOL_TC and abs(judgement.errors["kcal"]) <= zoo.TOL_KCAL
@@ -471,10 +483,11 @@ def test_zoo_decay_measured_in_short_records(name, seed, index, what, tmp_path):
         assert not {p.kind for p in result.problems} & BASELINE_KINDS, result.reason
         assert result.problems, result.reason
         assert all(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in result.problems), result.reason
-        # its plate (6.1 kHz at 40 kHz) stated: no alias behind the peak's problem, ok with the peak withheld
+        # its plate (6.1 kHz at 40 kHz) stated: no alias, but a band limit that rounds the front over 2 % of TC,
+        # where a peak problem may be the only sign of a TC too long: still excluded, its peak not withheld
         result, judgement = zoo.run_trace(zoo.trace_for(seed, index, bandwidth_known=True), tmp_path)
-        assert judgement.category == "ok_right", (judgement.errors, result.reason)
-        assert result.peak_note.startswith("peak force between samples"), result.peak_note
+        assert result.status == "excluded" and result.peak_note == "", result.reason
+        assert all(p.kind is ProblemKind.PEAK_BETWEEN_SAMPLES for p in result.problems), result.reason
     else:
         assert_invariant(trace, result, judgement, must_be_ok=True)
 
