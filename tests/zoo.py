@@ -798,7 +798,8 @@ def factor_labels(rig: Rig, truth: ZooTruth) -> list[str]:
                    else "plate 10-30 kHz")
     if rig.bandwidth_hz is not None:
         above = rig.bandwidth_hz > 0.5 * fs
-        out.append(f"plate {'above' if above else 'below'} fs/2, bandwidth {'given' if rig.bandwidth_known else 'absent'}")
+        given = "given" if rig.bandwidth_known else "absent"
+        out.append(f"plate {'above' if above else 'below'} fs/2, bandwidth {given}")
     out.append("noise < 1 mV" if rig.noise_V < 1e-3 else "noise 1-5 mV")
     out.append("peak < 2 V" if rig.peak_volts < 2 else "peak >= 2 V")
     if rig.spikes:

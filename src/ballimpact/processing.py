@@ -297,8 +297,9 @@ def _aliasing_problem(res: ImpactResult, meta) -> None:
 
     A plate resonance above fs / 2 reaches the samples as its alias: near fs (0.65-1.3 fs in the zoo) it folds
     near zero frequency, a slow swing no check can tell from the force, and it moves the impulse's sum of samples
-    (so kCAL) and the ends and peak fitted through them. The zoo's only ok but wrong traces are of this kind
-    (``python bench/robustness.py --n 2000 --seed 0``: 0:1236, kCAL -1.14 %); only the rig's bandwidth tells it.
+    (so kCAL) and the ends and peak fitted through them. It is the zoo's last class of ok but wrong traces
+    (``python bench/robustness.py --n 2000 --seed 0`` on 7a75a4b: 0:1236, kCAL -1.14 %); only the rig's bandwidth
+    tells it.
     """
     fs, bw = res.sample_rate_hz, meta.bandwidth_hz
     if bw is None or not math.isfinite(fs) or alias_free(bw, fs):

@@ -154,7 +154,7 @@ class SessionMeta:
     rig_orientation: str = "horizontal"  # optional `rig.orientation` (v1.1): horizontal or vertical
     air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
     time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
-    bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency reaching the ADC; None = unknown
+    bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency at the ADC; None = unknown
 
 
 @dataclass
