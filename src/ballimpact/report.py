@@ -414,15 +414,14 @@ def _counts_block(fig, cur, ds) -> None:
     x0 = _MARGIN_IN
     cur.skip(0.15)
     n_total = ds.sizes.get("impact", 0)
-    n_ok = ar.impacts(ds, status="ok").size if n_total else 0
+    ok = ar.impacts(ds, status="ok") if n_total else np.empty(0, dtype=int)
+    n_ok = ok.size
     cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
-    withheld = 0
-    if n_total and "peak_note" in ds:
-        ok = np.asarray(ar.text_values(ds["status"].values)) == "ok"
-        withheld = int(sum(bool(_text(note)) for note, good in zip(ar.text_values(ds["peak_note"].values), ok)
-                           if good))
+    notes = ar.text_values(ds["peak_note"].values) if "peak_note" in ds else []
+    withheld = sum(bool(_text(notes[i])) for i in ok) if len(notes) else 0
     peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
-             "the peak alone, with an alias and a rounded front ruled out by daq.bandwidth_hz: impacts.csv peak_note)." if withheld else "")
+             "the peak alone, with an alias and a rounded front ruled out by daq.bandwidth_hz: impacts.csv "
+             "peak_note)." if withheld else "")
     cur.text(x0, "\n".join(textwrap.wrap(f"{n_total} impacts in the raw impacts.csv: {n_ok} good, "
                                          f"{n_total - n_ok} excluded (listed with their reasons after the figures)."
                                          + peaks, 110)), size=9.5)

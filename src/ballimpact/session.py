@@ -494,7 +494,7 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
         warnings.warn(
             f"{file}: key 'daq.bandwidth_hz' not given, and at {sample_rate_hz / 1e3:g} kHz a plate resonance "
             f"between {sample_rate_hz / 2e3:g} and {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to "
-            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g}) reaches the samples through its alias, which no check can tell from "
+            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz) reaches the samples through its alias, which no check can tell from "
             "the force: give the anti-aliasing filter's cut-off, or the plate's highest resonance (docs/raw-format.md)",
             SessionWarning,
             stacklevel=3,

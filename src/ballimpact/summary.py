@@ -297,8 +297,8 @@ def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
     lines = [f"  {name}: {len(rows)} impacts, {n_ok} ok, {len(rows) - n_ok} excluded"]
     for kind, count in kinds.most_common():
         lines.append(f"    excluded {count:3d} x {kind}")
-    withheld = Counter(_reason_kind(r.get("peak_note") or "") for r in rows
-                       if r["status"] == "ok" and (r.get("peak_note") or "").strip())
+    notes = [r.get("peak_note") or "" for r in rows if r["status"] == "ok"]
+    withheld = Counter(_reason_kind(note) for note in notes if note.strip())
     for kind, count in withheld.most_common():
         lines.append(f"    ok, peak withheld {count:3d} x {kind}")
     params = folder / "parameters.csv"
