@@ -594,6 +594,31 @@ def test_refit_moves_a_convex_end_earlier_and_a_concave_one_later(fs):
     assert abs(np.mean(bent)) < 0.1 and np.mean(line) > 0.15, (np.mean(bent), np.mean(line))
 
 
+@pytest.mark.parametrize("noise", [2.0e-3, 3.0e-3])
+@pytest.mark.parametrize("fs", [25e3, 50e3])
+def test_end_unbiased_with_an_honest_uncertainty_at_moderate_noise(fs, noise):
+    """At noise of 0.2-0.3 % of the peak, where a bend through the last samples is seldom significant, the end of
+    a nearly straight fall (a pressurised ball at 20 m/s) over 120 noise draws is unbiased: its mean error within 3
+    standard errors of zero plus 0.05 sample; and its standard uncertainty is honest: z = error / ``end_se_s`` has
+    an RMS under 1.25 and a mean within 0.45 of zero. With the bend taken only where it lowered the residual by 2
+    noise variances (else the straight hinge's corner, late) the end was +0.11 to +0.23 samples late on average,
+    z's mean +0.5 to +0.8 and its RMS up to 1.5 (issue 9: the late ends of ok but wrong traces on
+    bench/ideal_plate_map.py and bench/antialias_map.py). A force that fades into its end (``CURVES["concave"]``)
+    is still late on average at this noise; its end is mostly not pinned (``end_se_s`` inf) and excluded."""
+    errors, z = [], []
+    for seed in range(120):
+        end_s = (1000.0 + 0.37 + 0.0071 * seed) / fs
+        v, _ = _model_end(fs, end_s, *CURVES["straight"], noise, 1000 + seed)
+        c = detect_contact(v, fs, noise_rms_V=noise, spread=True, curve=True, step=True)
+        assert math.isfinite(c.end_se_s), (seed, c.flags)
+        errors.append((c.end_s - end_s) * fs)
+        z.append((c.end_s - end_s) / c.end_se_s)
+    errors, z = np.array(errors), np.array(z)
+    assert abs(np.mean(errors)) < 3.0 * np.std(errors) / math.sqrt(errors.size) + 0.05, (np.mean(errors),
+                                                                                      np.std(errors))
+    assert math.sqrt(np.mean(z * z)) < 1.25 and abs(np.mean(z)) < 0.45, (np.sqrt(np.mean(z * z)), np.mean(z))
+
+
 def test_end_from_curve_where_the_line_is_early():
     """A convex fade (zoo trace 2:1489: the force flattens into its end, TC -1.1 % from the hinge): noise-free
     samples with a noise level given, the hinge's line meets zero more than half a sample early, the curve's end

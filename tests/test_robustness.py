@@ -302,8 +302,9 @@ ZOO_EDGE_BUMP = [
 #: so that it moves to ZOO_REGRESSION): the kinds the README lists under "What remains".
 ZOO_STILL_WRONG: list = [
     # ("plate-15.5kHz-above-nyquist", 1, 1220, ...): excluded since the first-overshoot check, ZOO_ALIAS_EXCLUDED
-    ("plate-20.5kHz-above-nyquist", 2, 710, "20.5 kHz plate sampled at 20.6 kHz, no anti-aliasing: kCAL +1.9 %, "
-     "peak -14.6 %"),
+    # ("plate-20.5kHz-above-nyquist", 2, 710, ...): kCAL +1.9 %, peak -14.6 %; excluded since the end's bend is
+    # taken without a price, for its end (the bent hinge's uncertainty), not for the alias: the class stands
+    ("plate-26.4kHz-above-nyquist", 1, 248, "26.4 kHz plate sampled at 20.1 kHz, no anti-aliasing: kCAL +1.08 %"),
 ]
 
 

@@ -963,9 +963,12 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages, at_ends + staircase + plateau,
                            t0_s, scale, spikes, it.mains, mains_source, it.contact_integral, plate)
         problems.extend(_plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
-    if contact.found and not problems:  # last, on a trace nothing else excludes: its fits cost a few ms
-        problems = _front_lowpass(it.x, fs, it.fit.noise, float(contact.peak_V), (contact.start_s - t0_s) * fs,
-                                  (contact.end_s - t0_s) * fs, contact.contact_time_s)
+    # last, on a trace nothing else excludes or whose ends alone are in doubt (its fits cost a few ms): a low-pass
+    # is then the cause to name (the spread check alone may see its slow front: lowpass map trace 1:85)
+    if contact.found and all(p.kind is ProblemKind.CONTACT_END_UNDETERMINED for p in problems):
+        problems = problems + _front_lowpass(it.x, fs, it.fit.noise, float(contact.peak_V),
+                                             (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs,
+                                             contact.contact_time_s)
     if contact.found and not problems:  # after the low-pass, which a slow fall may be too and which names TC's error
         s_u = (contact.start_s - t0_s) * fs
         xc = it.x[max(int(math.ceil(s_u)), 0):int(math.floor((contact.end_s - t0_s) * fs)) + 1]
