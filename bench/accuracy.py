@@ -61,7 +61,8 @@ def measure(session_dir: Path) -> dict:
         if relative:
             err = 100 * err / truth.loc[ok, col].astype(float)
         unit = "%" if relative else ("ms" if col.endswith("_ms") else "")
-        out[col] = {"mean": float(err.mean()), "max_abs": float(err.abs().max()), "unit": unit}
+        out[col] = {"mean": float(err.mean()), "rms": float(np.sqrt(np.mean(err**2))),
+                    "max_abs": float(err.abs().max()), "unit": unit}
     out["time_constant"] = _time_constant(session_dir, [r for r in results if r.impact_id in set(ok)])
     return out
 
@@ -97,7 +98,8 @@ def main():
     print(f"  faults missed or with the wrong reason: {out['faults_missed'] or 'none'}")
     for col in QUANTITIES:
         e = out[col]
-        print(f"  {col:22s} error mean {e['mean']:+.4f} {e['unit']:2s}  largest {e['max_abs']:.4f} {e['unit']}")
+        print(f"  {col:22s} error mean {e['mean']:+.4f} {e['unit']:2s}  RMS {e['rms']:.4f} {e['unit']:2s}  "
+              f"largest {e['max_abs']:.4f} {e['unit']}")
     tau = out["time_constant"]
     if tau is not None:
         print(f"  amplifier time constant ({tau['true_s']:g} s), estimated in {tau['n_estimated']}: error mean "
