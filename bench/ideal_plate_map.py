@@ -57,13 +57,14 @@ def run_one(args):
         rig = trace.rig
         c = condition_voltage(trace.voltage_V, trace.sample_rate_hz, polarity=rig.polarity, mains_hz=rig.mains_hz,
                               tau_s=rig.tau_s).contact  # as process_impact conditions it (tau and mains given)
-    start_err = end_err = np.nan
+    start_err = end_err = end_z = np.nan
     flags = ()
     if c.found:
         start_err = 100 * (c.start_s - t.start_s) / t.tc_s
         end_err = 100 * (c.end_s - t.end_s) / t.tc_s
+        end_z = (c.end_s - t.end_s) / c.end_se_s if c.end_se_s > 0 else np.nan  # inf: not pinned, z 0
         flags = c.flags
-    return (index, trace.rig, j.category, 100 * j.errors["tc"], start_err, end_err, flags, j.reason)
+    return (index, trace.rig, j.category, 100 * j.errors["tc"], start_err, end_err, flags, j.reason, end_z)
 
 
 def main(argv=None):
@@ -74,7 +75,15 @@ def main(argv=None):
     for band, counts in zoo.band_counts([r[1].sample_rate_hz / 1e3 for r in rows], [r[2] for r in rows],
                                         RATE_BANDS_KHZ):
         print(f"  fs {band:>5} kHz: {counts}")
-    for index, rig, cat, tc, se, ee, flags, reason in rows:
+    # the end's bias and the honesty of its uncertainty, over the ends that are not jumps (a jump's is half a sample)
+    ends = [r for r in rows if np.isfinite(r[5]) and "end_jump" not in r[6]]
+    err = np.array([r[5] for r in ends])
+    z = np.array([r[8] for r in ends if np.isfinite(r[8]) and r[8] != 0.0])
+    if err.size and z.size:
+        print(f"  ends not jumps: {err.size}, error {np.mean(err):+.3f} % of TC on average (standard deviation "
+              f"{np.std(err):.3f} %); z = error / end_se_s over the {z.size} with a finite uncertainty: mean "
+              f"{np.mean(z):+.2f}, RMS {np.sqrt(np.mean(z * z)):.2f}, abs(z) > 2: {np.count_nonzero(np.abs(z) > 2)}")
+    for index, rig, cat, tc, se, ee, flags, reason, _ in rows:
         if cat == "ok_wrong" or (a.show_ok and cat.startswith("ok") and abs(tc) > 0.5):
             print(f"  {cat} {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
                   f"noise {100 * rig.noise_V / rig.peak_volts:.2f} % of the peak: TC {tc:+.2f} % (start {se:+.2f} %, "
