@@ -811,12 +811,25 @@ ZOO_START_STEP = [
     ("ideal-plate-start-step-225", 1, 225, "pressurised ball, 48.0 kHz: TC +1.01 % on main, +0.85 % now"),
 ]
 
+#: Traces of bench/ideal_plate_map.py (seed 1), ok but wrong on main at ebaf7c7: the end's bent hinge was taken only
+#: where it lowered the residual by 2 noise variances, and the straight hinge's corner, late where the noise hides the
+#: bend, stood. Taken wherever it lowers the residual (``contact.BEND_CHI2`` 0): 1:386 ok and right, 1:484 excluded
+#: for its end's uncertainty (name, seed, index, what, must_be_ok).
+ZOO_BEND_NO_PRICE = [
+    ("ideal-plate-bend-386", 1, 386, "punctured ball, 54.0 kHz, noise 0.36 %: TC +1.06 % on ebaf7c7, +0.71 % now",
+     True),
+    ("ideal-plate-bend-484", 1, 484, "pressureless ball, 55.6 kHz, noise 0.44 %: TC +1.72 % on ebaf7c7, excluded now",
+     False),
+]
+
 
 @pytest.mark.parametrize("name, seed, index, what, must_be_ok",
                          [pytest.param(*c, False, id=c[0]) for c in ZOO_FADE_NOT_PINNED]
-                         + [pytest.param(*c, True, id=c[0]) for c in ZOO_START_STEP])
+                         + [pytest.param(*c, True, id=c[0]) for c in ZOO_START_STEP]
+                         + [pytest.param(*c, id=c[0]) for c in ZOO_BEND_NO_PRICE])
 def test_zoo_ideal_plate_map_case(name, seed, index, what, must_be_ok, tmp_path):
-    """ZOO_FADE_NOT_PINNED (excluded: the end's hinge does not pin TC to 1 %) and ZOO_START_STEP (ok and right)."""
+    """ZOO_FADE_NOT_PINNED (excluded: the end's hinge does not pin TC to 1 %), ZOO_START_STEP (ok and right) and
+    ZOO_BEND_NO_PRICE (either, as marked)."""
     trace = bench_module("ideal_plate_map").trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
