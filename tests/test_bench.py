@@ -126,3 +126,50 @@ def test_antialias_map_states_a_bandwidth_below_half_the_sample_rate_and_runs_ea
     index, rig, _, runs = antialias.run_one((1, 0))
     assert index == 0 and [len(r) for r in runs] == [4, 4]
     assert runs[0][3] == ""  # without the key no peak is withheld
+
+
+def _trace_rows(spec):
+    """Per-trace CSV rows as bench/robustness.py writes them: (index, category, TC, kCAL, peak error in %)."""
+    return [{"seed": 3, "index": i, "id": f"3:{i}", "category": cat, "reason": "" if cat.startswith("ok") else
+             f"contact end not determined to 1 %: trace {i}", "tc_err_pct": tc, "kcal_err_pct": kcal,
+             "peak_err_pct": peak, "process_s": 0.01 * i} for i, cat, tc, kcal, peak in spec]
+
+
+def test_compare_robustness_names_each_changed_trace_and_the_errors_of_those_ok_in_both(tmp_path, capsys):
+    import pandas as pd
+    compare = bench_module("compare_robustness")
+    old = _trace_rows([(0, "ok_right", 0.2, 0.1, 1.0), (1, "ok_wrong", 1.4, 0.0, 0.0),
+                       (2, "excluded_measurable", 0.3, 0.2, 0.1), (3, "ok_right", -0.6, 0.3, 0.5),
+                       (4, "excluded_faulty", float("nan"), float("nan"), float("nan"))])
+    new = _trace_rows([(0, "ok_right", 0.4, 0.1, 1.0), (1, "excluded_measurable", 1.4, 0.0, 0.0),
+                       (2, "ok_right", 0.1, 0.2, 0.1), (3, "ok_right", -0.2, 0.3, 0.5),
+                       (4, "excluded_faulty", float("nan"), float("nan"), float("nan"))])
+    for side, rows in (("old", old), ("new", new)):
+        (tmp_path / side).mkdir()
+        pd.DataFrame(rows).to_csv(tmp_path / side / "robustness-s3-n5.csv", index=False)
+    assert compare.main([str(tmp_path / "old"), str(tmp_path / "new")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "  ok_wrong: 1 -> 0" in out and "  excluded_measurable: 1 -> 1" in out and "  ok_right: 2 -> 3" in out
+    assert "  category changed: 2" in out
+    assert any(l.startswith("    3:1: ok_wrong -> excluded_measurable; TC +1.40 % -> +1.40 %") and
+               "contact end not determined to 1 %: trace 1" in l for l in out)
+    assert any(l.startswith("    3:2: excluded_measurable -> ok_right") for l in out)
+    assert "  ok in both: 2" in out  # traces 0 and 3
+    # TC of the two ok in both: (0.2, -0.6) -> (0.4, -0.2); one beyond 0.5 % before, none after
+    tc = next(l for l in out if l.startswith("    TC error"))
+    assert "mean -0.2000 -> +0.1000 %" in tc and "beyond 0.5 %: 1 -> 0" in tc and "largest change of one trace 0.4 %" in tc
+    assert out[-1] == ("all: ok_right 2 -> 3, ok_wrong 1 -> 0, excluded_measurable 1 -> 1, excluded_faulty 1 -> 1")
+
+
+@pytest.mark.parametrize("mangle, message", [
+    (lambda df: df.iloc[:-1], "hold different traces"),
+    (lambda df: df.drop(columns="kcal_err_pct"), "lacks the columns \\['kcal_err_pct'\\]"),
+])
+def test_compare_robustness_refuses_runs_it_cannot_pair(tmp_path, mangle, message):
+    import pandas as pd
+    compare = bench_module("compare_robustness")
+    rows = _trace_rows([(0, "ok_right", 0.2, 0.1, 1.0), (1, "ok_right", 0.1, 0.0, 0.0)])
+    pd.DataFrame(rows).to_csv(tmp_path / "a.csv", index=False)
+    mangle(pd.DataFrame(rows)).to_csv(tmp_path / "b.csv", index=False)
+    with pytest.raises(SystemExit, match=message):
+        compare.main([str(tmp_path / "a.csv"), str(tmp_path / "b.csv")])
