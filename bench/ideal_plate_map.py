@@ -30,6 +30,7 @@ from ballimpact.conditioning import condition_voltage  # noqa: E402
 
 BALLS = ("pressureless", "pressurised", "punctured", "oversize")
 RATE_BANDS_KHZ = (20.0, 30.0, 40.0, 50.0, 60.0)
+Z_OUTLIER = 5.0  # an end off by more than this many standard uncertainties is counted apart [-]
 
 
 def rig_for(seed: int, index: int):
@@ -83,6 +84,19 @@ def main(argv=None):
         print(f"  ends not jumps: {err.size}, error {np.mean(err):+.3f} % of TC on average (standard deviation "
               f"{np.std(err):.3f} %); z = error / end_se_s over the {z.size} with a finite uncertainty: mean "
               f"{np.mean(z):+.2f}, RMS {np.sqrt(np.mean(z * z)):.2f}, abs(z) > 2: {np.count_nonzero(np.abs(z) > 2)}")
+        # by ball and by rate band, over the ends off by at most Z_OUTLIER uncertainties (a few ends far off, all
+        # excluded, would hide how honest the rest are: count them apart)
+        zr = [(r[1], r[8]) for r in ends if np.isfinite(r[8]) and r[8] != 0.0]
+        far = sum(abs(zz) > Z_OUTLIER for _, zz in zr)
+        groups = {}
+        for rig, zz in zr:
+            if abs(zz) <= Z_OUTLIER:
+                k = min(max(int(np.searchsorted(RATE_BANDS_KHZ, rig.sample_rate_hz / 1e3, side="right")), 1),
+                        len(RATE_BANDS_KHZ) - 1)
+                groups.setdefault(rig.ball, []).append(zz)
+                groups.setdefault(f"fs {RATE_BANDS_KHZ[k - 1]:g}-{RATE_BANDS_KHZ[k]:g} kHz", []).append(zz)
+        print(f"  RMS of z with abs(z) <= {Z_OUTLIER:g} ({far} beyond): "
+              + ", ".join(f"{k} {np.sqrt(np.mean(np.square(v))):.2f} ({len(v)})" for k, v in sorted(groups.items())))
     for index, rig, cat, tc, se, ee, flags, reason, _ in rows:
         if cat == "ok_wrong" or (a.show_ok and cat.startswith("ok") and abs(tc) > 0.5):
             print(f"  {cat} {a.seed}:{index}: {rig.ball} {rig.vin_m_s:.1f} m/s, fs {rig.sample_rate_hz / 1e3:.1f} kHz, "
