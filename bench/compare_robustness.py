@@ -22,8 +22,11 @@ from pathlib import Path
 
 import pandas as pd
 
-CATEGORIES = ("ok_right", "ok_wrong", "faulty_ok", "excluded_measurable", "excluded_faulty", "excluded_marginal",
-              "crash")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+import zoo  # noqa: E402
+
+CATEGORIES = zoo.CATEGORIES + ("crash",)  # bench/robustness.py's: the zoo's judgements, and a crash of the processing
 QUANTITIES = (("TC", "tc_err_pct"), ("kCAL", "kcal_err_pct"), ("peak", "peak_err_pct"))
 FAR_PCT = 0.5  # an ok trace's error beyond this many per cent is counted [%]
 REASON_CHARS = 150  # the start of a changed trace's reason shown [-]
@@ -36,7 +39,8 @@ def pairs(old: Path, new: Path) -> list[tuple[Path, Path]]:
         raise SystemExit(f"give two CSV files or two folders, got {old} and {new}")
     if not old.is_dir():
         return [(old, new)]
-    names = sorted({p.name for p in old.glob("robustness-s*-n*.csv")} & {p.name for p in new.glob("robustness-s*-n*.csv")},
+    pattern = "robustness-s*-n*.csv"
+    names = sorted({p.name for p in old.glob(pattern)} & {p.name for p in new.glob(pattern)},
                    key=lambda s: tuple(int(g) for g in CSV_NAME.search(s).groups()))
     if not names:
         raise SystemExit(f"no robustness-s<SEED>-n<N>.csv in both {old} and {new}")

@@ -79,14 +79,14 @@ def main(argv=None):
     # the end's bias and the honesty of its uncertainty, over the ends that are not jumps (a jump's is half a sample)
     ends = [r for r in rows if np.isfinite(r[5]) and "end_jump" not in r[6]]
     err = np.array([r[5] for r in ends])
-    z = np.array([r[8] for r in ends if np.isfinite(r[8]) and r[8] != 0.0])
+    zr = [(r[1], r[8]) for r in ends if np.isfinite(r[8]) and r[8] != 0.0]  # (rig, z) where the end is pinned
+    z = np.array([zz for _, zz in zr])
     if err.size and z.size:
         print(f"  ends not jumps: {err.size}, error {np.mean(err):+.3f} % of TC on average (standard deviation "
               f"{np.std(err):.3f} %); z = error / end_se_s over the {z.size} with a finite uncertainty: mean "
               f"{np.mean(z):+.2f}, RMS {np.sqrt(np.mean(z * z)):.2f}, abs(z) > 2: {np.count_nonzero(np.abs(z) > 2)}")
         # by ball and by rate band, over the ends off by at most Z_OUTLIER uncertainties (a few ends far off, all
         # excluded, would hide how honest the rest are: count them apart)
-        zr = [(r[1], r[8]) for r in ends if np.isfinite(r[8]) and r[8] != 0.0]
         far = sum(abs(zz) > Z_OUTLIER for _, zz in zr)
         groups = {}
         for rig, zz in zr:

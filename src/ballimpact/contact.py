@@ -90,7 +90,8 @@ BENT_STEP = 0.02  # the end's bent hinge profiled on a grid this fine, then its 
 BENT_REFINE_LEVELS = 3  # ... its least refined on this many finer grids [-]
 BENT_REFINE_POINTS = 41  # ... of this many corners each [-]
 BEND_CHI2 = 0.0  # ... and taken where its bend lowers the least residual sum of squares by more than this many
-#                   noise variances (none: a price selects the straight hinge's late corner where noise hides the bend) [-]
+#                   noise variances (none: a price selects the straight hinge's late corner where noise hides
+#                   the bend) [-]
 JUMP_SIGMA = 3.0  # the first rising sample's step beats the next rise by this many standard errors: a jump [-]
 STEP_FRACTION = 0.03  # the first sample out of the noise above this fraction of the peak: the force stepped up to it [-]
 STEP_SIGMA = 1.0  # ... where the start's line predicts the last quiet sample within this many noise deviations [-]
@@ -946,9 +947,9 @@ def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]
     noise hides the bend, and that corner is late: at noise of 0.2-0.3 % of the peak the end was then +0.11 to
     +0.23 samples late on average on a nearly straight fall, its z (error over uncertainty) of mean +0.5 to +0.8
     and RMS up to 1.5; taken always, +0.04 to +0.10 samples, z of mean +0.14 to +0.35 and RMS 1.02-1.13
-    (tests/test_contact.py, ``test_end_unbiased_with_an_honest_uncertainty_at_moderate_noise``). The uncertainty is :func:`_hinge_se`'s rule on this profile: half the width of the
-    corners within CURVE_CHI2 noise variances of the least over its root (inf when that reaches wl), or a
-    uniform's over those within one.
+    (tests/test_contact.py, ``test_end_unbiased_with_an_honest_uncertainty_at_moderate_noise``). The
+    uncertainty is :func:`_hinge_se`'s rule on this profile: half the width of the corners within CURVE_CHI2 noise
+    variances of the least over its root (inf when that reaches wl), or a uniform's over those within one.
     """
     wl, wr, i0 = (int(v) for v in window[:3])
     if not (noise > 0) or wr - i0 < 3:  # a bend is read from 4 rising samples at least
