@@ -1998,3 +1998,31 @@ def test_correlation_factor_is_one_for_white_residuals_and_large_for_unmodelled_
     assert _correlation_factor(x, d, hum, lag) > 0.5 * (lag + 1)
     assert _correlation_factor(x, d, np.zeros(n), lag) == 1.0
     assert _correlation_factor(x[:2], d[:2], np.ones(2), lag) == 1.0
+
+
+@pytest.mark.parametrize("tau_s, mains", [(None, [50.0, 100.0, 150.0]), (0.5, []), (None, [])])
+def test_baseline_fit_cache_returns_the_fit_of_the_same_quiet_samples(tau_s, mains):
+    """The iteration's fit cache: a window moved by a fraction of a sample keeps its quiet samples and gets the
+    same fit back; one moved by samples gets a new fit; each is the fit made without the cache."""
+    from ballimpact.conditioning import _fit_baseline
+
+    v, fs, truth = make_trace(tau_s=2.0, hum_V=0.01, noise_V=0.001, offset_V=0.02, seed=7)
+    s_u, e_u = truth.start_s * fs, truth.end_s * fs
+    guards = (0.5e-3 * fs, 1.0e-3 * fs)
+    kappa = None if tau_s is None else 1.0 / tau_s
+    cache: dict = {}
+
+    def fit(a, b, use_cache=True):
+        return _fit_baseline(v, fs, mains, a, b, *guards, None, True, kappa, cache=cache if use_cache else None)
+
+    first = fit(s_u, e_u)
+    # the quiet stretches start and end at whole samples: a move of 0.02 samples that crosses none of the
+    # boundaries gives the same samples
+    a, b = math.floor(s_u) + 0.3, math.floor(e_u) + 0.3
+    assert fit(a, b) is fit(a + 0.02, b + 0.02)
+    moved = fit(s_u + 3.0, e_u + 3.0)
+    assert moved is not first
+    for (x, y), cached in [((s_u, e_u), first), ((s_u + 3.0, e_u + 3.0), moved)]:
+        fresh = fit(x, y, use_cache=False)
+        assert_allclose(cached.baseline, fresh.baseline, rtol=0, atol=0)
+        assert repr(cached.coef) == repr(fresh.coef)

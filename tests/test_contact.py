@@ -13,8 +13,8 @@ from numpy.testing import assert_allclose
 from tracekit import DIRTY, make_trace
 
 from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import (contact_samples, detect_clipping, detect_contact, detect_saturation, quantization_step,
-                               robust_noise)
+from ballimpact.contact import (ContactSearch, contact_samples, detect_clipping, detect_contact, detect_saturation,
+                               finite_median, quantization_step, robust_noise)
 
 RATES_HZ = [66964.3, 50000.0]
 
@@ -124,6 +124,46 @@ def test_no_clipping_below_the_rails():
 def test_clipping_bad_range():
     with pytest.raises(ValueError, match="adc_range_V"):
         detect_clipping(np.zeros(10), (10.0, -10.0))
+
+
+OPTIONS = [dict(), dict(step=True), dict(spread=True), dict(curve=True),
+           dict(t0_s=0.25, spread=True, curve=True, step=True)]
+SEARCH_TRACES = [  # a cloth foot, a step up at a low rate, a ringing plate, a double impact, pure noise
+    dict(cloth_s=0.1e-3, noise_V=0.001, seed=1),
+    dict(sample_rate_hz=20000.0, noise_V=0.002, start_phase=0.5, seed=2),
+    dict(ringing_fraction=0.05, ringing_hz=12000.0, noise_V=0.001, seed=3),
+    dict(second_impact=dict(delay_s=8e-3, fraction=0.3, duration_s=3e-3), noise_V=0.001, seed=4),
+    None,
+]
+
+
+@pytest.mark.parametrize("trace", SEARCH_TRACES)
+@pytest.mark.parametrize("given_noise", [False, True])
+def test_one_search_reports_every_option_as_detect_contact(trace, given_noise):
+    """A ContactSearch gives, for every option set in turn, what detect_contact gives for it alone (the
+    conditioning reports its last iteration's search with the options, and must not see a difference)."""
+    if trace is None:
+        v, fs = np.random.default_rng(5).normal(0.0, 0.001, 3000), 50000.0
+    else:
+        v, fs, _ = make_trace(**trace)
+    noise = 0.001 if given_noise else None
+    search = ContactSearch(v, fs, noise_rms_V=noise)
+    for options in OPTIONS + OPTIONS[::-1]:  # in both orders: one result may not change the next
+        # repr: every field, NaN equal to NaN, floats to the last bit
+        assert repr(search.result(**options)) == repr(detect_contact(v, fs, noise_rms_V=noise, **options)), options
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 101, 1000])
+def test_finite_median_is_numpys(n):
+    rng = np.random.default_rng(n)
+    for scale in (1e-6, 1.0, 1e6):
+        v = rng.standard_normal(n) * scale
+        assert finite_median(v) == np.median(v)  # bit for bit: the conditioning's results may not move
+        assert finite_median(np.round(v)) == np.median(np.round(v))  # ties
+
+
+def test_finite_median_of_nothing_is_nan():
+    assert math.isnan(finite_median([]))
 
 
 def test_robust_noise_ignores_outliers():

@@ -83,7 +83,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from .calibration import force_top
-from .contact import ContactResult, detect_contact, quantization_step, robust_noise
+from .contact import ContactResult, ContactSearch, detect_contact, finite_median, quantization_step, robust_noise
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
                     lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain,
@@ -448,7 +448,7 @@ def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
 
 
 def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mask=None, with_decay=False,
-                  kappa_given=None, reduce=True, noise_floor=0.0) -> _BaselineFit:
+                  kappa_given=None, reduce=True, noise_floor=0.0, cache: dict | None = None) -> _BaselineFit:
     """Robust least squares of the baseline model on the quiet samples (see the module docstring).
 
     Pre-contact quiet samples: ``v = B`` with ``B = sum_j theta_j phi_j`` (offset,
@@ -464,12 +464,42 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     _choose_tau) and ``reduce``, the fits with fewer hum harmonics (down to
     none) are tried too: the harmonics can take up the undershoot's step in a
     short record, and the fit of least BIC is returned.
+
+    A dict ``cache`` (one per record ``v``) holds the fits made: the window
+    enters the fit only through its quiet samples and the sample its running
+    integrals start from, so a window that moved by less than that (the
+    iteration's last steps) gets the same fit back without refitting it.
     """
     n = v.size
     if mask is None:
         mask = np.zeros(n, dtype=bool)
-    pre, post, quiet, has_post, use_post, no_post = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard,
-                                                                   mask, with_decay, kappa_given)
+    regions = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given)
+    key = None
+    if cache is not None:
+        pre, post, quiet, has_post, use_post, no_post = regions
+        key = (tuple(frequencies), kappa_given, noise_floor, pre.tobytes(), post.tobytes(), quiet.tobytes(),
+               has_post, use_post, no_post, max(int(math.floor(start_u)) - 1, 0) if use_post else None)
+        fit = cache.get(key)
+        if fit is None:
+            fit = cache[key] = _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor)
+    else:
+        fit = _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor)
+    hidden = UNDERSHOOT_SIGNIFICANCE * fit.kappa_se
+    if (reduce and fit.hum_amplitudes and regions[4] and kappa_given is None and hidden > abs(fit.kappa)
+            and (end_u - start_u) / fs * hidden / 2.0 > BIAS_EXCLUDE_FRACTION):
+        for k in range(len(fit.hum_amplitudes)):  # the harmonics fitted are all of ``frequencies``
+            alt = _fit_baseline(v, fs, list(frequencies)[:k], start_u, end_u, pre_guard, post_guard, mask, with_decay,
+                                kappa_given, reduce=False, noise_floor=noise_floor, cache=cache)
+            if alt.bic < fit.bic:
+                fit = alt
+    return fit
+
+
+def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -> _BaselineFit:
+    """The fit of :func:`_fit_baseline` on its quiet samples ``regions`` (:func:`_quiet_regions`), before the
+    fits with fewer harmonics are tried."""
+    n = v.size
+    pre, post, quiet, has_post, use_post, no_post = regions
     t = np.arange(n) / fs
     qi = np.flatnonzero(quiet)
     tq = t[qi]
@@ -523,17 +553,8 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
         "kappa_per_s": float(kappa),
         "kappa_se_per_s": float(kappa_se),
     }
-    fit = _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                       noise, amps, bic, quiet, pre, post, no_post)
-    hidden = UNDERSHOOT_SIGNIFICANCE * kappa_se
-    if (reduce and freqs and use_post and kappa_given is None and hidden > abs(kappa)
-            and (end_u - start_u) / fs * hidden / 2.0 > BIAS_EXCLUDE_FRACTION):
-        for k in range(len(freqs)):
-            alt = _fit_baseline(v, fs, freqs[:k], start_u, end_u, pre_guard, post_guard, mask, with_decay,
-                                kappa_given, reduce=False, noise_floor=noise_floor)
-            if alt.bic < fit.bic:
-                fit = alt
-    return fit
+    return _BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
+                        noise, amps, bic, quiet, pre, post, no_post)
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
@@ -752,13 +773,13 @@ def _rough_trend(v, n_blocks=20):
     """A robust straight line through the record (Theil-Sen on block medians) [V]."""
     n = v.size
     if n < 4 * n_blocks:
-        return np.full(n, np.median(v))
+        return np.full(n, finite_median(v))
     edges = np.linspace(0, n, n_blocks + 1).astype(int)
     centres = 0.5 * (edges[:-1] + edges[1:] - 1)
-    meds = np.array([np.median(v[a:b]) for a, b in zip(edges[:-1], edges[1:])])
+    meds = np.array([finite_median(v[a:b]) for a, b in zip(edges[:-1], edges[1:])])
     i, j = np.triu_indices(n_blocks, 1)
-    slope = float(np.median((meds[j] - meds[i]) / (centres[j] - centres[i])))
-    icpt = float(np.median(meds - slope * centres))
+    slope = finite_median((meds[j] - meds[i]) / (centres[j] - centres[i]))
+    icpt = finite_median(meds - slope * centres)
     return icpt + slope * np.arange(n)
 
 
@@ -906,7 +927,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     # the record before the peak holds no undershoot: its median is the level under the contact
     k_peak = int(np.argmax(v - trend))
     if k_peak >= MIN_QUIET_SAMPLES:
-        trend = np.full(v.size, float(np.median(v[:k_peak])))
+        trend = np.full(v.size, finite_median(v[:k_peak]))
     rough = detect_contact(v - trend, fs)
     if not rough.found:
         fits = {f: _fit_baseline(v, fs, fr, -math.inf, -math.inf, 0.0, 0.0, noise_floor=noise_floor)
@@ -926,8 +947,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                        mains_source)
 
     it = _iterate(v, fs, candidates, rough, pre_guard_s * fs, post_guard_s * fs, tau_s, kappa_given, scale, noise_floor)
-    contact = _curve_end_contact(detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, spread=True,
-                                                curve=True, step=True), fs, t0_s)
+    # detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, ...), sharing the last iteration's search
+    contact = _curve_end_contact(it.search.result(t0_s=t0_s, spread=True, curve=True, step=True), fs, t0_s)
     d2_spiky = _second_differences(v_spiky)  # as remove_spikes saw the record, with its noise
     at_ends, keep = _spikes_at_ends(v_spiky, d2_spiky, spikes, _kept, contact, it.x, it.fit.noise, fs, t0_s, scale)
     near_ends = _low_spikes_at_ends(v_spiky, d2_spiky, spikes, contact, fs, t0_s) if _kept is None else ()
@@ -1643,12 +1664,14 @@ class _Iteration:
     end_u: float
     n_iter: int
     contact_integral: float
+    search: ContactSearch  # the contact's search on x (with fit's noise)
 
 
-def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask, kappa_given, noise_floor):
+def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask, kappa_given, noise_floor,
+                    cache=None):
     """The baseline fit of each mains candidate; the best by BIC, its frequency, and an ambiguity (or None)."""
     fits = {f: _fit_baseline(v, fs, fr, start_u, end_u, pre_guard, post_guard, mask, True, kappa_given,
-                             noise_floor=noise_floor)
+                             noise_floor=noise_floor, cache=cache)
             for f, fr in candidates.items()}
     mains = min(fits, key=lambda f: fits[f].bic)
     fit = fits[mains]
@@ -1671,19 +1694,29 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
     mains = next(iter(candidates))
     ambiguous: tuple | None = None
     windows = [(start_u, end_u)]
+    # the fits made, and the last corrected signal and its contact: a window that moved by a fraction of a sample
+    # often gives the same fit and the same signal again, whose contact is then known
+    cache: dict = {}
+    last = (None, math.nan, -1, None, None)  # fit, tau, the sample the decay's integral starts at, x, its search
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
             fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
-                                                    kappa_given, noise_floor)
+                                                    kappa_given, noise_floor, cache)
         else:
             fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
-                                kappa_given, noise_floor=noise_floor)
+                                kappa_given, noise_floor=noise_floor, cache=cache)
         y = v - fit.baseline
         contact_integral = _integral_to(y, fs, start_u, end_u)
         tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
-        x = _decay_correct(y, fs, start_u, tau)
-        c = detect_contact(x, fs, noise_rms_V=fit.noise)
+        i0 = max(int(math.floor(start_u)) - 1, 0) if math.isfinite(tau) else -1
+        if last[0] is fit and last[1] == tau and last[2] == i0:
+            x, search = last[3], last[4]
+        else:
+            x = _decay_correct(y, fs, start_u, tau)
+            search = ContactSearch(x, fs, noise_rms_V=fit.noise)
+        last = (fit, tau, i0, x, search)
+        c = search.result()
         if not c.found:
             break
         new_mask = _event_mask(x, fs, fit.noise, c, pre_guard, post_guard)
@@ -1704,7 +1737,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
                                     f"{1e3 * b1 / fs:.4g} ms of the record: the decay, drift and hum fitted "
                                     "around each window move it)"))
     return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
-                      contact_integral)
+                      contact_integral, search)
 
 
 def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, ambiguous, start_u, end_u,

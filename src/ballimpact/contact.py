@@ -54,10 +54,12 @@ import numpy as np
 __all__ = [
     "ContactResult",
     "detect_contact",
+    "ContactSearch",
     "detect_clipping",
     "detect_saturation",
     "Saturation",
     "robust_noise",
+    "finite_median",
     "quantization_step",
     "contact_samples",
     "end_from_curve",
@@ -234,7 +236,36 @@ def robust_noise(values) -> float:
     v = np.asarray(values, dtype=float).ravel()
     if v.size == 0:
         return math.nan
-    return float(MAD_TO_SIGMA * np.median(np.abs(v - np.median(v))))
+    return float(MAD_TO_SIGMA * finite_median(np.abs(v - finite_median(v))))
+
+
+def finite_median(values) -> float:
+    """The median of finite values, as :func:`numpy.median` gives it, bit for bit, without its overhead.
+
+    The conditioning takes about fifty medians of a few hundred to a few
+    thousand samples per impact; numpy's wrapper (NaN check, axis handling)
+    costs about as much as the partition itself there.
+
+    Parameters
+    ----------
+    values : array_like
+        Finite values, any unit; NaN is not checked for.
+
+    Returns
+    -------
+    float
+        The middle value, or the mean of the two middle ones for an even
+        number of values [same unit]; NaN for an empty input.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    n = v.size
+    if n == 0:
+        return math.nan
+    k = n // 2
+    if n % 2:
+        return float(np.partition(v, k)[k])
+    part = np.partition(v, (k - 1, k))
+    return float((part[k - 1] + part[k]) / 2.0)
 
 
 def quantization_step(values) -> float:
@@ -838,93 +869,146 @@ def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise
         positive.
     """
     fs, x = _checked_arguments(voltage_V, sample_rate_hz, t0_s)
-    flags: list[str] = []
-    clipped = False
-    if raw_voltage_V is not None and adc_range_V is not None:
-        clipped = detect_clipping(raw_voltage_V, adc_range_V, adc_bits=adc_bits)
-        if clipped:
-            flags.append("clipped")
+    return ContactSearch(x, fs, noise_rms_V=noise_rms_V, raw_voltage_V=raw_voltage_V, adc_range_V=adc_range_V,
+                         adc_bits=adc_bits).result(t0_s=t0_s, spread=spread, curve=curve, step=step)
 
-    n = x.size
-    if n < MIN_CONTACT_SAMPLES:
-        return _not_found(math.nan, math.nan, -1, math.nan, clipped, flags)
-    peak_index = int(np.argmax(x))
-    scale = float(np.max(np.abs(x)))
-    if scale == 0.0 or not math.isfinite(scale) or x[peak_index] <= 0:
-        return _not_found(math.nan, math.nan, peak_index, x[peak_index], clipped, flags)
-    xs = x / scale  # work in units of the largest magnitude: no overflow for any finite input
-    peak = float(xs[peak_index])
-    merge_gap = max(int(round(MERGE_GAP_S * fs)), 1)
-    sigma = _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
-    thr = max(THRESHOLD_SIGMA * sigma, THRESHOLD_FRACTION * peak)
-    if not peak > thr:
-        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
 
-    starts, ends, k = _main_run(xs > thr, peak_index, merge_gap)
-    if k < 0 or ends[k] - starts[k] + 1 < MIN_CONTACT_SAMPLES:
-        return _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
-    run_a, run_b = int(starts[k]), int(ends[k])
-    others_found = _other_impacts(xs, starts, ends, k, peak, fs)
-    n_impacts = 1 + len(others_found)
-    if n_impacts > 1:
-        flags.append("multiple_impacts")
+class ContactSearch:
+    """The contact of one conditioned trace, found once and reported with any of :func:`detect_contact`'s options.
 
-    windows: dict = {}
-    u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows, step)
-    # the end's spread is the straight line's: how far its end depends on the samples near the noise (its bend's
-    # corner moves less, and the checks on the spread were set on the line's)
-    u_line = windows.get("line_end", math.nan)
-    if not math.isfinite(u_line):
-        u_line = u_end
-    spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_line, step) if spread else (math.nan, math.nan)
-    # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
-    # just before (after) the contact that the merging of runs joined to it is no force on the ball.
-    run_a, run_b = _unbroken_run(xs, peak_index, sigma, thr, run_a, run_b)
-    u_start = min(max(u_start, 0.0), float(run_a))
-    u_end = max(min(u_end, n - 1.0), float(run_b))
-    u_line = max(min(u_line, n - 1.0), float(run_b))
-    u_edge_start = min(max(u_edge_start, u_start), float(run_a))
-    u_edge_end = max(min(u_edge_end, u_end), float(run_b))
-    ses = (math.nan, math.nan)
-    if curve:  # the ends' uncertainties go with the curve's (what the conditioning's checks read)
-        # a start in the middle of a step's interval: a uniform's deviation over it goes with the hinge's
-        ses = (math.hypot(_hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
-                          windows.get("start_step", 0.0) / math.sqrt(12.0)),
-               # the bent hinge's (one more parameter) and never less than the straight one's: where no straight
-               # line pins the end, no bend does (zoo trace 1:1448, noise 0.6 % of the peak: TC -1.4 % with the
-               # bent hinge's own)
-               np.fmax(_hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags),
-                       windows.get("end_se", math.nan)))
-    by_curve = (math.nan, math.nan)
-    # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
-    # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
-    if curve and not {"ringing_after_contact", "contact_at_trace_end"} & set(flags):
-        by_curve = _curve_end(xs, sigma, u_start, u_line, peak_index, max(run_b, peak_index), fs)
+    ``ContactSearch(x, fs, noise_rms_V=s).result(t0_s=t, spread=True)`` is
+    ``detect_contact(x, fs, t0_s=t, noise_rms_V=s, spread=True)``. The noise,
+    the threshold, the main run, the other impacts, the edges and the end's
+    hinge do not depend on the options and are found once, when the search is
+    made: the conditioning's last baseline iteration and its final report of
+    the same signal share them.
 
-    return ContactResult(
-        found=True,
-        start_s=t0_s + u_start / fs,
-        end_s=t0_s + u_end / fs,
-        edge_start_s=t0_s + u_edge_start / fs,
-        edge_end_s=t0_s + u_edge_end / fs,
-        start_index=int(math.ceil(u_start)),
-        end_index=int(math.floor(u_end)),
-        peak_index=peak_index,
-        peak_V=peak * scale,
-        n_impacts=n_impacts,
-        noise_rms_V=sigma * scale,
-        threshold_V=thr * scale,
-        clipped=clipped,
-        flags=tuple(flags),
-        other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
-        start_spread_s=spreads[0],
-        end_spread_s=spreads[1],
-        curve_end_s=t0_s + by_curve[0] / fs,
-        curve_end_se_s=by_curve[1] / fs,
-        start_se_s=ses[0] / fs,
-        end_se_s=ses[1] / fs,
-        line_end_s=t0_s + u_line / fs,
-    )
+    Parameters
+    ----------
+    voltage_V : array_like
+        Conditioned voltage, one sample per 1/sample_rate_hz [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    noise_rms_V, raw_voltage_V, adc_range_V, adc_bits
+        As for :func:`detect_contact`.
+
+    Raises
+    ------
+    ValueError
+        If the voltage holds NaN or infinite values or the sample rate is not
+        positive.
+    """
+
+    def __init__(self, voltage_V, sample_rate_hz: float, *, noise_rms_V: float | None = None, raw_voltage_V=None,
+                 adc_range_V=None, adc_bits: int = 16):
+        fs, x = _checked_arguments(voltage_V, sample_rate_hz, 0.0)
+        self._fs = fs
+        self._not_found = None
+        flags: list[str] = []
+        clipped = False
+        if raw_voltage_V is not None and adc_range_V is not None:
+            clipped = detect_clipping(raw_voltage_V, adc_range_V, adc_bits=adc_bits)
+            if clipped:
+                flags.append("clipped")
+        self._clipped = clipped
+        n = x.size
+        if n < MIN_CONTACT_SAMPLES:
+            self._not_found = _not_found(math.nan, math.nan, -1, math.nan, clipped, flags)
+            return
+        peak_index = int(np.argmax(x))
+        scale = float(np.max(np.abs(x)))
+        if scale == 0.0 or not math.isfinite(scale) or x[peak_index] <= 0:
+            self._not_found = _not_found(math.nan, math.nan, peak_index, x[peak_index], clipped, flags)
+            return
+        xs = x / scale  # work in units of the largest magnitude: no overflow for any finite input
+        peak = float(xs[peak_index])
+        merge_gap = max(int(round(MERGE_GAP_S * fs)), 1)
+        sigma = _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
+        thr = max(THRESHOLD_SIGMA * sigma, THRESHOLD_FRACTION * peak)
+        if not peak > thr:
+            self._not_found = _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
+            return
+        starts, ends, k = _main_run(xs > thr, peak_index, merge_gap)
+        if k < 0 or ends[k] - starts[k] + 1 < MIN_CONTACT_SAMPLES:
+            self._not_found = _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
+            return
+        others_found = _other_impacts(xs, starts, ends, k, peak, fs)
+        if others_found:
+            flags.append("multiple_impacts")
+        self._xs, self._scale, self._peak_index, self._peak = xs, scale, peak_index, peak
+        # consistency: the run above threshold lies inside the contact, start < end inside the trace. A spike
+        # just before (after) the contact that the merging of runs joined to it is no force on the ball.
+        self._sigma, self._thr = sigma, thr
+        self._run = _unbroken_run(xs, peak_index, sigma, thr, int(starts[k]), int(ends[k]))
+        self._others, self._flags = others_found, tuple(flags)
+        self._end_fits = _end_fits(xs, peak_index, peak, sigma, fs)
+
+    def result(self, *, t0_s: float = 0.0, spread: bool = False, curve: bool = False,
+               step: bool = False) -> ContactResult:
+        """The contact, as :func:`detect_contact` reports it with these options (see there)."""
+        if self._not_found is not None:
+            return self._not_found
+        fs, xs, peak_index, peak, sigma, scale = (self._fs, self._xs, self._peak_index, self._peak, self._sigma,
+                                                  self._scale)
+        n = xs.size
+        flags = list(self._flags)
+        others_found = self._others
+        n_impacts = 1 + len(others_found)
+        windows: dict = {}
+        u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, sigma, fs, flags, windows, step,
+                                                                 self._end_fits)
+        # the end's spread is the straight line's: how far its end depends on the samples near the noise (its
+        # bend's corner moves less, and the checks on the spread were set on the line's)
+        u_line = windows.get("line_end", math.nan)
+        if not math.isfinite(u_line):
+            u_line = u_end
+        spreads = _spreads(xs, peak_index, sigma, fs, u_start, u_line, step) if spread else (math.nan, math.nan)
+        run_a, run_b = self._run
+        u_start = min(max(u_start, 0.0), float(run_a))
+        u_end = max(min(u_end, n - 1.0), float(run_b))
+        u_line = max(min(u_line, n - 1.0), float(run_b))
+        u_edge_start = min(max(u_edge_start, u_start), float(run_a))
+        u_edge_end = max(min(u_edge_end, u_end), float(run_b))
+        ses = (math.nan, math.nan)
+        if curve:  # the ends' uncertainties go with the curve's (what the conditioning's checks read)
+            # a start in the middle of a step's interval: a uniform's deviation over it goes with the hinge's
+            ses = (math.hypot(_hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
+                              windows.get("start_step", 0.0) / math.sqrt(12.0)),
+                   # the bent hinge's (one more parameter) and never less than the straight one's: where no straight
+                   # line pins the end, no bend does (zoo trace 1:1448, noise 0.6 % of the peak: TC -1.4 % with the
+                   # bent hinge's own)
+                   np.fmax(_hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags),
+                           windows.get("end_se", math.nan)))
+        by_curve = (math.nan, math.nan)
+        # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
+        # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
+        if curve and not {"ringing_after_contact", "contact_at_trace_end"} & set(flags):
+            by_curve = _curve_end(xs, sigma, u_start, u_line, peak_index, max(run_b, peak_index), fs)
+
+        return ContactResult(
+            found=True,
+            start_s=t0_s + u_start / fs,
+            end_s=t0_s + u_end / fs,
+            edge_start_s=t0_s + u_edge_start / fs,
+            edge_end_s=t0_s + u_edge_end / fs,
+            start_index=int(math.ceil(u_start)),
+            end_index=int(math.floor(u_end)),
+            peak_index=peak_index,
+            peak_V=peak * scale,
+            n_impacts=n_impacts,
+            noise_rms_V=sigma * scale,
+            threshold_V=self._thr * scale,
+            clipped=self._clipped,
+            flags=tuple(flags),
+            other_impacts=tuple(((j - u_start) / fs, frac) for j, frac in others_found),
+            start_spread_s=spreads[0],
+            end_spread_s=spreads[1],
+            curve_end_s=t0_s + by_curve[0] / fs,
+            curve_end_se_s=by_curve[1] / fs,
+            start_se_s=ses[0] / fs,
+            end_se_s=ses[1] / fs,
+            line_end_s=t0_s + u_line / fs,
+        )
 
 
 def _bent_corner(y, window, noise: float, ts_line: float) -> tuple[float, float]:
@@ -1138,10 +1222,24 @@ def _pulse_height(xs, a: int, b: int, w: int) -> float:
     return float(np.max(xs[a:b + 1] - np.maximum(np.interp(u, centres, levels), 0.0)))
 
 
-def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None, step=False):
-    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
-    ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
-    from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with."""
+@dataclass(frozen=True)
+class _EndFits:
+    """What :func:`_contact_ends` finds that no option changes: the edges and the end's hinge (see there)."""
+
+    u_edge_start: float
+    u_edge_end: float
+    edge_fallback: bool
+    u_end: float | None  # on the reversed trace [samples]; None when the force never returns to zero
+    jump_end: bool
+    w_end: list
+    sigma_end: float
+    ringing: bool
+    end_se: float
+    u_line: float | None  # the straight hinge's end, on the reversed trace [samples]
+
+
+def _end_fits(xs, peak_index, peak, sigma, fs) -> _EndFits:
+    """The steep edges' zero crossings and the end's hinge (straight, then bent) of :func:`_contact_ends`."""
     n = xs.size
     lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
     hi = EDGE_BAND[1] * peak
@@ -1150,13 +1248,11 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None, step=Fal
     u_edge_start, fallback_start = _edge_zero(xs, peak_index, lo, hi)
     u_edge_end, fallback_end = _edge_zero(rev, n - 1 - peak_index, lo, hi)
     u_edge_end = n - 1 - u_edge_end
-    if fallback_start or fallback_end:
-        flags.append("edge_fallback")
-    # feet: hinge fits where the force leaves (returns to) zero
-    w_start, w_end, step_start = [], [], []
-    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start, step=step_start if step else None)
+    # foot: the hinge fit where the force returns to zero
+    w_end: list = []
     u_end, jump_end = _foot_start(rev, n - 1 - peak_index, sigma, fs, window=w_end)
     sigma_end = sigma
+    ringing = False
     if u_end is not None:
         # Plate ringing that outlasts the contact would pass for force: measure
         # the disturbance just after the end and, when it is well above the
@@ -1166,18 +1262,37 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None, step=Fal
         if b - a >= MIN_NOISE_SAMPLES:
             ring = float(np.sqrt(np.mean(xs[a:b] ** 2)))
             if ring > RING_SIGMA * sigma:
-                flags.append("ringing_after_contact")
-                w_ring = []
+                ringing = True
+                w_ring: list = []
                 u_ring, jump_ring = _foot_start(rev, n - 1 - peak_index, ring, fs, window=w_ring)
                 if u_ring is not None:
                     u_end, jump_end, w_end, sigma_end = u_ring, jump_ring, w_ring, ring
     end_se, u_line = math.nan, u_end
     if u_end is not None and not jump_end and len(w_end) == 3:
         u_end, end_se = _bent_corner(rev, w_end, sigma_end, u_end)
+    return _EndFits(u_edge_start, u_edge_end, fallback_start or fallback_end, u_end, jump_end, w_end, sigma_end,
+                    ringing, end_se, u_line)
+
+
+def _contact_ends(xs, peak_index, sigma, fs, flags, windows=None, step=False, end_fits: _EndFits | None = None):
+    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
+    ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
+    from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with.
+    ``end_fits``: :func:`_end_fits` of the same trace, peak and noise, when already found."""
+    n = xs.size
+    ef = end_fits if end_fits is not None else _end_fits(xs, peak_index, float(xs[peak_index]), sigma, fs)
+    if ef.edge_fallback:
+        flags.append("edge_fallback")
+    if ef.ringing:
+        flags.append("ringing_after_contact")
+    # foot: the hinge fit where the force leaves zero
+    w_start, step_start = [], []
+    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start, step=step_start if step else None)
+    u_end, jump_end, u_line = ef.u_end, ef.jump_end, ef.u_line
     if windows is not None:
         windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
-                       end=(*w_end, sigma_end) if len(w_end) == 3 else None,
-                       start_step=step_start[0] if step_start and u_start is not None else 0.0, end_se=end_se,
+                       end=(*ef.w_end, ef.sigma_end) if len(ef.w_end) == 3 else None,
+                       start_step=step_start[0] if step_start and u_start is not None else 0.0, end_se=ef.end_se,
                        line_end=n - 1 - u_line if u_line is not None else math.nan)
     if step_start and u_start is not None:
         flags.append("start_step")
@@ -1188,16 +1303,16 @@ def _contact_ends(xs, peak_index, peak, sigma, fs, flags, windows=None, step=Fal
     if u_start is None:
         flags.append("contact_at_trace_start")
         u_start = 0.0
-    elif u_start < u_edge_start - 1.0:
+    elif u_start < ef.u_edge_start - 1.0:
         flags.append("cloth_foot")
     if u_end is None:
         flags.append("contact_at_trace_end")
         u_end = float(n - 1)
     else:
         u_end = n - 1 - u_end
-        if u_end > u_edge_end + 1.0:
+        if u_end > ef.u_edge_end + 1.0:
             flags.append("end_tail")
-    return u_start, u_end, u_edge_start, u_edge_end
+    return u_start, u_end, ef.u_edge_start, ef.u_edge_end
 
 
 def _spreads(xs, peak_index, sigma, fs, u_start, u_end, step=False) -> tuple[float, float]:

@@ -184,7 +184,8 @@ def _opposite_pulse_reason(raw, polarity: int) -> Problem | None:
     """
     v = polarity * (np.asarray(raw, dtype=float) - np.median(raw))
     if v.size >= 3:
-        v = np.median(np.stack([v[:-2], v[1:-1], v[2:]]), axis=0)
+        a, b, c = v[:-2], v[1:-1], v[2:]  # the median of three, as np.median gives it (NaN where one is NaN)
+        v = np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
     if v.size == 0 or not np.max(-v) > OPPOSITE_PULSE_RATIO * max(np.max(v), 0.0):
         return None
     sign = "negative" if polarity == 1 else "positive"
