@@ -381,6 +381,14 @@ def remove_spikes(voltage_V, noise_rms_V: float | None = None, keep=()):
     d2, s = _second_differences(v)
     if noise_rms_V is not None:
         s = float(noise_rms_V)
+    return _replace_spikes(v, d2, s, keep)
+
+
+def _replace_spikes(v, d2, s, keep=()):
+    """:func:`remove_spikes` on v (replaced in place and returned) with its second differences d2 and their
+    noise s [V] (:func:`_second_differences`)."""
+    if v.size < 7:
+        return v, np.zeros(0, dtype=int)
     if not (s > 0):
         s = float(np.min(np.diff(np.unique(v)))) if np.unique(v).size > 1 else 0.0
         if not (s > 0):
@@ -533,7 +541,8 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
         if math.isfinite(kappa_se):
             # residuals that are not white (hum over less than a period, left to the drift and the decay) carry
             # less information on kappa than their number says
-            kappa_se *= math.sqrt(_correlation_factor(columns[keep], (iv - big_phi @ theta)[keep], resid[keep],
+            kept = slice(None) if keep.all() else keep  # a view where nothing was dropped
+            kappa_se *= math.sqrt(_correlation_factor(columns[kept], (iv - big_phi @ theta)[kept], resid[kept],
                                                       max(1, int(round(KAPPA_CORRELATION_S * fs)))))
     elif kappa_given is not None:
         kappa, kappa_se = float(kappa_given), 0.0
@@ -611,14 +620,20 @@ def _design(v, fs, t, t_mid, trig, freqs, qi, post_q, start_u, use_post):
     change of sin (and minus that of cos) from the start, as the sum of the
     trapezoids telescopes; v's is summed.
     """
-    phi = np.column_stack([np.ones(qi.size), t[qi] - t_mid, trig[qi]])
+    phi = np.empty((qi.size, 2 + trig.shape[1]))
+    phi[:, 0] = 1.0
+    np.subtract(t[qi], t_mid, out=phi[:, 1])
+    phi[:, 2:] = trig[qi]
     norms = np.sqrt(np.sum(phi * phi, axis=0))
     norms[norms == 0] = 1.0
-    phi = phi / norms
+    phi /= norms
     big_phi = np.zeros_like(phi)
     iv = np.zeros(qi.size)
     if use_post and post_q.any():
         i0 = max(int(math.floor(start_u)) - 1, 0)
+        first = int(np.argmax(post_q))
+        if post_q[first:].all():  # the post stretch follows the pre one: a slice, not a mask
+            post_q = slice(first, None)
         j = qi[post_q]
         h = 1.0 / fs
         cols = [t[j] - t[i0], 0.5 * ((t[j] - t_mid) ** 2 - (t[i0] - t_mid) ** 2)]
@@ -634,7 +649,7 @@ def _design(v, fs, t, t_mid, trig, freqs, qi, post_q, start_u, use_post):
 
 def _normal_equations(phi, big_phi, y, iv, keep):
     """Coefficients of the normal equations, quadratic in kappa, of the kept samples."""
-    a, b_, y_, i_ = phi[keep], big_phi[keep], y[keep], iv[keep]
+    a, b_, y_, i_ = (phi, big_phi, y, iv) if keep.all() else (phi[keep], big_phi[keep], y[keep], iv[keep])
     return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
             float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
 
@@ -909,7 +924,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     # an ADC step above the noise: the noise is taken as no less than the step's (its error's deviation)
     adc_step = quantization_step(v_spiky)
     noise_floor = adc_step / math.sqrt(12.0)
-    v, spikes = remove_spikes(v_spiky, keep=_kept or ())
+    d2_spiky = _second_differences(v_spiky)  # the record's, with its noise (also for the spikes at the ends)
+    v, spikes = _replace_spikes(v_spiky.copy(), *d2_spiky, keep=_kept or ())
     if _near_ends:
         near = np.asarray(_near_ends, dtype=int)
         v[near] = 0.5 * (v_spiky[near - 1] + v_spiky[near + 1])
@@ -949,7 +965,6 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     it = _iterate(v, fs, candidates, rough, pre_guard_s * fs, post_guard_s * fs, tau_s, kappa_given, scale, noise_floor)
     # detect_contact(it.x, fs, t0_s=t0_s, noise_rms_V=it.fit.noise, ...), sharing the last iteration's search
     contact = _curve_end_contact(it.search.result(t0_s=t0_s, spread=True, curve=True, step=True), fs, t0_s)
-    d2_spiky = _second_differences(v_spiky)  # as remove_spikes saw the record, with its noise
     at_ends, keep = _spikes_at_ends(v_spiky, d2_spiky, spikes, _kept, contact, it.x, it.fit.noise, fs, t0_s, scale)
     near_ends = _low_spikes_at_ends(v_spiky, d2_spiky, spikes, contact, fs, t0_s) if _kept is None else ()
     if keep or near_ends:  # the force's own samples at its jump kept, lower spikes at the ends replaced: again

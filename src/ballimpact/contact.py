@@ -1440,18 +1440,20 @@ def _profile_end(y, u, sigma: float, u_end: float, floor_u: float, degree: int, 
     if grid.size < 3 or y.size < degree + 2:
         return math.nan, math.nan, math.nan
     s = np.maximum(grid[:, None] - u[None, :], 0.0)
-    sse = None
-    for powers in (range(1, degree + 1), range(2, degree + 1)):  # without the linear term where its slope is < 0
+
+    def fit(s, powers):  # the residual sums of squares and the coefficients at each of the ends of s's rows
         a = np.stack([s ** p for p in powers], axis=-1)
         ata = np.einsum("gnk,gnl->gkl", a, a)
         aty = np.einsum("gnk,n->gk", a, y)
         ridge = 1e-12 * (1.0 + np.trace(ata, axis1=1, axis2=2))[:, None, None] * np.eye(len(powers))
         coef = np.linalg.solve(ata + ridge, aty[..., None])[..., 0]
-        r = np.sum((y[None, :] - np.einsum("gnk,gk->gn", a, coef)) ** 2, axis=1)
-        if sse is None:
-            sse, slope_ok, slope = r, coef[:, 0] >= 0, np.maximum(coef[:, 0], 0.0)
-        else:
-            sse = np.where(slope_ok, sse, r)
+        return np.sum((y[None, :] - np.einsum("gnk,gk->gn", a, coef)) ** 2, axis=1), coef
+
+    sse, coef = fit(s, range(1, degree + 1))
+    slope = np.maximum(coef[:, 0], 0.0)
+    bent = np.flatnonzero(coef[:, 0] < 0)  # without the linear term where its slope is < 0 (only those ends)
+    if bent.size:
+        sse[bent] = fit(s[bent], range(2, degree + 1))[0]
     k = int(np.argmin(sse))
     level = sse[k] + CURVE_CHI2 * sigma * sigma
     inside = np.flatnonzero(sse <= level)
