@@ -666,12 +666,26 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split:
     hinge uncertainty under 0.05 % of TC, the truth inside [ts, i0] on every
     one; on the 7 below 3 % it was off by 0.02 samples on average.
     """
+    return _foot_from_hinge(xs, peak_index, sigma, _foot_hinge(xs, peak_index, sigma, fs, split), window, step)
+
+
+def _foot_hinge(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split: bool = True):
+    """The hinge of :func:`_foot_start`: (ts [samples], i0, its window [wl, wr, i0]); None when never zero."""
     quiet = np.flatnonzero(xs[:peak_index + 1] <= FOOT_SIGMA * sigma)
     if not quiet.size:
-        return None, False
+        return None
     i0 = int(quiet[-1]) + 1
-    w = window if window is not None else []
-    ts = _hinge_start(xs, peak_index, sigma, fs, i0, split, w)
+    w: list = []
+    return _hinge_start(xs, peak_index, sigma, fs, i0, split, w), i0, w
+
+
+def _foot_from_hinge(xs: np.ndarray, peak_index: int, sigma: float, hinge, window=None, step=None):
+    """:func:`_foot_start` from its hinge (:func:`_foot_hinge`): the jump and the step judged on it."""
+    if hinge is None:
+        return None, False
+    ts, i0, w = hinge
+    if window is not None:
+        window[:] = w
     if i0 + 1 <= peak_index and abs(ts - (i0 - 1)) < 0.5:
         jump, rise = xs[i0] - xs[i0 - 1], xs[i0 + 1] - xs[i0]
         if jump - rise > JUMP_SIGMA * math.sqrt(5.0) * sigma:
@@ -941,7 +955,7 @@ class ContactSearch:
         self._sigma, self._thr = sigma, thr
         self._run = _unbroken_run(xs, peak_index, sigma, thr, int(starts[k]), int(ends[k]))
         self._others, self._flags = others_found, tuple(flags)
-        self._end_fits = _end_fits(xs, peak_index, peak, sigma, fs)
+        self._hinges = _hinges(xs, peak_index, peak, sigma, fs)
 
     def result(self, *, t0_s: float = 0.0, spread: bool = False, curve: bool = False,
                step: bool = False) -> ContactResult:
@@ -956,7 +970,7 @@ class ContactSearch:
         n_impacts = 1 + len(others_found)
         windows: dict = {}
         u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, sigma, fs, flags, windows, step,
-                                                                 self._end_fits)
+                                                                 self._hinges)
         # the end's spread is the straight line's: how far its end depends on the samples near the noise (its
         # bend's corner moves less, and the checks on the spread were set on the line's)
         u_line = windows.get("line_end", math.nan)
@@ -1223,9 +1237,11 @@ def _pulse_height(xs, a: int, b: int, w: int) -> float:
 
 
 @dataclass(frozen=True)
-class _EndFits:
-    """What :func:`_contact_ends` finds that no option changes: the edges and the end's hinge (see there)."""
+class _Hinges:
+    """What :func:`_contact_ends` finds that no option changes: the edges, the start's hinge before the step is
+    judged, and the end's hinge (see there)."""
 
+    start_hinge: tuple | None  # :func:`_foot_hinge` of the start
     u_edge_start: float
     u_edge_end: float
     edge_fallback: bool
@@ -1238,8 +1254,9 @@ class _EndFits:
     u_line: float | None  # the straight hinge's end, on the reversed trace [samples]
 
 
-def _end_fits(xs, peak_index, peak, sigma, fs) -> _EndFits:
-    """The steep edges' zero crossings and the end's hinge (straight, then bent) of :func:`_contact_ends`."""
+def _hinges(xs, peak_index, peak, sigma, fs) -> _Hinges:
+    """The steep edges' zero crossings, the start's hinge and the end's (straight, then bent) of
+    :func:`_contact_ends`."""
     n = xs.size
     lo = max(EDGE_BAND[0] * peak, min(FOOT_SIGMA * sigma, 0.5 * EDGE_BAND[1] * peak))
     hi = EDGE_BAND[1] * peak
@@ -1270,24 +1287,25 @@ def _end_fits(xs, peak_index, peak, sigma, fs) -> _EndFits:
     end_se, u_line = math.nan, u_end
     if u_end is not None and not jump_end and len(w_end) == 3:
         u_end, end_se = _bent_corner(rev, w_end, sigma_end, u_end)
-    return _EndFits(u_edge_start, u_edge_end, fallback_start or fallback_end, u_end, jump_end, w_end, sigma_end,
-                    ringing, end_se, u_line)
+    return _Hinges(_foot_hinge(xs, peak_index, sigma, fs), u_edge_start, u_edge_end, fallback_start or fallback_end,
+                   u_end, jump_end, w_end, sigma_end, ringing, end_se, u_line)
 
 
-def _contact_ends(xs, peak_index, sigma, fs, flags, windows=None, step=False, end_fits: _EndFits | None = None):
+def _contact_ends(xs, peak_index, sigma, fs, flags, windows=None, step=False, hinges: _Hinges | None = None):
     """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
     ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
     from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with.
-    ``end_fits``: :func:`_end_fits` of the same trace, peak and noise, when already found."""
+    ``hinges``: :func:`_hinges` of the same trace, peak and noise, when already found."""
     n = xs.size
-    ef = end_fits if end_fits is not None else _end_fits(xs, peak_index, float(xs[peak_index]), sigma, fs)
+    ef = hinges if hinges is not None else _hinges(xs, peak_index, float(xs[peak_index]), sigma, fs)
     if ef.edge_fallback:
         flags.append("edge_fallback")
     if ef.ringing:
         flags.append("ringing_after_contact")
     # foot: the hinge fit where the force leaves zero
     w_start, step_start = [], []
-    u_start, jump_start = _foot_start(xs, peak_index, sigma, fs, window=w_start, step=step_start if step else None)
+    u_start, jump_start = _foot_from_hinge(xs, peak_index, sigma, ef.start_hinge, window=w_start,
+                                           step=step_start if step else None)
     u_end, jump_end, u_line = ef.u_end, ef.jump_end, ef.u_line
     if windows is not None:
         windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
