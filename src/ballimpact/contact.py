@@ -892,19 +892,17 @@ class ContactSearch:
 
     ``ContactSearch(x, fs, noise_rms_V=s).result(t0_s=t, spread=True)`` is
     ``detect_contact(x, fs, t0_s=t, noise_rms_V=s, spread=True)``. The noise,
-    the threshold, the main run, the other impacts, the edges and the end's
-    hinge do not depend on the options and are found once, when the search is
+    the threshold, the main run, the other impacts, the edges and both ends'
+    hinges do not depend on the options and are found once, when the search is
     made: the conditioning's last baseline iteration and its final report of
     the same signal share them.
 
     Parameters
     ----------
-    voltage_V : array_like
-        Conditioned voltage, one sample per 1/sample_rate_hz [V].
-    sample_rate_hz : float
-        Sample rate [Hz].
-    noise_rms_V, raw_voltage_V, adc_range_V, adc_bits
-        As for :func:`detect_contact`.
+    voltage_V, sample_rate_hz, noise_rms_V, raw_voltage_V, adc_range_V, adc_bits
+        As for :func:`detect_contact`: the conditioned voltage [V], its sample
+        rate [Hz], its noise [V] (estimated when omitted), the recorded
+        voltage [V] and the ADC's range [V] and resolution [bit].
 
     Raises
     ------
@@ -959,7 +957,8 @@ class ContactSearch:
 
     def result(self, *, t0_s: float = 0.0, spread: bool = False, curve: bool = False,
                step: bool = False) -> ContactResult:
-        """The contact, as :func:`detect_contact` reports it with these options (see there)."""
+        """The contact, as :func:`detect_contact` reports it with these options: the time of the first sample
+        ``t0_s`` [s], ``spread``, ``curve`` and ``step`` (see there)."""
         if self._not_found is not None:
             return self._not_found
         fs, xs, peak_index, peak, sigma, scale = (self._fs, self._xs, self._peak_index, self._peak, self._sigma,
