@@ -807,18 +807,20 @@ def _running_integral(y, fs, start_u):
     return out
 
 
-def _decay_correct(y, fs, start_u, tau):
-    """Inverse first-order high-pass from the contact start: y + cumulative integral / tau."""
+def _decay_correct(y, running, tau):
+    """Inverse first-order high-pass from the contact start: y + cumulative integral / tau; ``running`` is y's
+    :func:`_running_integral` [V s], tau in [s]."""
     x = y.copy()
     if math.isfinite(tau):
-        x += _running_integral(y, fs, start_u) / tau
+        x += running / tau
     return x
 
 
-def _integral_to(y, fs, start_u, end_u) -> float:
-    """Trapezium integral of y from the sample before start to the sub-sample end [V s]."""
+def _integral_to(running, start_u, end_u) -> float:
+    """Trapezium integral of y from the sample before start to the sub-sample end [V s], from y's
+    :func:`_running_integral` ``running`` [V s] from the same start."""
     i0 = max(int(math.floor(start_u)) - 1, 0)
-    c = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
+    c = running[i0:]
     return float(np.interp(end_u - i0, np.arange(c.size), c))
 
 
@@ -1721,14 +1723,15 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
             fit = _fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
                                 kappa_given, noise_floor=noise_floor, cache=cache)
         y = v - fit.baseline
-        contact_integral = _integral_to(y, fs, start_u, end_u)
+        running = _running_integral(y, fs, start_u)
+        contact_integral = _integral_to(running, start_u, end_u)
         tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
         i0 = max(int(math.floor(start_u)) - 1, 0) if math.isfinite(tau) else -1
         if last[0] is fit and last[1] == tau and last[2] == i0:
             x, search = last[3], last[4]
         else:
-            x = _decay_correct(y, fs, start_u, tau)
+            x = _decay_correct(y, running, tau)
             search = ContactSearch(x, fs, noise_rms_V=fit.noise)
         last = (fit, tau, i0, x, search)
         c = search.result()
