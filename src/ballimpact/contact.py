@@ -710,8 +710,11 @@ def _hinge_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, i0: i
     k_max = max(FOOT_MIN_SAMPLES + 1, int(math.ceil(FOOT_MAX_S * fs)))
     # no foot reaches back to a lone sample above the contact threshold between quiet ones: that is a
     # spike (switching equipment), no force on the ball, and it must not pull the hinge
-    lone = np.flatnonzero(_lone_samples(xs[:max(i0, 0)], sigma))
-    floor = int(lone[-1]) + 1 if lone.size else 0
+    # (looked for only as far back as the widest window reaches: one before it holds no window's corner back; the
+    # slice starts a sample earlier, so that its first sample is judged with both neighbours)
+    reach = max(i0 - n_pre * (1 + FOOT_MAX_WIDENINGS) - 2, 0)
+    lone = np.flatnonzero(_lone_samples(xs[reach:max(i0, 0)], sigma))
+    floor = reach + int(lone[-1]) + 1 if lone.size else 0
     wl = max(i0 - n_pre, floor)
     last = min(i0 + k_max - 1, peak_index)
     wr = min(i0 + FOOT_MIN_SAMPLES - 1, last)
