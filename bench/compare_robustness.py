@@ -6,9 +6,11 @@ With folders (e.g. ``bench/out`` of a worktree on the old commit and of this one
 ``robustness-s<SEED>-n<N>.csv`` present in both is compared. For each pair it prints the counts per category
 before and after, every trace whose category changed (with its TC and kCAL errors before and after and, where it
 is excluded now, the start of its reason), and over the traces ok in both runs the mean and standard deviation of
-the TC, kCAL and peak errors, the number off by more than 0.5 %, and the largest change of each. A last line sums
-the categories over every pair. The two runs must hold the same traces (seed and index), or it stops with a
-message naming the file. The timing columns are not compared.
+the TC, kCAL and peak errors, the number off by more than 0.5 %, and the largest change of each; and whether every
+other column is identical to the last bit (a change meant to make the processing faster must leave them so), or
+which columns differ on how many traces. A last line sums the categories over every pair. The two runs must hold
+the same traces (seed and index), or it stops with a message naming the file. The timing columns are not compared,
+and the temporary folders a reason may name are masked.
 """
 
 from __future__ import annotations
@@ -31,6 +33,8 @@ QUANTITIES = (("TC", "tc_err_pct"), ("kCAL", "kcal_err_pct"), ("peak", "peak_err
 FAR_PCT = 0.5  # an ok trace's error beyond this many per cent is counted [%]
 REASON_CHARS = 150  # the start of a changed trace's reason shown [-]
 CSV_NAME = re.compile(r"robustness-s(\d+)-n(\d+)\.csv$")
+TIMING = ("make_s", "process_s", "process_cpu_s")  # what a run's machine decides, not its processing
+TEMP_PATH = re.compile(r"/\S*?zoo-bench-[^/\s]+/zoo-[^/\s]+/")  # each run's own temporary session folder
 
 
 def pairs(old: Path, new: Path) -> list[tuple[Path, Path]]:
@@ -50,7 +54,7 @@ def pairs(old: Path, new: Path) -> list[tuple[Path, Path]]:
 def read(path: Path) -> pd.DataFrame:
     """One per-trace CSV of bench/robustness.py, indexed by trace id ("seed:index")."""
     try:
-        df = pd.read_csv(path)
+        df = pd.read_csv(path, float_precision="round_trip")  # every bit of the written numbers
     except (OSError, pd.errors.ParserError) as exc:
         raise SystemExit(f"{path}: cannot read it as a CSV: {exc}") from None
     missing = ({"id", "category", "reason"} | {c for _, c in QUANTITIES}) - set(df.columns)
@@ -89,7 +93,38 @@ def compare(old: pd.DataFrame, new: pd.DataFrame, name: str = "") -> tuple[str, 
         lines.append(f"    {label} error: mean {a.mean():+.4f} -> {b.mean():+.4f} %, standard deviation "
                      f"{a.std():.4f} -> {b.std():.4f} %, beyond {FAR_PCT:g} %: {int((a.abs() > FAR_PCT).sum())} -> "
                      f"{int((b.abs() > FAR_PCT).sum())}; largest change of one trace {moved:.3g} %")
+    diff = differences(old, new)
+    if diff:
+        lines.append("  differ: " + "; ".join(f"{col} on {len(ids)} traces (e.g. {', '.join(map(str, ids[:3]))})"
+                                              for col, ids in diff.items()))
+    else:
+        lines.append("  every other column identical to the last bit")
     return "\n".join(lines), before, after
+
+
+def differences(old: pd.DataFrame, new: pd.DataFrame) -> dict[str, list]:
+    """Columns (but the timing ones) whose values differ between two runs of the same traces, with the traces
+    where they do; NaN equals NaN, numbers must be equal to the last bit, text equal once temporary paths are
+    masked."""
+    new = new.loc[old.index]
+    out = {}
+    for col in old.columns:
+        if col in TIMING or col not in new.columns:
+            continue
+        a, b = old[col], new[col]
+        if pd.api.types.is_numeric_dtype(a) and pd.api.types.is_numeric_dtype(b):
+            same = (a == b) | (a.isna() & b.isna())
+        else:
+            same = a.map(_masked) == b.map(_masked)
+        if not same.all():
+            out[col] = list(old.index[~same])
+    for col in sorted(set(new.columns) - set(old.columns) - set(TIMING)):
+        out[col] = ["(only in the new run)"]
+    return out
+
+
+def _masked(text) -> str:
+    return "nan" if isinstance(text, float) and math.isnan(text) else TEMP_PATH.sub("<tmp>/", str(text))
 
 
 def _pct(x) -> str:

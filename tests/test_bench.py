@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
@@ -174,3 +175,39 @@ def test_compare_robustness_refuses_runs_it_cannot_pair(tmp_path, mangle, messag
     mangle(pd.DataFrame(rows)).to_csv(tmp_path / "b.csv", index=False)
     with pytest.raises(SystemExit, match=message):
         compare.main([str(tmp_path / "a.csv"), str(tmp_path / "b.csv")])
+
+
+def test_compare_robustness_says_whether_every_other_column_is_identical_to_the_last_bit(tmp_path, capsys):
+    import pandas as pd
+    compare = bench_module("compare_robustness")
+    old = pd.DataFrame(_trace_rows([(0, "ok_right", 0.2, 0.1, 1.0), (1, "excluded_measurable", 0.3, float("nan"),
+                                                                    0.1)]))
+    old.loc[1, "reason"] = "unreadable trace: /tmp/zoo-bench-abc/zoo-x1/traces/zoo-1.tdms: truncated"
+    same = old.copy()
+    same["process_s"] += 1.0  # the timing columns do not count
+    same.loc[1, "reason"] = "unreadable trace: /tmp/zoo-bench-def/zoo-y2/traces/zoo-1.tdms: truncated"  # nor the tmp
+    moved = old.copy()
+    moved.loc[0, "tc_err_pct"] = float(np.nextafter(0.2, 1.0))  # one bit
+    moved.loc[1, "reason"] = "unreadable trace: /tmp/zoo-bench-def/zoo-y2/traces/zoo-2.tdms: truncated"
+    for name, df in (("old", old), ("same", same), ("moved", moved)):
+        df.to_csv(tmp_path / f"{name}.csv", index=False)
+    compare.main([str(tmp_path / "old.csv"), str(tmp_path / "same.csv")])
+    assert "  every other column identical to the last bit" in capsys.readouterr().out.splitlines()
+    compare.main([str(tmp_path / "old.csv"), str(tmp_path / "moved.csv")])
+    out = capsys.readouterr().out
+    assert "  differ: reason on 1 traces (e.g. 3:1); tc_err_pct on 1 traces (e.g. 3:0)" in out.splitlines()
+
+
+def test_time_against_gives_each_commits_median_and_its_ratio_to_the_first():
+    rows = bench_module("time_against").summarise({"base": [0.007, 0.006, 0.008],
+                                                   "new": [0.010, 0.011, 0.009, 0.0095]})
+    assert [r["rev"] for r in rows] == ["base", "new"]
+    assert_allclose([rows[0]["median_ms"], rows[1]["median_ms"]], [7.0, 9.75], rtol=1e-12)
+    assert_allclose([rows[0]["ratio"], rows[1]["ratio"]], [1.0, 9.75 / 7.0], rtol=1e-12)
+    assert_allclose([rows[1]["min_ms"], rows[1]["max_ms"]], [9.0, 11.0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("times", [{}, {"base": [0.007], "new": []}])
+def test_time_against_needs_a_run_of_every_commit(times):
+    with pytest.raises(ValueError, match="at least one run"):
+        bench_module("time_against").summarise(times)
