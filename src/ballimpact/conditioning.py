@@ -1760,7 +1760,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
     # the fits made, and the last corrected signal and its contact: a window that moved by a fraction of a sample
     # often gives the same fit and the same signal again, whose contact is then known
     cache: dict = {}
-    last = (None, math.nan, -1, None, None)  # fit, tau, the sample the decay's integral starts at, x, its search
+    made_from: tuple = ()  # the fit, tau and the sample the decay's integral starts at of x and search below
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
             fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
@@ -1774,12 +1774,10 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
         tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
         i0 = max(int(math.floor(start_u)) - 1, 0) if math.isfinite(tau) else -1
-        if last[0] is fit and last[1] == tau and last[2] == i0:
-            x, search = last[3], last[4]
-        else:
+        if not (made_from and made_from[0] is fit and made_from[1:] == (tau, i0)):
             x = _decay_correct(y, running, tau)
             search = ContactSearch(x, fs, noise_rms_V=fit.noise)
-        last = (fit, tau, i0, x, search)
+            made_from = (fit, tau, i0)
         c = search.result()
         if not c.found:
             break
