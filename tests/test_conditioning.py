@@ -2067,3 +2067,32 @@ def test_undone_peak_spread_flags_a_spike_built_by_the_damping_term(spike, flagg
         assert problems[0].kind is ProblemKind.PEAK_ON_RINGING
         assert re.search(r"the peak moves by [\d.]+ % with the damping ratio 25 % off", problems[0].message)
     assert PLATE_PEAK_SPREAD == 0.015  # half the peak's 3 % tolerance (the docstring's reading)
+
+
+@pytest.mark.parametrize("tail_s, where, flagged", [
+    (0.5e-3, "start", True),    # the fall of an impact the trigger came late for
+    (0.0, "start", False),      # a quiet record's start
+    (2 / 50e3, "start", False),  # two samples: shorter than EDGE_EVENT_MIN_S (a spike the spike check cannot reach)
+    (0.5e-3, "end", False),     # after the contact the decay's correction wanders: not looked at
+])
+def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flagged):
+    from ballimpact.conditioning import _edge_event_problems
+
+    fs, noise, peak = 50e3, 1e-3, 1.0
+    rng = np.random.default_rng(3)
+    x = rng.normal(0.0, noise, int(0.03 * fs))
+    t = np.arange(x.size) / fs
+    s_u, e_u = 0.010 * fs, 0.014 * fs
+    x += np.where((t >= 0.010) & (t <= 0.014), peak * np.sin(np.pi * (t - 0.010) / 0.004), 0.0)
+    n_tail = int(round(tail_s * fs))
+    fall = 0.02 * peak * np.linspace(1.0, 0.0, n_tail, endpoint=False)  # 2 % of the peak, falling to zero
+    if where == "start":
+        x[:n_tail] += fall
+    else:
+        x[x.size - n_tail:] += fall[::-1]
+    problems = _edge_event_problems(x, fs, noise, peak, s_u, 1.0)
+    assert bool(problems) is flagged
+    if flagged:
+        assert problems[0].kind is ProblemKind.MULTIPLE_IMPACTS
+        assert re.match(r"more than one impact in the trace: force at the record's start, [\d.]+ ms",
+                        problems[0].message)

@@ -339,6 +339,24 @@ def test_zoo_undone_peak_that_rests_on_the_damping_excluded(name, seed, index, w
     assert_invariant(trace, result, judgement, excluded_with="peak force not determined")
 
 
+#: Held-out seed 9 (first run on c3dd4da, faulty and ok there): the record starts 86 % into a punctured ball's
+#: contact, whose tail (1.6 % of the peak, 0.5 ms) is below the contact threshold, and a second contact (80 % of the
+#: first) 15 ms later was measured in its place: TC +24.7 %, kCAL -21.4 % against the impact the gates timed. Force
+#: from the record's first sample on, before the contact, is an impact the record cut off
+#: (``conditioning._edge_event_problems``) (name, seed, index, what).
+ZOO_CUT_OFF_BEFORE = [
+    ("punctured-tail-at-the-record-start", 9, 476, "faulty ok on c3dd4da: TC +24.7 %, kCAL -21.4 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_CUT_OFF_BEFORE))
+def test_zoo_impact_cut_off_at_the_record_start_excluded(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.fault and trace.rig.truncate == "start", name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with="force at the record's start")
+
+
 #: Aliased plates, ok but wrong without ``daq.bandwidth_hz`` (the class ZOO_STILL_WRONG keeps): stated, the
 #: plate's resonance above fs/2 excludes the impact (name, seed, index, what).
 ZOO_ALIASED_BANDWIDTH = [
