@@ -2096,3 +2096,21 @@ def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flag
         assert problems[0].kind is ProblemKind.MULTIPLE_IMPACTS
         assert re.match(r"more than one impact in the trace: force at the record's start, [\d.]+ ms",
                         problems[0].message)
+
+
+@pytest.mark.parametrize("hum_V, flagged", [(0.03, False), (3.0, True)])
+def test_baseline_bend_under_the_contact_beyond_a_tenth_of_the_peak(hum_V, flagged):
+    """A 60 Hz hum of tens of mV bends the baseline under a 4 ms contact by a few mV; one fitted at volts (an
+    unpinned fit, zoo trace 11:342) by more than a tenth of a 1 V peak."""
+    from types import SimpleNamespace
+
+    from ballimpact.conditioning import _baseline_bend_problems
+
+    fs = 50e3
+    t = np.arange(int(0.03 * fs)) / fs
+    fit = SimpleNamespace(baseline=hum_V * np.sin(2 * np.pi * 60.0 * t + 0.3), hum_amplitudes=(hum_V,))
+    problems = _baseline_bend_problems(fit, 1.0, 0.010 * fs, 0.014 * fs, 1.0)
+    assert bool(problems) is flagged
+    if flagged:
+        assert problems[0].kind is ProblemKind.MAINS_UNRESOLVED
+        assert problems[0].message.startswith("mains hum not resolved: the fitted baseline bends by")
