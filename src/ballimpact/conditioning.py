@@ -384,8 +384,6 @@ def remove_spikes(voltage_V, noise_rms_V: float | None = None, keep=()):
         Replaced samples [-].
     """
     v = np.array(voltage_V, dtype=float).ravel()
-    if v.size < 7:
-        return v, np.zeros(0, dtype=int)
     d2, s = _second_differences(v)
     if noise_rms_V is not None:
         s = float(noise_rms_V)
@@ -394,7 +392,7 @@ def remove_spikes(voltage_V, noise_rms_V: float | None = None, keep=()):
 
 def _replace_spikes(v, d2, s, keep=()):
     """:func:`remove_spikes` on v (replaced in place and returned) with its second differences d2 and their
-    noise s [V] (:func:`_second_differences`)."""
+    noise s [V] (:func:`_second_differences`); a record of fewer than 7 samples is returned as it is."""
     if v.size < 7:
         return v, np.zeros(0, dtype=int)
     if not (s > 0):
@@ -490,11 +488,10 @@ def _fit_baseline(v, fs, frequencies, start_u, end_u, pre_guard, post_guard, mas
     if mask is None:
         mask = np.zeros(n, dtype=bool)
     regions = _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given)
-    key = None
     if cache is not None:
         pre, post, quiet, has_post, use_post, no_post = regions
         key = (tuple(frequencies), kappa_given, noise_floor, pre.tobytes(), post.tobytes(), quiet.tobytes(),
-               has_post, use_post, no_post, max(int(math.floor(start_u)) - 1, 0) if use_post else None)
+               has_post, use_post, no_post, _integral_start(start_u) if use_post else None)
         fit = cache.get(key)
         if fit is None:
             fit = cache[key] = _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor)
@@ -638,7 +635,7 @@ def _design(v, fs, t, t_mid, trig, freqs, qi, post_q, start_u, use_post):
     big_phi = np.zeros_like(phi)
     iv = np.zeros(qi.size)
     if use_post and post_q.any():
-        i0 = max(int(math.floor(start_u)) - 1, 0)
+        i0 = _integral_start(start_u)
         first = int(np.argmax(post_q))
         if post_q[first:].all():  # the post stretch follows the pre one: a slice, not a mask
             post_q = slice(first, None)
@@ -806,9 +803,15 @@ def _rough_trend(v, n_blocks=20):
     return icpt + slope * np.arange(n)
 
 
+def _integral_start(start_u: float) -> int:
+    """The sample the running integrals of the baseline fit and the decay's correction start from: the one before
+    the contact's start ``start_u`` [samples], or the first."""
+    return max(int(math.floor(start_u)) - 1, 0)
+
+
 def _running_integral(y, fs, start_u):
     """Trapezium integral of y from the sample before start, 0 before it [V s]."""
-    i0 = max(int(math.floor(start_u)) - 1, 0)
+    i0 = _integral_start(start_u)
     out = np.zeros(y.size)
     if i0 < y.size - 1:
         out[i0:] = cumulative_trapezoid(y[i0:], dx=1.0 / fs, initial=0.0)
@@ -827,7 +830,7 @@ def _decay_correct(y, running, tau):
 def _integral_to(running, start_u, end_u) -> float:
     """Trapezium integral of y from the sample before start to the sub-sample end [V s], from y's
     :func:`_running_integral` ``running`` [V s] from the same start."""
-    i0 = max(int(math.floor(start_u)) - 1, 0)
+    i0 = _integral_start(start_u)
     c = running[i0:]
     return float(np.interp(end_u - i0, np.arange(c.size), c))
 
@@ -1777,7 +1780,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
         contact_integral = _integral_to(running, start_u, end_u)
         tau, source, pending, tau_problems = _choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
-        i0 = max(int(math.floor(start_u)) - 1, 0) if math.isfinite(tau) else -1
+        i0 = _integral_start(start_u) if math.isfinite(tau) else -1
         if not (made_from and made_from[0] is fit and made_from[1:] == (tau, i0)):
             x = _decay_correct(y, running, tau)
             search = ContactSearch(x, fs, noise_rms_V=fit.noise)

@@ -971,8 +971,8 @@ class ContactSearch:
         others_found = self._others
         n_impacts = 1 + len(others_found)
         windows: dict = {}
-        u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, sigma, fs, flags, windows, step,
-                                                                 self._hinges)
+        u_start, u_end, u_edge_start, u_edge_end = _contact_ends(xs, peak_index, sigma, fs, self._hinges, flags,
+                                                                 windows, step)
         # the end's spread is the straight line's: how far its end depends on the samples near the noise (its
         # bend's corner moves less, and the checks on the spread were set on the line's)
         u_line = windows.get("line_end", math.nan)
@@ -1293,27 +1293,25 @@ def _hinges(xs, peak_index, peak, sigma, fs) -> _Hinges:
                    u_end, jump_end, w_end, sigma_end, ringing, end_se, u_line)
 
 
-def _contact_ends(xs, peak_index, sigma, fs, flags, windows=None, step=False, hinges: _Hinges | None = None):
-    """Start and end of the contact and of its steep edges [samples], adding the flags of what was seen; a dict
-    ``windows`` receives, for "start" and "end", the first and last sample of each hinge's fit (on the trace read
-    from that end), the first sample above FOOT_SIGMA noise deviations and the noise it was fitted with.
-    ``hinges``: :func:`_hinges` of the same trace, peak and noise, when already found."""
+def _contact_ends(xs, peak_index, sigma, fs, hinges: _Hinges, flags, windows, step=False):
+    """Start and end of the contact and of its steep edges [samples] from the trace's :func:`_hinges` (the same
+    trace, peak and noise), adding the flags of what was seen; the dict ``windows`` receives, for "start" and "end",
+    the first and last sample of each hinge's fit (on the trace read from that end), the first sample above
+    FOOT_SIGMA noise deviations and the noise it was fitted with."""
     n = xs.size
-    ef = hinges if hinges is not None else _hinges(xs, peak_index, float(xs[peak_index]), sigma, fs)
-    if ef.edge_fallback:
+    if hinges.edge_fallback:
         flags.append("edge_fallback")
-    if ef.ringing:
+    if hinges.ringing:
         flags.append("ringing_after_contact")
     # foot: the hinge fit where the force leaves zero
     w_start, step_start = [], []
-    u_start, jump_start = _foot_from_hinge(xs, peak_index, sigma, ef.start_hinge, window=w_start,
+    u_start, jump_start = _foot_from_hinge(xs, peak_index, sigma, hinges.start_hinge, window=w_start,
                                            step=step_start if step else None)
-    u_end, jump_end, u_line = ef.u_end, ef.jump_end, ef.u_line
-    if windows is not None:
-        windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
-                       end=(*ef.w_end, ef.sigma_end) if len(ef.w_end) == 3 else None,
-                       start_step=step_start[0] if step_start and u_start is not None else 0.0, end_se=ef.end_se,
-                       line_end=n - 1 - u_line if u_line is not None else math.nan)
+    u_end, jump_end, u_line = hinges.u_end, hinges.jump_end, hinges.u_line
+    windows.update(start=(*w_start, sigma) if len(w_start) == 3 else None,
+                   end=(*hinges.w_end, hinges.sigma_end) if len(hinges.w_end) == 3 else None,
+                   start_step=step_start[0] if step_start and u_start is not None else 0.0, end_se=hinges.end_se,
+                   line_end=n - 1 - u_line if u_line is not None else math.nan)
     if step_start and u_start is not None:
         flags.append("start_step")
     if jump_start and u_start is not None:
@@ -1323,16 +1321,16 @@ def _contact_ends(xs, peak_index, sigma, fs, flags, windows=None, step=False, hi
     if u_start is None:
         flags.append("contact_at_trace_start")
         u_start = 0.0
-    elif u_start < ef.u_edge_start - 1.0:
+    elif u_start < hinges.u_edge_start - 1.0:
         flags.append("cloth_foot")
     if u_end is None:
         flags.append("contact_at_trace_end")
         u_end = float(n - 1)
     else:
         u_end = n - 1 - u_end
-        if u_end > ef.u_edge_end + 1.0:
+        if u_end > hinges.u_edge_end + 1.0:
             flags.append("end_tail")
-    return u_start, u_end, ef.u_edge_start, ef.u_edge_end
+    return u_start, u_end, hinges.u_edge_start, hinges.u_edge_end
 
 
 def _spreads(xs, peak_index, sigma, fs, u_start, u_end, step=False) -> tuple[float, float]:
