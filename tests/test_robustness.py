@@ -283,10 +283,22 @@ def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
+    if name in LOWPASSED_SPIKE_EXCLUDED:  # undone, TC and kCAL right, the low-passed spike's top not known
+        assert_invariant(trace, result, judgement, excluded_with="may be the pre-buckling spike")
+        assert [p.kind for p in result.problems] == [ProblemKind.PEAK_ON_RINGING], result.reason
+        assert abs(judgement.errors["tc"]) < 0.01 and abs(judgement.errors["kcal"]) < 0.01, judgement.errors
+    else:
+        assert_invariant(trace, result, judgement, must_be_ok=True)
     assert result.plate_resonance_hz > 0  # undone
     if name in UNDONE_FN_TOLERANCE:
         assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=UNDONE_FN_TOLERANCE[name])
+
+
+#: Cases above whose peak is the pre-buckling spike of a force undone from its plate and low-passed: ok and right
+#: until ``conditioning._lowpassed_spike`` (peak -0.5 % and -2.2 %), excluded since for that peak alone; the
+#: kernel's loss on such a spike, 2.1 % on average over zoo seeds 0-14, reached -6.3 % on traces the other checks
+#: passed (ZOO_HELD_OUT_MEASURABLE_EXCLUDED).
+LOWPASSED_SPIKE_EXCLUDED = {"fitted-top-13.8kHz-spike-121kHz", "plate-17.4kHz-front-ringing-undone"}
 
 
 #: Ideal-plate traces of the benchmark excluded on main at 58169d8 for "plate ringing at 3.0-3.4 kHz during the
@@ -339,6 +351,10 @@ ZOO_HELD_OUT_EXCLUDED = [
     # (``conditioning._baseline_bend_problems``)
     ("hum-fit-unpinned-by-a-short-ringing-record", 11, 342, "fitted baseline bends",
      "ok but wrong on acdca8c: TC +153 %, kCAL -99 %"),
+    # 13:41 (ok but wrong on 7315197): a 3.83 kHz plate at 50 kHz, undone and low-passed at 8.8 kHz; the kernel
+    # took the pre-buckling spike's top (``conditioning._lowpassed_spike``)
+    ("spike-top-lowered-by-the-undone-force-low-pass", 13, 41, "may be the pre-buckling spike",
+     "ok but wrong on 7315197: peak -5.5 %"),
 ]
 
 
@@ -346,6 +362,28 @@ ZOO_HELD_OUT_EXCLUDED = [
 def test_zoo_held_out_case_excluded(name, seed, index, reason, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert not trace.truth.measurable, name  # marginal or faulty: excluded is right, ok would have to be right
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, excluded_with=reason)
+
+
+#: Held-out measurable traces ok but wrong when first run, excluded since: the exclusion is a measurable trace
+#: lost (the 2 % target's cost), the lesser failure (name, seed, index, text of the reason, what). Each a spike peak
+#: of a force undone from its plate and low-passed (``conditioning._lowpassed_spike``): over zoo seeds 0-14 the 85
+#: such peaks reported came out 2.1 % low on average, down to -6.3 %.
+ZOO_HELD_OUT_MEASURABLE_EXCLUDED = [
+    ("damped-11.9kHz-plate-refined-spike-low", 11, 784, "may be the pre-buckling spike",
+     "ok but wrong on 7315197: damping 0.145 refined to 0.072, low-passed at 16.3 kHz, peak -6.3 %"),
+    ("10.2kHz-plate-fn-6pc-off-spike-low", 14, 1538, "may be the pre-buckling spike",
+     "ok but wrong on 7315197: fn identified 5.7 % high, low-passed at 14.3 kHz, peak -5.6 %"),
+    ("13.2kHz-plate-fn-6pc-off-spike-low", 14, 1632, "may be the pre-buckling spike",
+     "ok but wrong on 7315197: fn identified 6.2 % low, low-passed at 17.2 kHz, peak -5.2 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, reason, what", named(ZOO_HELD_OUT_MEASURABLE_EXCLUDED))
+def test_zoo_held_out_measurable_case_excluded(name, seed, index, reason, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable and trace.truth.peak_is_spike, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, excluded_with=reason)
 
