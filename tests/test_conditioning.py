@@ -1638,6 +1638,35 @@ def test_peak_between_samples_judges_the_range_of_the_lifted_top():
     assert _peak_between_samples(x, fs, noise, lifted=False) == []
 
 
+#: zoo trace 11:617's force (25.7 kHz, ideal plate, punctured ball), a fraction of its true peak, the sample before
+#: the contact first: the jump's sample on the spike's ramp, a lower maximum after it, the top (1.0) between it and
+#: the drop, and the smooth hump's largest sample at 92 %
+_SPIKE_AFTER_THE_JUMP = [0.0, 0.757, 0.9066, 0.8525, 0.7614, 0.7922, 0.8136, 0.8297, 0.8431, 0.8542, 0.8637, 0.8734,
+                         0.8822, 0.8898, 0.8976, 0.9039, 0.91, 0.9144, 0.9173, 0.9197, 0.9208, 0.9203, 0.9187, 0.9165]
+
+
+@pytest.mark.parametrize("spike, flagged", [
+    (0.9066, True),   # half the rise from the jump's sample (7.5 %) above it: 6.4 % above the largest sample
+    (0.80, False),    # a lower spike: half its rise (2.2 %) leaves it below the hump's top
+    (None, False),    # the jump from zero straight to the maximum (no sample on the ramp before it): no ramp seen
+])
+def test_peak_between_samples_sees_a_spike_on_the_jumps_next_sample(spike, flagged):
+    """A lower maximum after the jump from zero and one rise on the ramp may hide the spike's top between samples:
+    zoo trace 11:617 (25.7 kHz) was ok with the peak 7.9 % low, its true top 8.6 % above the largest sample."""
+    from ballimpact.conditioning import _peak_between_samples
+
+    x = np.array(_SPIKE_AFTER_THE_JUMP)
+    if spike is None:
+        x = np.delete(x, 1)  # 0 -> 0.9066 -> 0.8525: one rise, from zero
+    else:
+        x[2] = spike
+    problems = _peak_between_samples(x, 25.7e3, 2.7e-4, lifted=False)
+    assert bool(problems) is flagged, problems
+    if flagged:
+        assert problems[0].kind is ProblemKind.PEAK_BETWEEN_SAMPLES
+        assert "a sampled maximum of 98.5 % of the largest sample" in problems[0].message
+
+
 @pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin", [
     (23.9e3, None, 0.0, "pressurised", 29.3),
     (35.5e3, None, 0.0, "pressureless", 31.0),

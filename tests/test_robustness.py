@@ -355,6 +355,10 @@ ZOO_HELD_OUT_EXCLUDED = [
     # took the pre-buckling spike's top (``conditioning._lowpassed_spike``)
     ("spike-top-lowered-by-the-undone-force-low-pass", 13, 41, "may be the pre-buckling spike",
      "ok but wrong on 7315197: peak -5.5 %"),
+    # 11:617 (ok but wrong on 7315197): at 25.7 kHz the jump's sample is on the spike's ramp, and the one after it
+    # a lower maximum whose top fell before the drop (``conditioning._peak_between_samples``)
+    ("spike-top-after-the-jumps-sample-25.7kHz", 11, 617, "peak force between samples",
+     "ok but wrong on 7315197: peak -7.9 %"),
 ]
 
 
