@@ -2427,9 +2427,10 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     interval.
 
     The same holds at every lower local maximum of the samples that follows
-    two rises, the last from a sample above PEAK_JUMP_FRACTION of the peak (a
-    spike's ramp; the first may be the jump from zero, whose sample is on the
-    ramp at low rates: zoo trace 11:617, 25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger rise above it) against
+    two rises from samples above PEAK_JUMP_FRACTION of the peak (a spike's
+    ramp), or the jump from zero to a sample above PEAK_RAMP_FLOOR of it and
+    one rise (the jump's sample on the ramp at low rates: zoo trace 11:617,
+    25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger rise above it) against
     the largest sample: a spike whose top fell between the samples so wholly
     that the largest sample is on the smooth part of the contact is such a
     maximum, and its top may exceed the largest sample (zoo seed 4000,
@@ -2470,14 +2471,17 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     # fell between the samples while the smooth part of the contact later holds the largest sample)
     # may hide a top up to one rise above it: a ramp's rises only. At the largest sample, the rises
     # from a sample already at PEAK_RAMP_FLOOR of the peak (not the jump from zero); at a lower
-    # maximum, a spike's ramp starts low: a maximum after two rises, the last from a sample off zero
-    # (PEAK_JUMP_FRACTION of the peak; the first may be the jump from zero itself: at 25.7 kHz the jump's
-    # sample is already on the ramp, and zoo trace 11:617's spike, its top between the jump's next sample and
-    # the one after, came out ok at -7.9 %); a jump from zero alone (one rise from a sample near zero) or a
-    # swing of ringing (a fall before its rise) hides no top above it
+    # maximum, a spike's ramp starts low: a maximum after two rises, both from samples off zero
+    # (PEAK_JUMP_FRACTION of the peak), or after the jump from zero to a sample already at PEAK_RAMP_FLOOR of
+    # the peak and one rise from it (at 25.7 kHz the jump's sample is on the spike's ramp, and zoo trace
+    # 11:617's top, between the next sample and the drop, came out ok at -7.9 %; a jump from zero spread over
+    # two samples, the first of them low, is no ramp: 66 right traces of zoo seeds 0-14 were excluded when any
+    # sample off zero counted); a jump from zero alone (one rise from a sample near zero) or a swing of ringing
+    # (a fall before its rise) hides no top above it
     jump_floor = PEAK_JUMP_FRACTION * peak
     maxima = [k for k in range(2, xc.size - 1)
-              if xc[k - 2] < xc[k - 1] <= xc[k] and xc[k - 1] >= jump_floor and xc[k] > xc[k + 1] and k != i]
+              if xc[k - 2] < xc[k - 1] <= xc[k] and xc[k] > xc[k + 1] and k != i
+              and xc[k - 1] >= (jump_floor if xc[k - 2] >= jump_floor else PEAK_RAMP_FLOOR * peak)]
     # force_top's half range at the largest sample where it lifts it (0 where it keeps the sample)
     half = force_top(np.arange(xc.size) / fs, xc, noise)[2] if lifted else 0.0
     for k in (i, *maxima):
