@@ -1486,8 +1486,8 @@ def _lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutof
                     f"peak force not determined: undone from the plate's resonance at {plate.frequency_hz / 1e3:.3g} "
                     f"kHz and low-passed at {cutoff / 1e3:.3g} kHz, the force's maximum {1e3 * (k - s_u) / fs:.2g} ms "
                     f"into the contact ({100 * top / peak:.3g} % of the peak) may be the pre-buckling spike's top, "
-                    "which the low-pass lowers by an amount the noisy exact undone force cannot bound (0-6 %, 2 % on "
-                    "average in the zoo)")]
+                    "which the low-pass lowers by an amount the noisy exact undone force cannot bound (2 % on average "
+                    "in the zoo, up to 15 % with the sampling's share)")]
 
 
 def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
@@ -2430,8 +2430,8 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     two rises from samples above PEAK_JUMP_FRACTION of the peak (a spike's
     ramp), or the jump from zero to a sample above PEAK_RAMP_FLOOR of it and
     one rise (the jump's sample on the ramp at low rates: zoo trace 11:617,
-    25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger rise above it) against
-    the largest sample: a spike whose top fell between the samples so wholly
+    25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger
+    rise above it) against the largest sample: a spike whose top fell between the samples so wholly
     that the largest sample is on the smooth part of the contact is such a
     maximum, and its top may exceed the largest sample (zoo seed 4000,
     "sample_rate": 23.3 kHz, spike 5.9 % above the largest sample, once ok).
