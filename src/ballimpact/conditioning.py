@@ -1861,6 +1861,7 @@ def _integrity(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, scale, am
         return []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     return (_edge_event_problems(x, fs, fit.noise, peak, s_u, scale)
+            + _end_event_problems(x, fs, fit.noise, peak, e_u, e_u - s_u, scale, post_guard_s)
             + _baseline_bend_problems(fit, peak, s_u, e_u, scale)
             + _level_problems(x, fs, fit, peak, scale, e_u, post_guard_s)
             + _end_problems(x, fs, fit, contact, s_u, e_u, scale, curve=True)
@@ -1923,6 +1924,40 @@ def _edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
                     f"more than one impact in the trace: force at the record's start, {run / fs * 1e3:.2g} ms of it "
                     f"before the contact, up to {top * scale * 1e3:.3g} mV ({100 * top / peak:.2g} % of the peak, "
                     f"{top / noise:.3g} noise deviations): an impact the record truncated (trigger earlier)")]
+
+
+def _end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_GUARD_S) -> list[Problem]:
+    """Force rising to the record's last sample, after the contact: another impact the record cut off.
+
+    The mirror of :func:`_edge_event_problems`, narrowed to what a contact's start looks like, for the end of a
+    record wanders (the decay's correction integrates the baseline's small errors) and a plate rings after the
+    contact: the corrected signal stands out as an event does (EVENT_SIGMA noise deviations and EVENT_FRACTION of
+    the peak) over the record's last samples, for EDGE_EVENT_MIN_S at least and for no longer than the contact
+    (a wander lasts longer), starting ``post_guard_s`` [s] or more after the contact's end, and its largest sample
+    is the record's last: it is rising when the record stops. Zoo trace 19:218 (a second contact starting 30.6 ms
+    after the first, 0.1 ms before the record's end, its force at 6.5 % of the peak there, 4 % as the 3.3 kHz plate
+    delays it) came out ok: a faulty trace, whose second contact is below the contact threshold for the few samples
+    it shows. x and noise in [V / scale] (scale [V]), peak likewise; e_u the contact's end and tc_u its length
+    [samples].
+    """
+    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
+    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))
+    first = int(math.ceil(e_u + post_guard_s * fs))
+    seg = x[max(first, 0):]
+    if seg.size < need or not seg[-1] > thr:
+        return []
+    quiet = np.flatnonzero(seg <= thr)
+    if not quiet.size:
+        return []  # no quiet sample between the contact and the record's end: the end checks judge that
+    run = seg.size - 1 - int(quiet[-1])  # samples above thr up to the record's last
+    if not need <= run <= tc_u or not seg[-1] >= np.max(seg[-run:]):
+        return []
+    top = float(seg[-1])
+    return [Problem(ProblemKind.MULTIPLE_IMPACTS,
+                    f"more than one impact in the trace: force rising at the record's end, {run / fs * 1e3:.2g} ms "
+                    f"of it, to {top * scale * 1e3:.3g} mV ({100 * top / peak:.2g} % of the peak, {top / noise:.3g} "
+                    "noise deviations) at the last sample: another impact the record cut off (record longer after "
+                    "the trigger)")]
 
 
 def _level_problems(x, fs, fit: _BaselineFit, peak, scale, end_u, post_guard_s=POST_GUARD_S):
