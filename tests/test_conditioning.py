@@ -2174,6 +2174,37 @@ def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flag
                         problems[0].message)
 
 
+@pytest.mark.parametrize("shape, flagged", [
+    ("rise", True),           # another impact's start, 0.1 ms of it rising to 5 % of the peak at the last sample
+    ("fall", False),          # the same stretch falling at the end: its largest sample is not the last
+    ("wander", False),        # a slow rise over 10 ms (longer than the contact): the decay's correction wandering
+    ("quiet", False),         # a quiet record's end
+    ("short", False),         # two samples: shorter than EDGE_EVENT_MIN_S
+])
+def test_end_event_rising_at_the_record_end_is_an_impact_cut_off(shape, flagged):
+    """Force rising to the record's last sample, after a quiet stretch, no longer than the contact: another impact
+    the record cut off (zoo trace 19:218, a faulty trace ok)."""
+    from ballimpact.conditioning import _end_event_problems
+
+    fs, noise, peak = 50e3, 1e-3, 1.0
+    x = np.random.default_rng(3).normal(0.0, noise, int(0.03 * fs))
+    t = np.arange(x.size) / fs
+    s_u, e_u = 0.005 * fs, 0.009 * fs
+    x += np.where((t >= 0.005) & (t <= 0.009), peak * np.sin(np.pi * (t - 0.005) / 0.004), 0.0)
+    n = {"rise": 5, "fall": 5, "wander": 500, "quiet": 0, "short": 2}[shape]
+    ramp = 0.05 * peak * np.linspace(0.0, 1.0, n + 1)[1:]
+    if shape == "fall":
+        ramp = ramp[::-1]
+    if n:
+        x[x.size - n:] += ramp
+    problems = _end_event_problems(x, fs, noise, peak, e_u, e_u - s_u, 1.0)
+    assert bool(problems) is flagged, problems
+    if flagged:
+        assert problems[0].kind is ProblemKind.MULTIPLE_IMPACTS
+        assert re.match(r"more than one impact in the trace: force rising at the record's end, [\d.]+ ms",
+                        problems[0].message)
+
+
 @pytest.mark.parametrize("hum_V, flagged", [(0.03, False), (3.0, True)])
 def test_baseline_bend_under_the_contact_beyond_a_tenth_of_the_peak(hum_V, flagged):
     """A 60 Hz hum of tens of mV bends the baseline under a 4 ms contact by a few mV; one fitted at volts (an

@@ -359,6 +359,10 @@ ZOO_HELD_OUT_EXCLUDED = [
     # a lower maximum whose top fell before the drop (``conditioning._peak_between_samples``)
     ("spike-top-after-the-jumps-sample-25.7kHz", 11, 617, "peak force between samples",
      "ok but wrong on 7315197: peak -7.9 %"),
+    # 19:218 (faulty and ok on 806b3d6): a second contact starting 0.1 ms before the record's end, its force at
+    # 6.5 % of the peak there, the samples (delayed by a 3.3 kHz plate) rising to 4 % (``_end_event_problems``)
+    ("second-contact-starting-at-the-record-end", 19, 218, "force rising at the record's end",
+     "faulty ok on 806b3d6: a second contact cut off by the record's end"),
 ]
 
 

@@ -1907,9 +1907,10 @@ def _edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
     punctured ball's tail at 1.6 % of the peak over the record's first 0.5 ms, a second contact 15 ms later)
     came out ok with TC +25 % and kCAL -21 %. Only the start: before the contact the decay's correction adds
     nothing, while after it it integrates the baseline's small errors, and a record of seconds wanders away from
-    zero by its end (zoo seeds 0-9: 9 right traces excluded when the end was looked at too, none at the start);
-    an impact after the measured one does not change what the gates timed, and one that reaches the contact
-    threshold is counted by :func:`ballimpact.contact.detect_contact`. x and noise in [V / scale] (scale [V]), peak
+    zero by its end (zoo seeds 0-9: 9 right traces excluded when the end was looked at the same way, none at the
+    start); an impact after the measured one does not change what the gates timed, and one that reaches the
+    contact threshold is counted by :func:`ballimpact.contact.detect_contact`. At the end, only force still
+    rising at the last sample is taken for another impact (:func:`_end_event_problems`). x and noise in [V / scale] (scale [V]), peak
     likewise; s_u: the contact's start [samples].
     """
     thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
