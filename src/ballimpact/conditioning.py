@@ -842,11 +842,17 @@ def _mains_frequencies(mains_hz, n_harmonics, fs):
     return [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
 
 
+def _event_threshold(noise, peak) -> float:
+    """The level an event of the corrected record stands above: EVENT_SIGMA noise deviations and EVENT_FRACTION of
+    the main peak (``noise`` and ``peak`` in one unit, the threshold in it)."""
+    return max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
+
+
 def _event_mask(x, fs, noise, contact: ContactResult, pre_guard, post_guard):
     """Samples of every event other than the main contact (runs standing out of the noise), with guards."""
     n = x.size
     peak = max(float(x[contact.peak_index]), 0.0) if contact.found else float(np.max(x))
-    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
+    thr = _event_threshold(noise, peak)
     above = x > thr
     if contact.found:
         a = max(int(math.floor((contact.start_s - 0.0) * fs - pre_guard)), 0)
@@ -1007,15 +1013,15 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             problems.append(Problem(ProblemKind.PLATE_RINGING, undone))
         elif undone is not None:
             y, contact, plate, cutoff = undone
-            peak_spread = _undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
-            peak_spread += _lowpassed_spike(y, fs, contact, plate, cutoff, t0_s)
+            peak_problems = (_undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
+                             + _lowpassed_spike(y, fs, contact, plate, cutoff, t0_s))
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
                             + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
             # the undone force's own noise: the ringing's plateau check on its final contact
             plateau = _plateau_end_problems(y, fs, robust_noise(np.diff(y)) / math.sqrt(2.0), contact, t0_s)
             return _result(y, it.fit, it.tau, it.source, contact, it.n_iter, messages,
-                           at_ends + staircase + plateau + peak_spread, t0_s, scale, spikes, it.mains, mains_source,
+                           at_ends + staircase + plateau + peak_problems, t0_s, scale, spikes, it.mains, mains_source,
                            it.contact_integral, plate)
         problems.extend(_plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
     # last, on a trace nothing else excludes or whose ends alone are in doubt (its fits cost a few ms): a low-pass
@@ -1911,11 +1917,11 @@ def _edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
     zero by its end (zoo seeds 0-9: 9 right traces excluded when the end was looked at the same way, none at the
     start); an impact after the measured one does not change what the gates timed, and one that reaches the
     contact threshold is counted by :func:`ballimpact.contact.detect_contact`. At the end, only force still
-    rising at the last sample is taken for another impact (:func:`_end_event_problems`). x and noise in [V / scale] (scale [V]), peak
-    likewise; s_u: the contact's start [samples].
+    rising at the last sample is taken for another impact (:func:`_end_event_problems`). x and noise in
+    [V / scale] (scale [V]), peak likewise; s_u: the contact's start [samples].
     """
-    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
-    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))
+    thr = _event_threshold(noise, peak)
+    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))  # at least 3 samples
     seg = x[:max(int(math.floor(s_u)), 0)]
     quiet = np.flatnonzero(seg <= thr)
     run = int(quiet[0]) if quiet.size else seg.size  # samples above thr from the record's first on
@@ -1947,8 +1953,8 @@ def _end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_
     it shows. x and noise in [V / scale] (scale [V]), peak likewise; e_u the contact's end and tc_u its length
     [samples].
     """
-    thr = max(EVENT_SIGMA * noise, EVENT_FRACTION * peak)
-    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))
+    thr = _event_threshold(noise, peak)
+    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))  # at least 3 samples
     first = int(math.ceil(e_u + post_guard_s * fs))
     seg = x[max(first, 0):]
     if seg.size < need or not seg[-1] > thr:
@@ -2474,8 +2480,9 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     ramp), or the jump from zero to a sample above PEAK_RAMP_FLOOR of it and
     one rise (the jump's sample on the ramp at low rates: zoo trace 11:617,
     25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger
-    rise above it) against the largest sample: a spike whose top fell between the samples so wholly
-    that the largest sample is on the smooth part of the contact is such a
+    rise above it) against the largest sample: a spike whose top fell
+    between the samples so wholly that the largest sample is on the smooth
+    part of the contact is such a
     maximum, and its top may exceed the largest sample (zoo seed 4000,
     "sample_rate": 23.3 kHz, spike 5.9 % above the largest sample, once ok).
     At the largest sample the rule is the one above (half a rise against half
