@@ -202,17 +202,33 @@ def test_alias_free_needs_a_bandwidth_of_at_most_half_the_sample_rate(bandwidth_
     assert processing.alias_free(bandwidth_hz, fs) is free
 
 
-@pytest.mark.parametrize("bandwidth_hz, fs, tc_s, withheld", [
-    (None, 100e3, 4e-3, False),  # aliasing not ruled out
-    (60e3, 100e3, 4e-3, False),  # above fs/2
-    (25e3, 50e3, 4e-3, True),  # rounds the front over 20 us = 0.5 % of TC
-    (24e3, 50e3, 4e-3, False),  # 20.8 us: more
-    (10e3, 21.5e3, 3.3e-3, False),  # bench/antialias_map.py 2:339's kind: 1.5 % of TC
-    (25e3, 50e3, float("nan"), False),
+@pytest.mark.parametrize("bandwidth_hz, fs, tc_s, plate_hz, withheld", [
+    (None, 59.9e3, 4e-3, None, False),  # no key below twice v1.1's 30 kHz plates: aliasing not ruled out
+    (None, 20e3, 4e-3, 9e3, False),  # ... whatever plate was undone
+    (None, 60e3, 4e-3, None, True),  # no key, sampled fast enough for any v1.1 plate
+    (None, 100e3, float("nan"), None, False),
+    (60e3, 100e3, 4e-3, None, False),  # above fs/2, key or no key
+    (60e3, 100e3, 4e-3, 60e3, False),
+    (25e3, 50e3, 4e-3, None, True),  # rounds the front over 20 us = 0.5 % of TC
+    (24e3, 50e3, 4e-3, None, False),  # 20.8 us: more
+    (10e3, 21.5e3, 3.3e-3, None, False),  # bench/antialias_map.py 2:339's kind: 1.5 % of TC
+    (8e3, 50e3, 4e-3, 8.7e3, True),  # the key is the undone plate's resonance: nothing left rounds the front
+    (8e3, 50e3, 4e-3, 7.3e3, True),
+    (8e3, 50e3, 4e-3, 8.9e3, False),  # 11 % off: another band limit (a filter) may round it
+    (8e3, 50e3, 4e-3, float("nan"), False),
+    (25e3, 50e3, float("nan"), None, False),
 ])
 def test_peak_withheld_only_without_alias_and_with_a_front_rounded_over_little_of_tc(bandwidth_hz, fs, tc_s,
-                                                                                       withheld):
-    assert processing.peak_can_be_withheld(bandwidth_hz, fs, tc_s) is withheld
+                                                                                       plate_hz, withheld):
+    assert processing.peak_can_be_withheld(bandwidth_hz, fs, tc_s, plate_hz) is withheld
+
+
+@pytest.mark.parametrize("bandwidth_hz, fs, ruled_out", [
+    (None, 59.9e3, False), (None, 60e3, True), (None, 200e3, True), (None, float("nan"), False),
+    (25e3, 50e3, True), (25.1e3, 50e3, False), (40e3, 200e3, True),
+])
+def test_aliasing_ruled_out_by_the_key_or_by_sampling_above_twice_the_highest_plate(bandwidth_hz, fs, ruled_out):
+    assert processing.aliasing_ruled_out(bandwidth_hz, fs) is ruled_out
 
 
 @pytest.mark.parametrize("factor, excluded", [(0.4, False), (0.6, True)])

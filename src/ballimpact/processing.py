@@ -27,7 +27,7 @@ from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
-from .session import ImpactRow, Session
+from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
 
 __all__ = [
@@ -43,6 +43,7 @@ __all__ = [
     "exclude_time_constant_outliers",
     "flag_time_constant_outliers",
     "alias_free",
+    "aliasing_ruled_out",
     "peak_can_be_withheld",
     "PEAK_WITHHOLD_MAX_ROUNDING",
 ]
@@ -249,12 +250,23 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
 #: 1.7 % of TC, TC +1.5 %). Half the TC tolerance, as the ends' spread check (conditioning.SPREAD_MAX_FRACTION).
 PEAK_WITHHOLD_MAX_ROUNDING = 0.005
 
+#: The stated band limit is the plate's resonance, not a filter's cut-off, where the plate identified and undone
+#: rings within this share of it [-]: the undoing restores the front the resonance rounded, and no rounding is left
+#: for PEAK_WITHHOLD_MAX_ROUNDING to bound (the identification is a few per cent off at worst in the zoo: 14:1538,
+#: about 6 %).
+PLATE_IS_BANDWIDTH_TOLERANCE = 0.1
 
-def peak_can_be_withheld(bandwidth_hz: float | None, sample_rate_hz: float, contact_time_s: float) -> bool:
+
+def peak_can_be_withheld(bandwidth_hz: float | None, sample_rate_hz: float, contact_time_s: float,
+                         plate_resonance_hz: float | None = None) -> bool:
     """Whether a problem of the peak alone withholds the peak instead of excluding the impact.
 
-    Only where the rig rules out aliasing (:func:`alias_free`) and its band limit rounds the contact's jump over
-    at most PEAK_WITHHOLD_MAX_ROUNDING of TC.
+    Only where aliasing is ruled out (:func:`aliasing_ruled_out`) and nothing is left to round the contact's jump
+    unseen: with ``daq.bandwidth_hz``, either it is the resonance of the plate identified and undone
+    (within PLATE_IS_BANDWIDTH_TOLERANCE), or it rounds the jump over at most PEAK_WITHHOLD_MAX_ROUNDING of TC.
+    Without the key (sampled at twice raw-format v1.1's highest plate resonance or faster) the ends' own checks are
+    all that bound a low-pass's rounding, as on every impact with no problem of its peak (``python
+    bench/lowpass_map.py`` and ``bench/antialias_map.py`` measure what they let through).
 
     Parameters
     ----------
@@ -264,14 +276,45 @@ def peak_can_be_withheld(bandwidth_hz: float | None, sample_rate_hz: float, cont
         Sample rate of the trace [Hz].
     contact_time_s : float
         Contact time TC [s].
+    plate_resonance_hz : float or None, optional
+        Resonance of the plate identified and undone (ballimpact.plate) [Hz]; None or NaN when none was.
 
     Returns
     -------
     bool
     """
-    if not alias_free(bandwidth_hz, sample_rate_hz) or not (math.isfinite(contact_time_s) and contact_time_s > 0):
+    if not aliasing_ruled_out(bandwidth_hz, sample_rate_hz) \
+            or not (math.isfinite(contact_time_s) and contact_time_s > 0):
         return False
+    if bandwidth_hz is None:
+        return True
+    if plate_resonance_hz is not None and math.isfinite(plate_resonance_hz) \
+            and abs(plate_resonance_hz - bandwidth_hz) <= PLATE_IS_BANDWIDTH_TOLERANCE * bandwidth_hz:
+        return True
     return 0.5 / bandwidth_hz <= PEAK_WITHHOLD_MAX_ROUNDING * contact_time_s
+
+
+def aliasing_ruled_out(bandwidth_hz: float | None, sample_rate_hz: float) -> bool:
+    """Whether no plate resonance can reach the samples through its alias.
+
+    With ``daq.bandwidth_hz``, where it is at most half the sample rate (:func:`alias_free`); without it, where
+    the trace is sampled at twice raw-format v1.1's highest plate resonance
+    (session.PLATE_RESONANCE_MAX_HZ, 30 kHz) or faster.
+
+    Parameters
+    ----------
+    bandwidth_hz : float or None
+        ``daq.bandwidth_hz`` [Hz]; None when not given.
+    sample_rate_hz : float
+        Sample rate of the trace [Hz].
+
+    Returns
+    -------
+    bool
+    """
+    if bandwidth_hz is None:
+        return math.isfinite(sample_rate_hz) and sample_rate_hz >= 2.0 * PLATE_RESONANCE_MAX_HZ
+    return alias_free(bandwidth_hz, sample_rate_hz)
 
 
 def alias_free(bandwidth_hz: float | None, sample_rate_hz: float) -> bool:
@@ -480,7 +523,8 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
         res.exclude(Problem(ProblemKind.CONTACT_TRUNCATED, "contact not entirely inside the trace (truncated trace?)"))
     # no alias, and no unseen rounding of the front, behind a peak problem
-    peak_alone = peak_can_be_withheld(meta.bandwidth_hz, res.sample_rate_hz, contact.contact_time_s)
+    peak_alone = peak_can_be_withheld(meta.bandwidth_hz, res.sample_rate_hz, contact.contact_time_s,
+                                      None if cond.plate is None else cond.plate.frequency_hz)
     for problem in cond.problems:
         if peak_alone and problem.kind in PEAK_KINDS:
             res.withhold_peak(problem)
