@@ -126,7 +126,7 @@ def test_read_good_session(tmp_path):
     assert meta.gate_resolution_s == pytest.approx(1e-6, rel=1e-12)
     assert meta.mains_hz is None  # v1.1: absent = find it in each trace
     assert meta.time_constant_s is None
-    assert meta.bandwidth_hz is None  # absent: aliasing not ruled out
+    assert meta.bandwidth_hz is None  # absent: unknown (at 67 kHz no v1.1 plate aliases: processing.aliasing_ruled_out)
     assert meta.synthetic is False
     assert list(meta.balls) == ["pressurised", "pressureless"]
     ball = meta.balls["pressurised"]

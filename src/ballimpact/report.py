@@ -420,8 +420,7 @@ def _counts_block(fig, cur, ds) -> None:
     notes = ar.text_values(ds["peak_note"].values) if "peak_note" in ds else []
     withheld = sum(bool(_text(notes[i])) for i in ok) if len(notes) else 0
     peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
-             "the peak alone, with an alias and a rounded front ruled out by daq.bandwidth_hz: impacts.csv "
-             "peak_note)." if withheld else "")
+             "the peak alone, with an alias and a rounded front ruled out: impacts.csv peak_note)." if withheld else "")
     cur.text(x0, "\n".join(textwrap.wrap(f"{n_total} impacts in the raw impacts.csv: {n_ok} good, "
                                          f"{n_total - n_ok} excluded (listed with their reasons after the figures)."
                                          + peaks, 110)), size=9.5)
