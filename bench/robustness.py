@@ -282,8 +282,11 @@ def main(argv=None):
                f"({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU: writing, reading and processing "
                "the trace, less sensitive to other load)")
     withheld = [r for r in records if r["category"].startswith("ok_") and r["peak_note"]]
-    summary += (f"\nok with the peak withheld (daq.bandwidth_hz given, a problem of the peak alone): {len(withheld)} "
-                f"({sum(r['category'] == 'ok_right' for r in withheld)} of them right: TC and kCAL within 1 %); "
+    keyed = sum(bool(r["bandwidth_given"]) for r in withheld)
+    summary += (f"\nok with the peak withheld (a problem of the peak alone, an alias and a rounded front ruled out: "
+                f"processing.peak_can_be_withheld): {len(withheld)}, {keyed} with daq.bandwidth_hz and "
+                f"{len(withheld) - keyed} without ({sum(r['category'] == 'ok_right' for r in withheld)} of them "
+                "right: TC and kCAL within 1 %); "
                 "excluded because daq.bandwidth_hz is above fs/2: "
                 f"{sum('aliasing' in r['kinds'].split() for r in records)}")
     alone, alone_right, alone_wrong = peak_alone(records)
