@@ -354,9 +354,11 @@ ZOO_HELD_OUT_EXCLUDED = [
     ("punctured-tail-at-the-record-start", 9, 476, "force at the record's start",
      "faulty ok on c3dd4da: TC +24.7 %, kCAL -21.4 %"),
     # 11:342 (ok but wrong on acdca8c): a 667 Hz plate ringing through a 24 ms record; the fit's 60 Hz hum (28 mV
-    # drawn) came out at volts and bent the baseline under the contact by more than the peak
-    # (``conditioning._baseline_bend_problems``)
-    ("hum-fit-unpinned-by-a-short-ringing-record", 11, 342, "fitted baseline bends",
+    # drawn) came out at volts and bent the baseline under the contact by more than the peak, excluded since by
+    # ``conditioning._baseline_bend_problems``. With events from 0.5 % of the peak and their shoulders
+    # (EVENT_FRACTION, EVENT_SHOULDER_SIGMA) the iteration settles on other windows and masks, where the hum does
+    # not bend: excluded for the ringing itself (a plate below 3 kHz, marginal).
+    ("hum-fit-unpinned-by-a-short-ringing-record", 11, 342, "plate ringing outlasts the contact",
      "ok but wrong on acdca8c: TC +153 %, kCAL -99 %"),
     # 13:41 (ok but wrong on 7315197): a 3.83 kHz plate at 50 kHz, undone and low-passed at 8.8 kHz; the kernel
     # took the pre-buckling spike's top (``conditioning._lowpassed_spike``)
@@ -396,6 +398,24 @@ def test_zoo_held_out_case_excluded(name, seed, index, reason, what, measurable,
     assert trace.truth.measurable is measurable, name
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement, excluded_with=reason)
+
+
+#: Held-out measurable traces ok but wrong when first run, ok and right since (name, seed, index, what):
+#: - 25:1094 (ok but wrong on a08c763): a second contact of 1.3 % of the peak 17.8 ms after a contact, in a 36 ms
+#:   record with 12 mV of hum and its harmonics; the five-harmonic hum fit took up part of it, its rest (0.6 % of
+#:   the peak) stayed under the event threshold (then 1 %), and the hum bent under the contact
+#:   (``conditioning._event_mask``: EVENT_FRACTION, EVENT_SHOULDER_SIGMA).
+ZOO_HELD_OUT_RIGHT = [
+    ("small-second-contact-in-a-short-hum-record", 25, 1094, "ok but wrong on a08c763: TC -0.85 %, kCAL +1.21 %"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_HELD_OUT_RIGHT))
+def test_zoo_held_out_case_right(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    assert trace.truth.measurable, name
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement, must_be_ok=True)
 
 
 #: Aliased plates, ok but wrong without ``daq.bandwidth_hz`` (the class ZOO_STILL_WRONG keeps): stated, the
