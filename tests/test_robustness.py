@@ -407,18 +407,10 @@ def test_zoo_held_out_case_excluded(name, seed, index, reason, what, measurable,
 #: - 25:1094 (ok but wrong on a08c763): a second contact of 1.3 % of the peak 17.8 ms after a contact, in a 36 ms
 #:   record with 12 mV of hum and its harmonics; the five-harmonic hum fit took up part of it, its rest (0.6 % of
 #:   the peak) stayed under the event threshold (then 1 %), and the hum bent under the contact
-#:   (``conditioning._event_mask``: EVENT_FRACTION, EVENT_SHOULDER_SIGMA).
+#:   (``conditioning._event_mask``: EVENT_FRACTION, EVENT_SHOULDER_SIGMA). Run by test_zoo_case_ok_and_right.
 ZOO_HELD_OUT_RIGHT = [
     ("small-second-contact-in-a-short-hum-record", 25, 1094, "ok but wrong on a08c763: TC -0.85 %, kCAL +1.21 %"),
 ]
-
-
-@pytest.mark.parametrize("name, seed, index, what", named(ZOO_HELD_OUT_RIGHT))
-def test_zoo_held_out_case_right(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    assert trace.truth.measurable, name
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, must_be_ok=True)
 
 
 #: Aliased plates, ok but wrong without ``daq.bandwidth_hz`` (the class ZOO_STILL_WRONG keeps): stated, the
@@ -1235,8 +1227,8 @@ ZOO_SPIKE_AT_END = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", named(ZOO_SPIKE_AT_END))
-def test_zoo_spike_at_a_contact_end_ok_and_right(name, seed, index, what, tmp_path):
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_SPIKE_AT_END + ZOO_HELD_OUT_RIGHT))
+def test_zoo_case_ok_and_right(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable, name
     result, judgement = zoo.run_trace(trace, tmp_path)
