@@ -167,8 +167,8 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "mains_frequency_hz": ("Hz", "mains frequency whose hum was removed (0 when none was)"),
     "mains_source": ("1", "where the mains frequency came from: given (daq.mains_hz), detected or none"),
     "peak_note": ("1", "why peak_force_N and time_to_peak_ms are withheld (NaN) on an ok impact: a problem of the "
-                       "peak alone, with an alias and a rounded front ruled out (daq.bandwidth_hz, or sampled at 60 kHz or "
-                       "faster); else empty"),
+                       "peak alone, with an alias and a rounded front ruled out (daq.bandwidth_hz, or sampled at "
+                       "60 kHz or faster); else empty"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (

@@ -84,8 +84,8 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from .calibration import force_top
-from .contact import (THRESHOLD_FRACTION, THRESHOLD_SIGMA, ContactResult, ContactSearch, detect_contact, finite_median,
-                      quantization_step, robust_noise)
+from .contact import (ContactResult, ContactSearch, contact_threshold, detect_contact, finite_median, quantization_step,
+                      robust_noise)
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
                     lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain,
@@ -1957,16 +1957,15 @@ def _end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_
     contact: the corrected signal stands out as an event does (EVENT_SIGMA noise deviations and EVENT_FRACTION of
     the peak) over the record's last samples, for EDGE_EVENT_MIN_S at least and for no longer than the contact
     (a wander lasts longer), starting ``post_guard_s`` [s] or more after the contact's end, and its largest sample
-    is the record's last, at the contact threshold (:data:`ballimpact.contact.THRESHOLD_SIGMA` noise deviations
-    and :data:`ballimpact.contact.THRESHOLD_FRACTION` of the peak) or above: a contact rising when the record
-    stops, whose height the record does not show (:func:`ballimpact.contact.detect_contact` counts a run at the
-    record's end from 5 % of the peak). Below the contact threshold, zoo seeds 0-20 held two right traces whose
-    end rose to 1.6 and 2 % of the peak (2:810, a 0.92 s record's decay-corrected end; 15:1958, a record ending
-    5 ms after the contact), and no faulty one. Zoo trace 19:218 (a second contact starting 30.6 ms
-    after the first, 0.1 ms before the record's end, its force at 6.5 % of the peak there, 4 % as the 3.3 kHz plate
-    delays it) came out ok: a faulty trace, whose second contact is below the contact threshold for the few samples
-    it shows. x and noise in [V / scale] (scale [V]), peak likewise; e_u the contact's end and tc_u its length
-    [samples].
+    is the record's last, at the contact threshold (:func:`ballimpact.contact.contact_threshold`) or above: a
+    contact rising when the record stops, whose height the record does not show
+    (:func:`ballimpact.contact.detect_contact` counts a run at the record's end from 5 % of the peak). Below the
+    contact threshold, zoo seeds 0-20 held two right traces whose end rose to 1.6 and 2 % of the peak (2:810, a
+    0.92 s record's decay-corrected end; 15:1958, a record ending 5 ms after the contact), and no faulty one. Zoo
+    trace 19:218 (a second contact starting 30.6 ms after the first, 0.1 ms before the record's end, its force at
+    6.5 % of the peak there, 4 % as the 3.3 kHz plate delays it) came out ok: a faulty trace, whose second contact
+    is below the contact threshold for the few samples it shows. x and noise in [V / scale] (scale [V]), peak
+    likewise; e_u the contact's end and tc_u its length [samples].
     """
     thr = _event_threshold(noise, peak)
     need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))  # at least 3 samples
@@ -1979,7 +1978,7 @@ def _end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_
         return []  # no quiet sample between the contact and the record's end: the end checks judge that
     run = seg.size - 1 - int(quiet[-1])  # samples above thr up to the record's last
     if not need <= run <= tc_u or not seg[-1] >= np.max(seg[-run:]) \
-            or seg[-1] < max(THRESHOLD_SIGMA * noise, THRESHOLD_FRACTION * peak):
+            or seg[-1] < contact_threshold(noise, peak):
         return []
     top = float(seg[-1])
     return [Problem(ProblemKind.MULTIPLE_IMPACTS,
@@ -2051,10 +2050,11 @@ def _baseline_step_problems(x, fs, fit: _BaselineFit, contact: ContactResult, t0
     spike weighs little, a line and a step are fitted to BASELINE_STEP_WINDOWS_S on either side of candidate
     instants BASELINE_STEP_GRID_S apart (the line takes up what the global fit's drift made of the step); a step of
     BASELINE_STEP_SIGMA standard errors and BASELINE_STEP_FRACTION of the peak that still holds, half its size and
-    3 standard errors, when fitted over four times as long (a small second contact below the event mask's EVENT_FRACTION
-    of the peak is a hump, not a step) is a problem. At the contact the two sides are every quiet sample before and after
-    it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the contact when ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the
-    contact, which is then taken for the amplifier's undershoot: only the given time constant tells them apart."""
+    3 standard errors, when fitted over four times as long (a small second contact below the event mask's
+    EVENT_FRACTION of the peak is a hump, not a step) is a problem. At the contact the two sides are every quiet
+    sample before and after it, one test at BASELINE_STEP_ACROSS_SIGMA: a step within the contact when
+    ``plate.time_constant_s`` is given. With the decay estimated, kappa takes up a shift within the contact, which
+    is then taken for the amplifier's undershoot: only the given time constant tells them apart."""
     peak = float(contact.peak_V)
     qi = np.flatnonzero(fit.quiet)
     if not (peak > 0 and fit.noise > 0) or qi.size < 2 * MIN_QUIET_SAMPLES:

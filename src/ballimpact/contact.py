@@ -61,6 +61,7 @@ __all__ = [
     "robust_noise",
     "finite_median",
     "quantization_step",
+    "contact_threshold",
     "contact_samples",
     "end_from_curve",
     "MAD_TO_SIGMA",
@@ -380,6 +381,24 @@ class Saturation:
     ratio: float
     flat: bool = False
     evidence: float = math.nan
+
+
+def contact_threshold(noise, peak) -> float:
+    """The level a contact stands above: THRESHOLD_SIGMA noise deviations and THRESHOLD_FRACTION of the peak.
+
+    Parameters
+    ----------
+    noise : float
+        Noise standard deviation [V] (or any unit, the peak's).
+    peak : float
+        Largest value of the contact, in the noise's unit.
+
+    Returns
+    -------
+    float
+        The threshold, in that unit.
+    """
+    return max(THRESHOLD_SIGMA * noise, THRESHOLD_FRACTION * peak)
 
 
 def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
@@ -939,7 +958,7 @@ class ContactSearch:
         peak = float(xs[peak_index])
         merge_gap = max(int(round(MERGE_GAP_S * fs)), 1)
         sigma = _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
-        thr = max(THRESHOLD_SIGMA * sigma, THRESHOLD_FRACTION * peak)
+        thr = contact_threshold(sigma, peak)
         if not peak > thr:
             self._not_found = _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
             return
@@ -1188,7 +1207,7 @@ def _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
         sigma = float(noise_rms_V) / scale
     else:
         sigma0 = robust_noise(xs)
-        thr0 = max(THRESHOLD_SIGMA * sigma0, THRESHOLD_FRACTION * peak)
+        thr0 = contact_threshold(sigma0, peak)
         starts0, _, _ = _main_run(xs > thr0, peak_index, merge_gap)
         first_crossing = int(starts0[0]) if starts0.size else peak_index
         stop = first_crossing - max(int(round(PRETRIGGER_GUARD_S * fs)), 1)

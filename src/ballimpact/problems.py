@@ -84,8 +84,8 @@ TRACE_FILE_KINDS = frozenset({
 })
 
 #: Problems of the peak force alone: where an alias and a rounded front are ruled out (processing.peak_can_be_withheld:
-#: by daq.bandwidth_hz, or without it by a sample rate of twice v1.1's highest plate resonance) they withhold the peak (impacts.csv ``peak_note``) instead of excluding the
-#: impact, whose TC and kCAL every other check judges.
+#: by daq.bandwidth_hz, or without it by a sample rate of twice v1.1's highest plate resonance) they withhold the
+#: peak (impacts.csv ``peak_note``) instead of excluding the impact, whose TC and kCAL every other check judges.
 PEAK_KINDS = frozenset({ProblemKind.PEAK_ON_RINGING, ProblemKind.PEAK_BETWEEN_SAMPLES})
 
 
