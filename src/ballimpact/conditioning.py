@@ -1917,6 +1917,12 @@ def _baseline_bend_problems(fit: _BaselineFit, peak, s_u, e_u, scale) -> list[Pr
                     "there (record longer pre- or post-trigger, or give daq.mains_hz)")]
 
 
+def _edge_event_samples(fs) -> int:
+    """The fewest samples an event at the record's start or end must hold: EDGE_EVENT_MIN_S at ``fs`` [Hz], and at
+    least 3."""
+    return max(3, int(round(EDGE_EVENT_MIN_S * fs)))
+
+
 def _edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
     """Force at the record's first samples, before the contact: an impact the record cut off.
 
@@ -1936,7 +1942,7 @@ def _edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
     [V / scale] (scale [V]), peak likewise; s_u: the contact's start [samples].
     """
     thr = _event_threshold(noise, peak)
-    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))  # at least 3 samples
+    need = _edge_event_samples(fs)
     seg = x[:max(int(math.floor(s_u)), 0)]
     quiet = np.flatnonzero(seg <= thr)
     run = int(quiet[0]) if quiet.size else seg.size  # samples above thr from the record's first on
@@ -1968,7 +1974,7 @@ def _end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_
     likewise; e_u the contact's end and tc_u its length [samples].
     """
     thr = _event_threshold(noise, peak)
-    need = max(3, int(round(EDGE_EVENT_MIN_S * fs)))  # at least 3 samples
+    need = _edge_event_samples(fs)
     first = int(math.ceil(e_u + post_guard_s * fs))
     seg = x[max(first, 0):]
     if seg.size < need or not seg[-1] > thr:
