@@ -327,6 +327,10 @@ ZOO_STILL_WRONG: list = [
     # held-out seed 28 (first run on d43008f): the plate's overshoot of the jump rides on the pre-buckling spike at
     # 3.6 samples a period, its ringing hidden in the buckling drop (README, "What remains")
     ("plate-10.1kHz-overshoot-on-the-spike-36kHz", 28, 896, "10.1 kHz plate at 36.3 kHz: peak +17.5 %"),
+    # held-out seed 34 (first run on 8738d3e): noise 0.7 % of a 0.55 V peak and a 12.4 kHz plate at 3.9 samples a
+    # period that nothing identifies; its rise puts the start 0.68 samples late (the hinge's own uncertainty 0.1), and
+    # the bent hinge meets zero 1.5 samples before the fade's end: each within its budget, together TC -1.07 %
+    ("noisy-fade-and-a-12.4kHz-plate-at-the-start", 34, 1810, "12.4 kHz plate at 48.7 kHz, noise 0.7 %: TC -1.07 %"),
 ]
 
 
@@ -379,9 +383,12 @@ ZOO_HELD_OUT_EXCLUDED = [
 
 
 #: Held-out measurable traces ok but wrong when first run, excluded since: the exclusion is a measurable trace
-#: lost (the 2 % target's cost), the lesser failure (name, seed, index, text of the reason, what). Each a spike peak
-#: of a force undone from its plate and low-passed (``conditioning._lowpassed_spike``): over zoo seeds 0-14 the 85
-#: such peaks reported came out 2.1 % low on average, down to -6.3 %.
+#: lost (the 2 % target's cost), the lesser failure (name, seed, index, text of the reason, what). The first three a
+#: spike peak of a force undone from its plate and low-passed (``conditioning._lowpassed_spike``): over zoo seeds
+#: 0-14 the 85 such peaks reported came out 2.1 % low on average, down to -6.3 %. 33:674 (ok but wrong on 8738d3e):
+#: a 1.5 V electrical spike on the second sample of the jump from zero (50.7 kHz, ideal plate), whose second
+#: differences there have no isolated spike's shape, taken for the peak (``conditioning._peak_between_samples``,
+#: PEAK_ALONE_FRACTION); at 50.7 kHz without ``daq.bandwidth_hz`` the peak is not withheld but the impact excluded.
 ZOO_HELD_OUT_MEASURABLE_EXCLUDED = [
     ("damped-11.9kHz-plate-refined-spike-low", 11, 784, "may be the pre-buckling spike",
      "ok but wrong on 7315197: damping 0.145 refined to 0.072, low-passed at 16.3 kHz, peak -6.3 %"),
@@ -389,6 +396,8 @@ ZOO_HELD_OUT_MEASURABLE_EXCLUDED = [
      "ok but wrong on 7315197: fn identified 5.7 % high, low-passed at 14.3 kHz, peak -5.6 %"),
     ("13.2kHz-plate-fn-6pc-off-spike-low", 14, 1632, "may be the pre-buckling spike",
      "ok but wrong on 7315197: fn identified 6.2 % low, low-passed at 17.2 kHz, peak -5.2 %"),
+    ("electrical-spike-on-the-jumps-second-sample", 33, 674, "the second of the force's jump from zero",
+     "ok but wrong on 8738d3e: peak +32 %"),
 ]
 
 
