@@ -2506,6 +2506,11 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     differences there do not have an isolated spike's shape
     (:func:`remove_spikes`). Zoo trace 33:674 (50.7 kHz, ideal plate) was ok
     with a 1.5 V electrical spike on that sample taken for the peak, +32 %.
+    Were it electrical, its excess over its neighbours' mean is in the
+    impulse as well: above SPIKE_END_IMPULSE of the impulse the start is
+    named not determined too (CONTACT_END_UNDETERMINED, as for a sample kept
+    at a contact end), so that a withheld peak never passes a kCAL that a
+    spike moved.
 
     The same holds at every lower local maximum of the samples that follows
     two rises from samples above PEAK_JUMP_FRACTION of the peak (a spike's
@@ -2549,15 +2554,23 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
                         "or the plate's overshoot of it, not a measured maximum (sample faster)")]
     if not peak > 0:
         return []
-    if i >= 2 and xc[i - 2] < PEAK_JUMP_FRACTION * peak and xc[i - 1] < PEAK_RAMP_FLOOR * peak:
+    if i >= 2 and i + 1 < xc.size and xc[i - 2] < PEAK_JUMP_FRACTION * peak and xc[i - 1] < PEAK_RAMP_FLOOR * peak:
         below = float(np.max(np.delete(xc, i)))
         if peak - below > PEAK_ALONE_FRACTION * peak:
-            return [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES,
-                            f"peak force between samples: the largest sample is the second of the force's jump from "
-                            f"zero (the one before it at {100 * xc[i - 1] / peak:.2g} % of it) and stands "
-                            f"{100 * (peak - below) / peak:.2g} % of it above every other sample: a single-sample top, "
-                            "the ball's spike with its ramp unsampled or an electrical spike on the jump, which the "
-                            "samples cannot tell apart (sample faster)")]
+            seen = (f"the largest sample is the second of the force's jump from zero (the one before it at "
+                    f"{100 * xc[i - 1] / peak:.2g} % of it) and stands {100 * (peak - below) / peak:.2g} % of it above "
+                    "every other sample: a single-sample top, the ball's spike with its ramp unsampled or an "
+                    "electrical spike on the jump, which the samples cannot tell apart")
+            out = [Problem(ProblemKind.PEAK_BETWEEN_SAMPLES, f"peak force between samples: {seen} (sample faster)")]
+            # were it electrical, its excess over its neighbours' mean is in the impulse too (as a sample kept at
+            # a contact end: _spikes_at_ends)
+            excess, impulse = float(xc[i] - 0.5 * (xc[i - 1] + xc[i + 1])), float(np.sum(xc[1:]))
+            if impulse > 0 and excess > SPIKE_END_IMPULSE * impulse:
+                out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                                   f"contact start not determined: were the jump's second sample, the largest, an "
+                                   f"electrical spike, the impulse would be {100 * excess / impulse:.2g} % off (more "
+                                   f"than {100 * SPIKE_END_IMPULSE:.2g} %)"))
+            return out
     # every sampled maximum (the largest sample and each lower local maximum, e.g. a spike whose top
     # fell between the samples while the smooth part of the contact later holds the largest sample)
     # may hide a top up to one rise above it: a ramp's rises only. At the largest sample, the rises
