@@ -112,6 +112,8 @@ MESSAGES = {
                                  "contact",
     ProblemKind.PEAK_BETWEEN_SAMPLES: "peak force between samples: the force rises by 14 % of the peak in the 43 us "
                                       "before the largest sample and may go on rising before it drops",
+    ProblemKind.IMPULSE_UNRESOLVED: "impulse not known to 0.5 %: were the largest sample an electrical spike, the "
+                                    "impulse would be 0.68 % off",
     ProblemKind.ALIASING: "signal bandwidth 25 kHz (daq.bandwidth_hz) above half the sample rate (10 kHz): the "
                           "plate's ringing is sampled through its alias",
     ProblemKind.SPEED_OUT_OF_BOUNDS: "inbound speed 1.20 m/s outside physical bounds (2.0, 80.0)",
