@@ -2314,24 +2314,3 @@ def test_front_dip_names_a_sample_back_at_zero_after_the_jump(second, start_u, f
     if flagged:
         assert problems[0].message.startswith("contact start not determined")
         assert "falls back to -11 % of the peak" in problems[0].message
-
-
-@pytest.mark.parametrize("before, n_fall, flagged", [
-    (2.0, 120, True),    # a spike on the sample before the contact: 1.5 % of the impulse (about 130 V samples)
-    (2.0, 1500, False),  # a contact ten times longer: 0.16 %, under SPIKE_END_IMPULSE
-    (0.0, 120, False),   # no spike: the front rises without a sample standing alone
-])
-def test_front_single_sample_is_charged_to_the_impulse(before, n_fall, flagged):
-    """A sample of the front standing above both neighbours (where remove_spikes cannot tell an electrical spike
-    from the jump) carries its excess over their mean: above SPIKE_END_IMPULSE of the impulse, kCAL is not known."""
-    from ballimpact.conditioning import SPIKE_END_IMPULSE, _front_single_sample
-
-    x = _front_33_674(n_fall=n_fall)
-    x[19] = before  # the sample before the contact's first
-    problems = _front_single_sample(x, 50.65e3, 2.09, 19.5, x.size - 2.0)
-    assert [p.kind for p in problems] == ([ProblemKind.IMPULSE_UNRESOLVED] if flagged else []), problems
-    if flagged:
-        share = (before - 0.5 * (x[18] + x[20])) / np.sum(x[20:])
-        assert share > SPIKE_END_IMPULSE
-        assert_allclose(float(re.search(r"impulse would be (\S+) % off", problems[0].message).group(1)),
-                        100 * share, rtol=0.02)

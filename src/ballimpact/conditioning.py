@@ -2330,8 +2330,6 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False,
         out.extend(_start_on_fast_ringing(x, fs, noise, peak, s_u, e_u))
     if front and not {p.kind for p in out} & PLATE_EVIDENCE:
         out.extend(_front_dip(x, fs, peak, s_u, e_u))
-    if front and ProblemKind.IMPULSE_UNRESOLVED not in {p.kind for p in out}:
-        out.extend(_front_single_sample(x, fs, peak, s_u, e_u))
     if fall and not out:  # a peak no check above judged (without ``front`` they find only plate or peak kinds)
         out.extend(_peak_on_slow_fall(xc, fs, noise, peak, math.ceil(s_u) - s_u))
     line = _ringing_line(x[max(int(math.ceil(start_u)), 0):min(int(math.floor(end_u)) + 1, x.size)], fs,
@@ -3284,39 +3282,6 @@ def _front_dip(x, fs, peak, s_u, e_u):
                     f"{100 * front[j] / peak:.2g} % of the peak after one at {100 * front[jumped[0]] / peak:.2g} % "
                     "(no ball's force returns to zero before it leaves): a negative electrical spike or a plate's "
                     "swing, and the force may start on either side of it")]
-
-
-def _front_single_sample(x, fs, peak, s_u, e_u):
-    """A sample of the contact's front standing alone above both neighbours by more than SPIKE_END_IMPULSE of the
-    impulse: were it an electrical spike, kCAL would be off by that much.
-
-    Where the force's curve breaks (its jump from zero, the drop at buckling) an electrical spike's second
-    differences have no isolated spike's shape and :func:`remove_spikes` leaves it; the ball's own spike caught by
-    one sample has the same shape, and the samples cannot tell the two apart. So every local maximum of the front
-    (from the sample before the start found to BUCKLING_TIME_S and FRONT_DIP_AFTER_SAMPLES after it) is charged its
-    excess over its neighbours' mean, as a sample kept at a contact end is (:func:`_spikes_at_ends`). On held-out
-    zoo trace 33:674's rig and 24 ok traces of seeds 1-2, electrical spikes of 15-100 % of the peak on a sample
-    from the one before the contact to its fifth passed as ok and wrong 67 times in 1008 before this check and the
-    others on single samples at the front (:func:`_peak_between_samples`, :func:`_front_dip`).
-    """
-    k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))
-    a = max(k0 - 1, 1)
-    b = min(k0 + int(math.ceil(BUCKLING_TIME_S * fs)) + FRONT_DIP_AFTER_SAMPLES, k1 - 1, x.size - 2)
-    impulse = float(np.sum(x[max(k0, 0):k1 + 1]))
-    if not (peak > 0 and impulse > 0) or b < a:
-        return []
-    seg = x[a - 1:b + 2]
-    excess = seg[1:-1] - 0.5 * (seg[:-2] + seg[2:])
-    alone = (seg[1:-1] > seg[:-2]) & (seg[1:-1] > seg[2:])
-    worst = int(np.argmax(np.where(alone, excess, -np.inf)))
-    if not (alone[worst] and excess[worst] > SPIKE_END_IMPULSE * impulse):
-        return []
-    return [Problem(ProblemKind.IMPULSE_UNRESOLVED,
-                    f"impulse not known to {100 * SPIKE_END_IMPULSE:.2g} %: the sample {1e3 * (a + worst - s_u) / fs:+.2g} "
-                    f"ms from the contact start stands {100 * excess[worst] / peak:.2g} % of the peak above its "
-                    f"neighbours' mean, a single-sample top (the ball's spike or an electrical one, which the samples "
-                    f"cannot tell apart); were it electrical, the impulse would be "
-                    f"{100 * excess[worst] / impulse:.2g} % off (sample faster)")]
 
 
 def _negative_force(x, fs, noise, peak, end_u):
