@@ -1012,7 +1012,9 @@ def test_zoo_lowpass_map_case(name, seed, index, what, tmp_path):
 #: (name, seed, index, what the reason must name, what).
 SLOW_FALL = "a ball's force drops at once"
 TWO_MODE_PLATES = [
-    ("two-modes-10.6+24.7kHz-54.9kHz", 2, 371, SLOW_FALL, "ok but wrong on 7489769: peak +12.25 %"),
+    # 2:371's overshoot top rises from a sample at 29 % of it and stands alone: named so first since d841f03
+    ("two-modes-10.6+24.7kHz-54.9kHz", 2, 371, "the largest sample stands alone",
+     "ok but wrong on 7489769: peak +12.25 %"),
     ("two-modes-7.5+27.0kHz-93.7kHz", 2, 385, SLOW_FALL, "ok but wrong on 7489769: peak +15.28 %"),
     ("two-modes-10.5+40.9kHz-155kHz", 2, 27, SLOW_FALL, "ok but wrong on 7489769: peak +3.72 %"),
     ("two-modes-6.1+19.5kHz-141.7kHz", 3, 301, SLOW_FALL, "ok but wrong on 7489769: peak +27.83 %"),
