@@ -236,6 +236,30 @@ def test_sample_rate_agreeing_with_a_header_is_not_warned_about(tmp_path):
     assert validate_session(folder).warnings == []
 
 
+@pytest.mark.parametrize(("slow_rate", "bandwidth_hz", "warned"), [
+    (25000.0, None, True),  # a trace's own rate below 60 kHz, no key: a plate above 12.5 kHz may alias
+    (25000.0, 12000.0, False),  # the key rules it out (or refuses the rig, in processing)
+    (RATE_HZ, None, False),  # every trace at 67 kHz: twice the 30 kHz plates
+])
+def test_slow_trace_rates_without_the_bandwidth_are_warned_of_aliasing(tmp_path, slow_rate, bandwidth_hz, warned):
+    daq = {"sample_rate_hz": RATE_HZ, "adc_range_v": [-10.0, 10.0]}
+    if bandwidth_hz is not None:
+        daq["bandwidth_hz"] = bandwidth_hz
+    folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{GATES},,", f"b,pressurised,traces/b.csv,{GATES},,"],
+                          meta={**META, "daq": daq})
+    write_csv_trace(folder / "traces" / "a.csv", header=f"# sample_rate_hz: {RATE_HZ}\n")
+    write_csv_trace(folder / "traces" / "b.csv", header=f"# sample_rate_hz: {slow_rate}\n")
+    for read_traces in (True, False):
+        aliasing = [w for w in validate_session(folder, read_traces=read_traces).warnings if "through its alias" in w]
+        if warned:
+            assert len(aliasing) == 1, aliasing
+            assert aliasing[0].startswith("1 trace(s) give their own sample rate below 60 kHz and key "
+                                          "'daq.bandwidth_hz' is not given: at 25 kHz a plate resonance between "
+                                          "12.5 and 30 kHz"), aliasing[0]
+        else:
+            assert aliasing == []
+
+
 @pytest.mark.parametrize("polarity", [1, -1])
 def test_polarity_is_guessed_from_the_traces(tmp_path, polarity):
     meta = {**META, "plate": {"polarity": polarity}}

@@ -31,6 +31,7 @@ __all__ = [
     "OPTIONAL_COLUMNS",
     "GATE_COLUMNS",
     "near_miss_name",
+    "alias_risk",
 ]
 
 SESSION_FILE = "session.yaml"
@@ -473,6 +474,29 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
     return int(polarity_number), kcal_range, time_constant_s
 
 
+def alias_risk(sample_rate_hz: float) -> str:
+    """
+    What a rig sampled below twice PLATE_RESONANCE_MAX_HZ risks without `daq.bandwidth_hz`, and what to state.
+
+    The text of the warnings of :func:`read_session` (daq.sample_rate_hz) and of
+    ``ballimpact.validation.validate_session`` (a trace's own rate).
+
+    Parameters
+    ----------
+    sample_rate_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    str
+        One sentence, starting "at ... kHz".
+    """
+    return (f"at {sample_rate_hz / 1e3:g} kHz a plate resonance between {sample_rate_hz / 2e3:g} and "
+            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz) reaches "
+            "the samples through its alias, which no check can tell from the force: give the anti-aliasing "
+            "filter's cut-off, or the plate's highest resonance (docs/raw-format.md)")
+
+
 def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None, float | None]:
     daq = _section(data, "daq", file)
     sample_rate_hz = _number(
@@ -491,14 +515,8 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     if daq.get("bandwidth_hz") is not None:
         bandwidth_hz = _number(daq["bandwidth_hz"], "daq.bandwidth_hz", file, positive=True)
     elif sample_rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
-        warnings.warn(
-            f"{file}: key 'daq.bandwidth_hz' not given, and at {sample_rate_hz / 1e3:g} kHz a plate resonance "
-            f"between {sample_rate_hz / 2e3:g} and {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to "
-            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz) reaches the samples through its alias, which no check can tell from "
-            "the force: give the anti-aliasing filter's cut-off, or the plate's highest resonance (docs/raw-format.md)",
-            SessionWarning,
-            stacklevel=3,
-        )
+        warnings.warn(f"{file}: key 'daq.bandwidth_hz' not given, and {alias_risk(sample_rate_hz)}",
+                      SessionWarning, stacklevel=3)
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
     return sample_rate_hz, (adc[0], adc[1]), mains_hz, bandwidth_hz
 

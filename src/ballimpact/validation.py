@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .problems import TRACE_FILE_KINDS, ProblemKind, has_kind
-from .session import read_session
+from .session import PLATE_RESONANCE_MAX_HZ, alias_risk, read_session
 from .traces import TraceError, read_trace
 
 __all__ = ["ValidationReport", "validate_session", "format_validation"]
@@ -196,6 +196,7 @@ def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
                 f"{SPEED_RANGE_M_S[0]:g}-{SPEED_RANGE_M_S[1]:g} m/s{_units_hint(tally.bad_speeds)}"
             )
         _check_sample_rate(meta.sample_rate_hz, tally.own_rates, tally.n_default_rate)
+        _check_alias_rates(meta.sample_rate_hz, meta.bandwidth_hz, tally.own_rates)
         _check_polarity(meta.polarity, tally.signs)
     per_ball = Counter(row.ball for row in session.impacts)
     return ValidationReport(
@@ -286,6 +287,17 @@ def _check_sample_rate(rate_hz: float, own_rates: list[float], n_default: int) -
         f"daq.sample_rate_hz = {rate_hz:g} Hz disagrees with the rate every trace gives itself "
         f"(mostly {common:g} Hz, from trace headers / time_s / TDMS wf_increment){use}: correct session.yaml"
     )
+
+
+def _check_alias_rates(rate_hz: float, bandwidth_hz: float | None, own_rates: list[float]) -> None:
+    """Warn when traces carry their own sample rate [Hz] too slow to rule out an aliased plate resonance, and
+    session.yaml states no `daq.bandwidth_hz` [Hz]. Below twice PLATE_RESONANCE_MAX_HZ at daq.sample_rate_hz,
+    reading session.yaml has warned already."""
+    slow = [r for r in own_rates if r < 2.0 * PLATE_RESONANCE_MAX_HZ]
+    if bandwidth_hz is not None or not slow or rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
+        return
+    warnings.warn(f"{len(slow)} trace(s) give their own sample rate below {2e-3 * PLATE_RESONANCE_MAX_HZ:g} kHz and "
+                  f"key 'daq.bandwidth_hz' is not given: {alias_risk(min(slow))}")
 
 
 def _check_polarity(polarity: int, signs: Counter) -> None:
