@@ -180,6 +180,31 @@ def exclusions(records, k):
     return "\n".join(lines)
 
 
+def by_mode_and_plate(records):
+    """The measurable traces excluded, by the zoo's mode (one factor from the reference rig, or a random combination)
+    and by plate (ideal, or a resonance): where the exclusions are, and how many had numbers within the tolerances
+    all the same (the rest would have been ok but wrong had they passed)."""
+    cells = defaultdict(lambda: [0, 0, 0])  # measurable, excluded, of them right all the same
+    for r in records:
+        if not r["measurable"]:
+            continue
+        labels = r["labels"].split("|")
+        mode = "random" if "mode random" in labels else "one factor"
+        plate = "ideal plate" if "plate ideal" in labels else "resonant plate"
+        cell = cells[(mode, plate)]
+        cell[0] += 1
+        if r["category"] == "excluded_measurable":
+            cell[1] += 1
+            cell[2] += _right_if_passed(r)
+    if not cells:
+        return ""
+    lines = ["", "#### excluded measurable, by mode and plate", "",
+             "| mode | plate | measurable | excluded | of them right all the same |", "|---|---|---|---|---|"]
+    for (mode, plate), (n, excl, right) in sorted(cells.items(), key=lambda kv: (kv[0][0] != "one factor", kv[0][1])):
+        lines.append(f"| {mode} | {plate} | {n} | {excl} ({100 * excl / n:.1f} %) | {right} |")
+    return "\n".join(lines)
+
+
 #: Problem kinds about the peak alone: an impact excluded for these only has TC and kCAL judged by every other check.
 PEAK_KINDS = frozenset({"peak_on_ringing", "peak_between_samples"})
 
@@ -294,7 +319,8 @@ def main(argv=None):
                 f"{alone}, {alone_right} of them with TC and kCAL within 1 % and {alone_wrong} not (a verdict per "
                 "quantity, the peak withheld, would keep the first and pass the second as ok)")
     text = (markdown(records, title) + "\n\n" + summary + "\n" + exclusions(records, args.worst)
-            + "\n" + time_constants(records) + "\n" + offenders(records, args.worst) + "\n")
+            + "\n" + by_mode_and_plate(records) + "\n" + time_constants(records) + "\n"
+            + offenders(records, args.worst) + "\n")
     print(text)
     stem = OUT / f"robustness-s{args.seed}-n{n}"
     stem.with_suffix(".md").write_text(text, encoding="utf-8")

@@ -72,6 +72,30 @@ def test_peak_alone_counts_the_exclusions_a_verdict_per_quantity_would_undo():
     assert robustness.peak_alone(records) == (2, 1, 1)
 
 
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_mode_and_plate_table_counts_measurable_traces_only():
+    robustness = bench_module("robustness")
+
+    def rec(category, labels, measurable=True, tc=0.0):
+        return {**_excluded("", tc, 0.0, 0.0, category=category), "labels": labels, "measurable": measurable}
+
+    records = [
+        rec("ok_right", "all|mode one factor|plate ideal"),
+        rec("excluded_measurable", "all|mode one factor|plate ideal"),  # right all the same
+        rec("excluded_measurable", "all|mode random|plate 3-10 kHz", tc=2.0),  # would have been wrong
+        rec("ok_right", "all|mode random|plate 10-30 kHz"),
+        rec("ok_right", "all|mode random|plate 10-30 kHz"),
+        rec("excluded_marginal", "all|mode random|plate ideal", measurable=False),  # not measurable: not counted
+    ]
+    table = robustness.by_mode_and_plate(records).splitlines()
+    assert "| one factor | ideal plate | 2 | 1 (50.0 %) | 1 |" in table
+    assert "| random | resonant plate | 3 | 1 (33.3 %) | 0 |" in table
+    assert not any(line.startswith("| random | ideal plate") for line in table)
+    assert table.index("| one factor | ideal plate | 2 | 1 (50.0 %) | 1 |") < table.index(
+        "| random | resonant plate | 3 | 1 (33.3 %) | 0 |")
+    assert robustness.by_mode_and_plate(records[5:]) == ""
+
+
 def _tau(category, source, true, tau, se):
     return {"category": category, "tau_source": source, "tau_true_s": true, "tau_s": tau, "tau_se_s": se}
 
