@@ -868,7 +868,7 @@ def test_zoo_contact_front_ringing_near_half_the_sample_rate(name, seed, overrid
 #: lifted as a spike's: force_top keeps that sample now, ok and right. The spike's top between samples where
 #: force_top keeps a sample (here the ramp's last sample is a lower maximum, the largest sample on the smooth part)
 #: is judged by half a rise and passes: a strict xfail, so a fix shows (judging the whole rise excluded 168 right
-#: traces of seeds 0-3, README "Robustness (issue 9)").
+#: traces of seeds 0-3, docs/robustness-history.md, cfca54b).
 ZOO_SPIKE_TOP = [
     # with the end's bent hinge (contact._bent_corner) excluded for its end (TC known to +-1 % only; the line's
     # end had it +1.13 %), not for its peak, still -5.8 %: the class stands (README, "What remains")

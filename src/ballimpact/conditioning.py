@@ -1082,7 +1082,7 @@ def _adc_step_problems(x, fs, noise, step, contact: ContactResult, t0_s, scale) 
     budget, and the end is not determined to 1 % (at half that fraction the
     map's seed 1 lost 57 more of its 400 traces, every one of them right, TC
     within 0.8 %). A jump crosses many steps within a sample and passes. Not
-    in the paper; see the README, "Robustness (issue 9)".
+    in the paper; see docs/robustness-history.md, "A coarse ADC".
 
     Parameters
     ----------
@@ -1498,7 +1498,7 @@ def _lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutof
     low-passed at 11.8 kHz) had its low-passed spike at 90 % of the later maximum reported, and its true top 5.2 %
     above that maximum: the kernel and the sampling took 14.5 % from it. The same rule excludes forces whose spike,
     at 90-98 % of the later maximum, was not their peak (82 of the 176 traces it moved over zoo seeds 0-14; see
-    the README, "Robustness (issue 9)").
+    docs/robustness-history.md, the round of 8a87902).
     """
     if math.isinf(cutoff):
         return []
@@ -2548,7 +2548,7 @@ def _peak_between_samples(xc, fs, noise, lifted=True):
     whole rise there (bench/spike_top_map.py; zoo seed 4's ok spike top at
     -5.4 % was of this class) excluded 168 more measurable traces of the
     zoo's seeds 0-3, all right, and good impacts of the synthetic sessions
-    (README, "Robustness (issue 9)").
+    (docs/robustness-history.md, cfca54b).
     """
     if xc.size < 3:
         return []
@@ -3120,8 +3120,8 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
 
     A low-pass whose delay is under a sample or two (at 20-40 kHz, near half
-    the rate) leaves little trace in the samples and is not always seen (the README,
-    "Robustness"). Not in the paper.
+    the rate) leaves little trace in the samples and is not always seen (README,
+    "What remains" under "Robustness (issue 9)"). Not in the paper.
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
@@ -3201,7 +3201,7 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     plate (PLATE_RINGING: its undoing is tried); below, or above fs / 2 seen
     through its alias, the ringing is named and the start not determined
     (CONTACT_END_UNDETERMINED, no evidence: an alias undone is wrong). Not
-    in the paper; see the README, "Robustness (issue 9)".
+    in the paper; see docs/robustness-history.md, "A contact front ringing near half the sample rate".
     """
     k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))
     a = k0 + int(math.ceil(BUCKLING_TIME_S * fs)) + FAST_RING_GAP_SAMPLES

@@ -1021,8 +1021,8 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     nonlinear least squares from a grid) or, with ``resonance=False``,
     through an ideal plate. Comparing the two says whether the samples need
     the plate's ringing, and the fit says how far the ringing lifts a sample
-    above the force. Not in the paper; see the README,
-    "Robustness (issue 9)".
+    above the force. Not in the paper; see the README, "Plate resonance", and
+    docs/robustness-history.md.
 
     Parameters
     ----------
