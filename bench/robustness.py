@@ -257,7 +257,9 @@ def replay(spec: str):
           f"measurable {t.measurable}, fault {t.fault!r}, marginal {t.marginal!r}, second {t.second_fraction:.3f}")
     print(f"  result: {result.status} {result.reason!r}: TC {result.contact_time_ms:.4f} ms, "
           f"kCAL {result.kcal_N_per_V:.3f} N/V, peak {result.peak_force_N:.1f} N, tau {result.tau_s:.4g} s, "
-          f"hum {result.hum_amplitude_V:.4g} V, noise {result.noise_rms_V:.3g} V")
+          f"hum {result.hum_amplitude_V:.4g} V, noise {result.noise_rms_V:.3g} V, plate undone "
+          + (f"{result.plate_resonance_hz:.0f} Hz (damping {result.plate_damping_ratio:.3f})"
+             if math.isfinite(result.plate_resonance_hz) else "none"))
     print(f"  judged: {j.category}; errors " + ", ".join(f"{k} {100 * v:+.3f} %" for k, v in j.errors.items()))
     print(f"  session folder written to {folder.relative_to(ROOT)}")
 
