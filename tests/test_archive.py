@@ -180,6 +180,15 @@ def test_metadata_attributes(ds):
     assert attrs["session_id"] == "fixture-session-01"
     assert json.loads(attrs["raw_sha256"])["session.yaml"] == "0" * 64
     assert attrs["session_date"] == "2026-11-21"
+    assert json.loads(attrs["validate_warnings"]) == []  # the fixture's session gave none
+
+
+def test_validate_warnings_are_kept_as_json_text(tmp_path):
+    warned = ["session.yaml: key 'daq.bandwidth_hz' not given, and at 25 kHz ...", "a second one, with 'quotes'"]
+    ds = add_metadata(xr.Dataset(), session_id="s", session_yaml_text="", raw_sha256={}, synthetic=False, history="h",
+                      validate_warnings=warned)
+    back = open_dataset(write_dataset(ds, tmp_path / "w.nc"))
+    assert json.loads(back.attrs["validate_warnings"]) == warned
 
 
 @pytest.mark.parametrize(
@@ -187,6 +196,8 @@ def test_metadata_attributes(ds):
     [
         ({"session_id": ""}, "session_id must be a non-empty string"),
         ({"raw_sha256": {"a": 1}}, "raw_sha256 must map str paths"),
+        ({"validate_warnings": "one warning, not a list"}, "validate_warnings must be a sequence of str"),
+        ({"validate_warnings": ["ok", 3]}, "validate_warnings must be a sequence of str"),
     ],
 )
 def test_metadata_validation(kwargs, match):

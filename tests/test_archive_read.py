@@ -82,3 +82,14 @@ def test_impact_lookup_and_exclusions(ds):
     assert np.isnan(ar.impact_value(ds, "cor", 1))
     assert ar.ball_value(ds, "mass_kg", "b2") == 0.058
     assert ar.ball_array(ds, "model_cor", "b1") is None
+
+
+@pytest.mark.parametrize(("attrs", "expected"), [
+    ({"validate_warnings": '["w1", "w2"]'}, ["w1", "w2"]),
+    ({"validate_warnings": "[]"}, []),
+    ({}, []),  # an archive written before the attribute existed
+    ({"validate_warnings": "not json"}, []),
+    ({"validate_warnings": '{"a": 1}'}, []),
+])
+def test_validate_warnings_read_from_the_json_attribute(attrs, expected):
+    assert ar.validate_warnings(xr.Dataset(attrs=attrs)) == expected

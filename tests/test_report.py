@@ -1,5 +1,6 @@
 """The PDF report: page count and order, metadata, A4, text inside the page, atomic writing."""
 
+import json
 import re
 import shutil
 import subprocess
@@ -328,4 +329,55 @@ def test_summary_page_with_conditioning_sentences_fits():
                         mains_source="detected", plate_hz=np.linspace(9e3, 20e3, n))
     fig = report._summary_page(full, report._session_info(full))
     assert len(report.conditioning_summary(full)) == 3
+    assert _text_inside_page(fig) == []
+
+
+def _warned(ds, warnings):
+    out = ds.copy()
+    out.attrs = dict(ds.attrs)
+    out.attrs["validate_warnings"] = json.dumps(warnings)
+    return out
+
+
+def test_session_warnings_lose_the_raw_folder_path(ds):
+    assert report.session_warnings(ds) == []  # the fixture's session gave none
+    warned = _warned(ds, ["/data/raw/rig 2/s1/session.yaml: key 'daq.bandwidth_hz' not given, and at 25 kHz ...",
+                          "C:\\raw\\s1\\impacts.csv: column 'x' ignored", "daq.sample_rate_hz = 50000 Hz disagrees",
+                          "p1: unreadable trace: traces/p1.csv: line 3"])
+    assert report.session_warnings(warned) == [
+        "session.yaml: key 'daq.bandwidth_hz' not given, and at 25 kHz ...",
+        "impacts.csv: column 'x' ignored", "daq.sample_rate_hz = 50000 Hz disagrees",
+        "p1: unreadable trace: traces/p1.csv: line 3"]  # only the path before session.yaml or impacts.csv goes
+
+
+def test_session_warnings_are_counted_on_the_summary_page_and_open_the_exclusion_list(ds):
+    long = "session.yaml: key 'daq.bandwidth_hz' not given, and at 25 kHz a plate resonance " + "between them " * 30
+    warned = _warned(ds, [long, "short one"] + [f"warning {k}: " + "word " * 100 for k in range(8)])
+    page1 = " ".join(_page_texts(report._summary_page(warned, report._session_info(warned))))
+    assert re.search(r"Reading\s+the\s+session\s+gave\s+10\s+warnings", page1), page1
+    assert "between them" not in page1  # counted there, listed with the exclusions
+    pages = report._excluded_pages(warned, report._session_info(warned))
+    first = " ".join(_page_texts(pages[0]))
+    assert "Warnings from reading the session: 10 (usable but suspect input)" in first
+    assert "- session.yaml: key 'daq.bandwidth_hz' not given" in first and "- short one" in first
+    assert re.search(r"- and \d more\.", first)  # the rest counted
+    assert "clip01" in " ".join(" ".join(_page_texts(p)) for p in pages)  # the exclusions still follow
+    for page in pages:
+        assert _text_inside_page(page) == []
+    plain = " ".join(_page_texts(report._summary_page(ds, report._session_info(ds))))
+    assert "warning" not in plain.lower() or "Fit warning" in plain
+
+
+def test_summary_page_with_warnings_fit_warnings_conditioning_and_four_balls_fits():
+    full = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
+    full.attrs["session_description"] = "A long description of the session. " * 20
+    n = full.sizes["impact"]
+    full = _conditioned(full, tau=np.linspace(0.5, 1.5, n), tau_source="estimated", mains_hz=50.0,
+                        mains_source="detected", plate_hz=np.linspace(9e3, 20e3, n))
+    message = ("ok; only 3 impacts: the intervals are rough; only 41 of 200 bootstrap refits converged; bands "
+               "unreliable, and more words to fill a third line of the note")
+    full["fit_message"] = ("ball", np.array([message] * full.sizes["ball"], dtype=object), full["fit_message"].attrs)
+    full = _warned(full, ["a warning that needs every line it may take. " * 20] * 6)
+    fig = report._summary_page(full, report._session_info(full))
+    assert re.search(r"Reading\s+the\s+session\s+gave\s+6\s+warnings", " ".join(_page_texts(fig)))
     assert _text_inside_page(fig) == []

@@ -675,6 +675,14 @@ def test_run_summary_shows_warnings_errors_and_stale_results(mixed_run, tmp_path
     assert (f"validate warning: {lab / 'session.yaml'}: unknown key(s) 'balls.{mixed_run['first_ball']}.kb0_kn_m'"
             in block), summary
     assert re.search(r"    fit \w+: (ok|WARNING: .+)\n", block)
+    # the archive keeps the warning, for the report's summary page and later readers
+    from ballimpact import archive, archive_read, report
+
+    with archive.open_dataset(results / "lab" / "lab.nc") as ds:
+        kept = archive_read.validate_warnings(ds)
+        shown = report.session_warnings(ds)
+    assert any(f"unknown key(s) 'balls.{mixed_run['first_ball']}.kb0_kn_m'" in w for w in kept), kept
+    assert shown and "kb0_kn_m" in " ".join(shown), shown
 
     # three session-level mistakes at once: all reported, earlier results marked stale
     # (on copies of lab's raw folder and results, so that the shared run stays as it was)

@@ -29,7 +29,7 @@ import datetime
 import json
 import math
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -699,6 +699,7 @@ def add_metadata(
     raw_sha256: Mapping[str, str],
     synthetic: bool,
     history: str,
+    validate_warnings: Sequence[str] = (),
 ) -> xr.Dataset:
     """Set the CF-1.10 / ACDD-1.3 global attributes of the archive.
 
@@ -717,13 +718,18 @@ def add_metadata(
         (netCDF has no boolean attributes).
     history : str
         What made the file (e.g. the command); prefixed with the UTC time.
+    validate_warnings : sequence of str, optional
+        The warnings of reading and validating the session (usable but suspect input:
+        ``ballimpact.validation.validate_session``); stored as JSON text, so that the
+        report and later readers carry them.
 
     Returns
     -------
     xarray.Dataset
         Copy of ``ds`` with title, summary, history, source, date_created,
         references, Conventions, software_version, session_id, synthetic,
-        session_yaml, raw_sha256 and the session's date, operator and description.
+        session_yaml, raw_sha256, validate_warnings and the session's date, operator
+        and description.
     """
     from . import __version__
 
@@ -734,6 +740,8 @@ def add_metadata(
     bad = [k for k, v in dict(raw_sha256).items() if not isinstance(k, str) or not isinstance(v, str)]
     if bad:
         raise ValueError(f"raw_sha256 must map str paths to str digests; bad key(s): {bad[:3]}")
+    if isinstance(validate_warnings, str) or not all(isinstance(w, str) for w in validate_warnings):
+        raise ValueError(f"validate_warnings must be a sequence of str, got {validate_warnings!r}")
     meta = _session_meta(session_yaml_text)
     created = _utc_now()
     description = str(meta.get("description", "") or "")
@@ -763,6 +771,7 @@ def add_metadata(
             "synthetic": np.int8(1 if synthetic else 0),
             "session_yaml": session_yaml_text,
             "raw_sha256": json.dumps(dict(sorted(dict(raw_sha256).items())), indent=None),
+            "validate_warnings": json.dumps(list(validate_warnings), indent=None),
         }
     )
     return out

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 __all__ = [
@@ -18,6 +20,7 @@ __all__ = [
     "impact_position",
     "contact_series",
     "excluded_impacts",
+    "validate_warnings",
 ]
 
 #: Archive variable of each parameter with an interval -> stem of its ``<stem>_lo`` and
@@ -257,3 +260,16 @@ def excluded_impacts(ds) -> list[tuple[str, str, str]]:
         return []
     ids, keys, reasons = (text_values(ds[n].values) for n in ("impact_id", "impact_ball", "reason"))
     return [(ids[i], keys[i], reasons[i]) for i in impacts(ds, status="excluded")]
+
+
+def validate_warnings(ds) -> list[str]:
+    """The warnings of reading and validating the session (attribute ``validate_warnings``, JSON text); [] for an
+    archive written without them (before the attribute existed) or whose attribute does not parse."""
+    text = ds.attrs.get("validate_warnings")
+    if not isinstance(text, str):
+        return []
+    try:
+        values = json.loads(text)
+    except ValueError:
+        return []
+    return [str(w) for w in values] if isinstance(values, list) else []

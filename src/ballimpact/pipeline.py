@@ -669,7 +669,7 @@ def fit_balls(impacts_nc, balls, session_dir, out_nc, *, n_bootstrap: int, seed:
     logger.info("fits of %d ball types (%s) written to %s", len(balls), ", ".join(balls), out_nc)
 
 
-def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) -> None:
+def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv, snapshot_json=None) -> None:
     """
     Write the session archive ``<session_id>.nc`` and ``parameters.csv``.
 
@@ -688,6 +688,10 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
         The archive to write (atomically).
     out_parameters_csv : str or Path
         ``parameters.csv`` to write (atomically), one row per ball type.
+    snapshot_json : str or Path, optional
+        ``work/session.json`` (:func:`snapshot_session`): its warnings (those of ``ballimpact
+        validate``) go into the archive's ``validate_warnings`` attribute, and so into the report.
+        None: no warnings are stored.
     """
     from . import archive
     from .session import IMPACTS_FILE, SESSION_FILE, file_sha256, read_session
@@ -708,6 +712,8 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv) 
         raw_sha256=raw_sha256,
         synthetic=session.meta.synthetic,
         history=f"ballimpact workflow, rule archive (ballimpact.pipeline.write_archive) from {session.path}",
+        validate_warnings=(json.loads(Path(snapshot_json).read_text(encoding="utf-8")).get("warnings", [])
+                           if snapshot_json is not None else ()),
     )
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
@@ -786,7 +792,7 @@ def make_report(archive_nc, figures_dir, out_pdf, *, ds=None, images: dict | Non
 
 
 def session_outputs(session_dir, impacts_nc, balls, out_fits_nc, out_nc, out_parameters_csv, figures_dir, out_pdf,
-                    *, n_bootstrap: int, seed: int) -> None:
+                    *, n_bootstrap: int, seed: int, snapshot_json=None) -> None:
     """
     Fits, archive, figures and report of a small session in one process.
 
@@ -819,11 +825,13 @@ def session_outputs(session_dir, impacts_nc, balls, out_fits_nc, out_nc, out_par
         Bootstrap resamples for the 95 % intervals, >= 0.
     seed : int
         Seed of the bootstrap random number generator, >= 0.
+    snapshot_json : str or Path, optional
+        ``work/session.json``, whose warnings the archive keeps (:func:`write_archive`).
     """
     _check_int("n_bootstrap", n_bootstrap, 0)
     _check_int("seed", seed, 0)
     fit_balls(impacts_nc, balls, session_dir, out_fits_nc, n_bootstrap=n_bootstrap, seed=seed)
-    write_archive(session_dir, impacts_nc, [out_fits_nc], out_nc, out_parameters_csv)
+    write_archive(session_dir, impacts_nc, [out_fits_nc], out_nc, out_parameters_csv, snapshot_json=snapshot_json)
     # the archive is read once for the figures and the report, and the figures' pixels go
     # to the report in memory: the same pages as rule report, which reads the PNG files
     from . import archive

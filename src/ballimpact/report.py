@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "conditioning_summary", "impact_conditioning", "itf_comparison",
-           "write_report", "report_page_count"]
+           "session_warnings", "write_report", "report_page_count"]
 
 #: A4 portrait page size [in].
 A4_PORTRAIT_IN = (8.27, 11.69)
@@ -32,6 +33,7 @@ FIGURE_CAPTIONS = {f.file_name: (f.title, f.caption) for f in REPORT_FIGURES}
 
 
 MAX_SHOWN_CHARS = 400  # longest text taken from the data onto a page (file names, reasons) [characters]
+MAX_WARNING_LINES = 24  # lines of session warnings before the list of excluded impacts; the rest are counted [-]
 
 
 def _text(value) -> str:
@@ -323,6 +325,29 @@ def conditioning_summary(ds) -> list[str]:
     return lines
 
 
+def session_warnings(ds) -> list[str]:
+    """The warnings of reading and validating the session, as the report shows them.
+
+    The archive's ``validate_warnings`` (usable but suspect input: a sample rate too slow
+    to rule out an aliased plate without ``daq.bandwidth_hz``, a sample rate or polarity
+    the traces disagree with, an unknown key, ...), each without the raw folder's path
+    before ``session.yaml`` or ``impacts.csv``. The summary page counts them; the list of
+    excluded impacts opens with them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive (:mod:`ballimpact.archive`).
+
+    Returns
+    -------
+    list of str
+        One text per warning; empty when the session gave none (or the archive holds none).
+    """
+    return [re.sub(r"^.*?[/\\]((?:session\.ya?ml|impacts\.csv): )", r"\1", " ".join(w.split()))
+            for w in ar.validate_warnings(ds)]
+
+
 def impact_conditioning(ds, i: int) -> str:
     """How impact ``i``'s trace was conditioned, in one line for its QC page ('' when it was not).
 
@@ -421,9 +446,12 @@ def _counts_block(fig, cur, ds) -> None:
     withheld = sum(bool(_text(notes[i])) for i in ok) if len(notes) else 0
     peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
              "the peak alone, with an alias and a rounded front ruled out: impacts.csv peak_note)." if withheld else "")
+    n_warned = len(ar.validate_warnings(ds))
+    warned = (f" Reading the session gave {n_warned} warning{'s' if n_warned != 1 else ''}: see the start of that "
+              "list." if n_warned else "")
     cur.text(x0, "\n".join(textwrap.wrap(f"{n_total} impacts in the raw impacts.csv: {n_ok} good, "
                                          f"{n_total - n_ok} excluded (listed with their reasons after the figures)."
-                                         + peaks, 110)), size=9.5)
+                                         + peaks + warned, 110)), size=9.5)
     cur.skip(0.08)
     cells = [["Ball type", "Impacts", "Good", "Excluded", "Used in fit"]]
     for ball, total, ok, excl, used in _counts(ds):
@@ -713,6 +741,7 @@ def _excluded_pages(ds, info) -> list[Figure]:
                      + (f" {n_outl} of them passed the per-impact checks but sit far off their ball type's "
                         "fit\n(fit outliers, listed last with their residuals)." if n_outl else ""),
                      size=9.5, dy=0.3 + (0.34 if n_outl else 0.17))
+            _warnings_block(fig, cur, session_warnings(ds))
         for x, label in ((x_id, "Impact"), (x_ball, "Ball type"), (x_reason, "Reason")):
             fig.text(x / w, 1 - cur.y / h, label, fontsize=9, weight="bold", va="top")
         cur.skip(0.2)
@@ -734,6 +763,23 @@ def _excluded_pages(ds, info) -> list[Figure]:
     for k, page in enumerate(pages, 1):
         _footer(page, info, f"excluded impacts {k}/{len(pages)}")
     return pages
+
+
+def _warnings_block(fig, cur, warned: list[str]) -> None:
+    """The session's warnings, before the list of excluded impacts: MAX_WARNING_LINES lines at most."""
+    if not warned:
+        return
+    cur.text(_MARGIN_IN, f"Warnings from reading the session: {len(warned)} (usable but suspect input)",
+             size=9.5, weight="bold", color="#8a4b00")
+    lines: list[str] = []
+    for k, warning in enumerate(warned):
+        wrapped = textwrap.wrap("- " + warning, 110, subsequent_indent="  ")
+        if len(lines) + len(wrapped) > MAX_WARNING_LINES:
+            lines.append(f"- and {len(warned) - k} more.")
+            break
+        lines.extend(wrapped)
+    cur.text(_MARGIN_IN, "\n".join(lines), size=8.5, color="#8a4b00")
+    cur.skip(0.2)
 
 
 def _hline(fig, y_in):
@@ -802,8 +848,9 @@ def write_report(ds, out_pdf, figures_dir=None, images=None) -> Path:
     Pages: (1) title, session metadata (with a red warning for synthetic data),
     impact counts and the fitted parameters with 95 % intervals beside Table 2 of
     Goodwill & Haake 2004; (2-7) one page per figure with a caption (Figs 7, 8, 9,
-    10, 2b and kCAL); then the list of excluded impacts with their reasons; then
-    the QC appendix, one page per excluded impact with its raw trace.
+    10, 2b and kCAL); then the list of excluded impacts with their reasons, opened
+    by the session's warnings (:func:`session_warnings`); then the QC appendix, one
+    page per excluded impact with its raw trace.
 
     Parameters
     ----------

@@ -11,4 +11,5 @@ with log_to_file(snakemake.log[0]):
         fit_ncs=list(snakemake.input.fits),
         out_nc=snakemake.output.archive,
         out_parameters_csv=snakemake.output.parameters_csv,
+        snapshot_json=snakemake.input.snapshot,
     )

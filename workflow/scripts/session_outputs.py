@@ -18,4 +18,5 @@ with log_to_file(snakemake.log[0]):
         out_pdf=snakemake.output.pdf,
         n_bootstrap=int(snakemake.params.n_bootstrap),
         seed=int(snakemake.params.seed),
+        snapshot_json=snakemake.input.snapshot,
     )
