@@ -321,12 +321,17 @@ def test_impact_conditioning_line(ds, tau, source, expected):
     assert report.impact_conditioning(early, 0) == ""  # excluded before its trace was conditioned
 
 
-def test_summary_page_with_conditioning_sentences_fits():
+def _full_page_archive():
+    """Four ball types, a long description and every conditioning sentence: a full summary page."""
     full = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
     full.attrs["session_description"] = "A long description of the session. " * 20
     n = full.sizes["impact"]
-    full = _conditioned(full, tau=np.linspace(0.5, 1.5, n), tau_source="estimated", mains_hz=50.0,
+    return _conditioned(full, tau=np.linspace(0.5, 1.5, n), tau_source="estimated", mains_hz=50.0,
                         mains_source="detected", plate_hz=np.linspace(9e3, 20e3, n))
+
+
+def test_summary_page_with_conditioning_sentences_fits():
+    full = _full_page_archive()
     fig = report._summary_page(full, report._session_info(full))
     assert len(report.conditioning_summary(full)) == 3
     assert _text_inside_page(fig) == []
@@ -365,15 +370,12 @@ def test_session_warnings_are_counted_on_the_summary_page_and_open_the_exclusion
     for page in pages:
         assert _text_inside_page(page) == []
     plain = " ".join(_page_texts(report._summary_page(ds, report._session_info(ds))))
-    assert "warning" not in plain.lower() or "Fit warning" in plain
+    assert not re.search(r"Reading\s+the\s+session\s+gave", plain), plain  # no warning: no sentence
+    assert "Warnings from reading" not in " ".join(_page_texts(report._excluded_pages(ds, report._session_info(ds))[0]))
 
 
 def test_summary_page_with_warnings_fit_warnings_conditioning_and_four_balls_fits():
-    full = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
-    full.attrs["session_description"] = "A long description of the session. " * 20
-    n = full.sizes["impact"]
-    full = _conditioned(full, tau=np.linspace(0.5, 1.5, n), tau_source="estimated", mains_hz=50.0,
-                        mains_source="detected", plate_hz=np.linspace(9e3, 20e3, n))
+    full = _full_page_archive()
     message = ("ok; only 3 impacts: the intervals are rough; only 41 of 200 bootstrap refits converged; bands "
                "unreliable, and more words to fill a third line of the note")
     full["fit_message"] = ("ball", np.array([message] * full.sizes["ball"], dtype=object), full["fit_message"].attrs)
