@@ -96,7 +96,8 @@ _AK_COMMENT = (
 )
 #: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
 _CONTENT_TYPES = (
-    (("status", "reason", "peak_note", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
+    (("status", "reason", "peak_note", "withheld_note", "reason_code", "contact_time_status", "kcal_status",
+      "peak_status", "cor_status", "contact_time_u", "kcal_u", "peak_force_u", "cor_u", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
@@ -130,6 +131,11 @@ _PER_IMPACT_SCALARS = [
     ("amplifier_time_constant_se_s", "tau_se_s"),
     ("plate_resonance_hz", "plate_resonance_hz"),
     ("plate_damping_ratio", "plate_damping_ratio"),
+    # v1.2: each quantity's standard uncertainty, from its error budget (ballimpact.verdicts)
+    ("contact_time_u_ms", "contact_time_u_ms"),
+    ("kcal_u_N_per_V", "kcal_u_N_per_V"),
+    ("peak_force_u_N", "peak_force_u_N"),
+    ("cor_u", "cor_u"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
@@ -169,6 +175,16 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "peak_note": ("1", "why peak_force_N and time_to_peak_ms are withheld (NaN) on an ok impact: a problem of the "
                        "peak alone, with an alias and a rounded front ruled out (daq.bandwidth_hz, or sampled at "
                        "60 kHz or faster); else empty"),
+    "contact_time_u_ms": ("ms", "standard uncertainty of TC, from its error budget"),
+    "kcal_u_N_per_V": ("N V-1", "standard uncertainty of kCAL, from its error budget"),
+    "peak_force_u_N": ("N", "standard uncertainty of the peak force, from its error budget"),
+    "cor_u": ("1", "standard uncertainty of COR, from the gate timer's resolution"),
+    "contact_time_status": ("1", "ok, or withheld when TC's budget exceeds 1 % or a finding cannot bound it"),
+    "kcal_status": ("1", "ok, or withheld when kCAL's budget exceeds 1 % or a finding cannot bound it"),
+    "peak_status": ("1", "ok, or withheld when the peak's budget exceeds 3 % (5 % spike) or kCAL is withheld"),
+    "cor_status": ("1", "ok, or withheld when COR's budget exceeds 0.002"),
+    "reason_code": ("1", "codes of the findings that withheld or excluded something (docs/checks.md), ;-separated"),
+    "withheld_note": ("1", "on an ok impact, why each withheld quantity is withheld; else empty"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (
@@ -270,6 +286,13 @@ _CONDITIONING_TEXT = [
     ("mains_source", "mains_source"),
     ("amplifier_time_constant_source", "tau_source"),
     ("peak_note", "peak_note"),
+    # v1.2 per-quantity verdicts
+    ("contact_time_status", "contact_time_status"),
+    ("kcal_status", "kcal_status"),
+    ("peak_status", "peak_status"),
+    ("cor_status", "cor_status"),
+    ("reason_code", "reason_code"),
+    ("withheld_note", "withheld_note"),
 ]
 
 

@@ -1035,7 +1035,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(staircase)
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
-            problems.append(Problem(ProblemKind.PLATE_RINGING, undone))
+            problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:
             y, contact, plate, cutoff = undone
             peak_problems = (_undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
@@ -2339,7 +2339,8 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False,
         out.append(Problem(ProblemKind.PLATE_RINGING,
                            f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
                            f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
-                           "force and plate ringing not separable"))
+                           "force and plate ringing not separable",
+                           data={"line_hz": f_line, "amplitude_fraction": amp_line / peak, "prominence": prominence}))
     return out
 
 
