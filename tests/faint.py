@@ -48,9 +48,9 @@ def faint_trace(base: "zoo.ZooTrace", line_hz: float, fraction: float, zeta: flo
 
 def draw_faint(seed: int, index: int) -> "zoo.ZooTrace":
     """Faint-line case ``index`` of ``seed``: a benign one-factor zoo rig (noise drawn), ideal plate, sampled at
-    50-200 kHz, with a line at 1-20 kHz (log-uniform) of 0.05-1 % of the peak and damping 0.01-0.05."""
+    60-200 kHz (aliasing ruled out without daq.bandwidth_hz), with a line at 1-20 kHz (log-uniform) of 0.05-1 % of the peak and damping 0.01-0.05."""
     rng = np.random.default_rng([seed, index, 7])
-    fs = float(math.exp(rng.uniform(math.log(50e3), math.log(200e3))))
+    fs = float(math.exp(rng.uniform(math.log(60e3), math.log(200e3))))
     base = zoo.make_trace(np.random.default_rng([seed, index]), "noise", label=f"faint {seed}:{index}",
                           plate_hz=None, sample_rate_hz=fs)
     f = float(math.exp(rng.uniform(math.log(1e3), math.log(20e3))))

@@ -2253,7 +2253,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined: the corrected signal in the "
                                f"{1e3 * FOOT_CHECK_S:.2g} ms {side} it stands {sigma:.3g} standard errors out of the "
-                               f"noise ({seen}, or a baseline wrong there): the force may {may}"))
+                               f"noise ({seen}, or a baseline wrong there): the force may {may}",
+                               data={"beyond": where}))
     # against the straight line's end (the bent hinge's sits earlier on an end whose slope eases; the threshold
     # was set on the line's)
     late = contact.curve_end_s - (contact.line_end_s if math.isfinite(contact.line_end_s) else contact.end_s)

@@ -82,9 +82,11 @@ def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -
     fault = False
     for p in findings:
         check = check_of(p.kind)
-        if check.fault:
+        if check.fault:  # excludes the impact, and nothing of it is known
             fault = True
             used.append(check.code)
+            for q in check.biases:
+                why[q].append(p.message)
             continue
         for q in tuple(check.biases) + tuple(p.data.get("also_biases", ())):
             effect = float(p.effects.get(q, math.nan))
