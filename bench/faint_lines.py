@@ -72,7 +72,7 @@ def main(argv=None):
         c = defaultdict(int)
         for r in sel:
             for q in TOL:
-                c[q, "withheld" if r[q] == "withheld_wrong" else r[q]] += 1
+                c[q, "withheld" if r[q] in ("withheld_wrong", "withheld_right") else r[q]] += 1
         name = "all" if hi == math.inf else f"{lo / 1e3:g}-{hi / 1e3:g} kHz"
         cells = [name, len(sel)] + [c[q, o] for q in TOL for o in ("ok_right", "ok_wrong", "lost", "withheld")]
         print("| " + " | ".join(str(x) for x in cells) + " |")

@@ -212,3 +212,41 @@ def test_a_time_constant_outlier_excludes_the_impact():
                               ProblemKind.TIME_CONSTANT_OUTLIER)
     assert out["status"] == ["excluded"] and out["reason"] == ["time constant unlike the session's"]
     assert check_of(ProblemKind.TIME_CONSTANT_OUTLIER).biases == ("contact_time", "kcal", "peak")
+
+
+# ------------------------------------------------------------------ whole traces (tests/zoo.py, tests/faint.py)
+
+import zoo  # noqa: E402
+import faint  # noqa: E402
+
+#: Zoo traces (seed 0, developed on) whose TC is right and was thrown away with the whole impact before per-quantity
+#: verdicts, each for one class of finding: (SEED:INDEX, the kind found).
+KEPT_NOW = [
+    ("0:74", "aliasing"),  # daq.bandwidth_hz above fs / 2: an alias moves kCAL, not TC
+    ("0:576", "undershoot_not_measurable"),  # the amplifier's time constant not measurable: kCAL and the peak
+    ("0:1520", "plate_ringing"),  # a plate line whose effect on TC is bounded
+]
+
+
+@pytest.mark.parametrize("name, kind", KEPT_NOW, ids=[k for _, k in KEPT_NOW])
+def test_a_finding_that_cannot_move_tc_keeps_the_impact_in_the_fit(name, kind):
+    seed, index = (int(v) for v in name.split(":"))
+    result, j = zoo.run_trace(zoo.trace_for(seed, index))
+    assert kind in {p.kind.value for p in result.problems}, result.reason_code
+    assert result.status == "ok", result.reason
+    assert j.outcomes["tc"] == "ok_right", j.errors
+    assert not j.wrong, (j.errors, j.outcomes)
+
+
+
+#: Faint-line cases (tests/faint.py, seed 0) across the band: every quantity kept and right.
+FAINT_KEPT = [0, 4, 6, 9, 16, 19]
+
+
+@pytest.mark.parametrize("index", FAINT_KEPT)
+def test_a_faint_plate_line_keeps_every_quantity(index):
+    trace = faint.draw_faint(0, index)
+    result, j = zoo.run_trace(trace)
+    assert result.status == "ok", (trace.label, result.reason)
+    assert all(o == "ok_right" for o in j.outcomes.values()), (trace.label, j.outcomes, j.errors,
+                                                                  result.withheld_note)

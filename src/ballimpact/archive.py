@@ -96,7 +96,7 @@ _AK_COMMENT = (
 )
 #: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
 _CONTENT_TYPES = (
-    (("status", "reason", "peak_note", "withheld_note", "reason_code", "contact_time_status", "kcal_status",
+    (("status", "reason", "peak_note", "withheld_note", "reason_code", "finding_", "contact_time_status", "kcal_status",
       "peak_status", "cor_status", "contact_time_u", "kcal_u", "peak_force_u", "cor_u", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
@@ -185,6 +185,12 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "cor_status": ("1", "ok, or withheld when COR's budget exceeds 0.002"),
     "reason_code": ("1", "codes of the findings that withheld or excluded something (docs/checks.md), ;-separated"),
     "withheld_note": ("1", "on an ok impact, why each withheld quantity is withheld; else empty"),
+    "check": ("1", "code of a check of the registry (docs/checks.md)"),
+    "finding_count": ("1", "how many findings of this check this impact has (0: none)"),
+    "finding_message": ("1", "the first finding's message (empty: none)"),
+    "finding_effect_contact_time": ("1", "largest relative effect on TC the check estimated (NaN: none or unknown)"),
+    "finding_effect_kcal": ("1", "largest relative effect on kCAL the check estimated (NaN: none or unknown)"),
+    "finding_effect_peak": ("1", "largest relative effect on the peak the check estimated (NaN: none or unknown)"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (
@@ -427,6 +433,7 @@ class _ImpactColumns:
 
     def __init__(self):
         self.ids = []
+        self.findings = []  # per impact: {check code: (count, message, effects)}
         self.text = {k: [] for k in _TEXT_PER_IMPACT + [name for name, _ in _CONDITIONING_TEXT]}
         self.scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
         self.series = {k: [] for k in _SERIES}
@@ -459,6 +466,12 @@ class _ImpactColumns:
             self.scalars[name].append(value)
         self._add_series(r, impact_id)
         self._add_raw(r, impact_id, max_raw_samples)
+        found = {}
+        for p in getattr(r, "problems", []) or []:
+            count, message, effects = found.get(p.kind.value, (0, p.message, {}))
+            merged = {q: max(effects.get(q, -math.inf), float(v)) for q, v in p.effects.items()}
+            found[p.kind.value] = (count + 1, message, {**effects, **merged})
+        self.findings.append(found)
 
     def _add_series(self, r, impact_id) -> None:
         n = _as_1d(getattr(r, "time_s", None)).size
@@ -503,9 +516,34 @@ class _ImpactColumns:
         data_vars["model_force_N"] = (dims, np.full((n_impact, n_sample), np.nan))
         data_vars["model_agreement_fraction"] = ("impact", np.full(n_impact, np.nan))
         data_vars["model_rms_N"] = ("impact", np.full(n_impact, np.nan))
+        data_vars.update(_findings_variables(self.findings))
         data_vars["raw_time_s"] = (raw_dims, _pad(self.raw_t, n_raw, np.float32))
         data_vars["raw_voltage_V"] = (raw_dims, _pad(self.raw_v, n_raw, np.float32))
         return xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(self.ids))})
+
+
+def _findings_variables(findings: list) -> dict:
+    """The (impact, check) variables of every finding: how many, the first message, and each estimated effect."""
+    from .checks import CHECKS
+
+    codes = list(CHECKS)
+    n = len(findings)
+    count = np.zeros((n, len(codes)), dtype=np.int16)
+    message = np.full((n, len(codes)), "", dtype=object)
+    effects = {q: np.full((n, len(codes)), np.nan) for q in ("contact_time", "kcal", "peak")}
+    for i, found in enumerate(findings):
+        for code, (k, text, eff) in found.items():
+            j = codes.index(code)
+            count[i, j], message[i, j] = k, text
+            for q, v in eff.items():
+                if q in effects and math.isfinite(v):
+                    effects[q][i, j] = v
+    dims = ("impact", "check")
+    out = {"finding_count": (dims, count), "finding_message": (dims, _text_array(message.ravel()).reshape(n, -1)
+                                                                if n else np.empty((0, len(codes)), dtype=object))}
+    out.update({f"finding_effect_{q}": (dims, v) for q, v in effects.items()})
+    out["check"] = ("check", _text_array(codes))
+    return out
 
 
 def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:
