@@ -244,7 +244,7 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           thresholds=(_t("processing", "PHYSICAL_BOUNDS", "ms (contact_time_ms)", "plausible TC"),),
           test="tests/test_processing.py -k bounds"),
     Check(ProblemKind.NO_CALIBRATION, "no calibration", "a finite positive voltage integral over the contact",
-          (_K, _P), test="tests/test_calibration.py"),
+          (_TC, _K, _P, _C), fault=True, test="tests/test_calibration.py"),
     Check(ProblemKind.KCAL_OUT_OF_RANGE, "kCAL out of range", "kCAL against plate.kcal_range_N_per_V", (_K, _P),
           test="tests/test_processing.py -k kcal_range"),
     Check(ProblemKind.KCAL_OUTLIER, "kCAL outlier", "kCAL against the session's median", (_K, _P),

@@ -162,9 +162,9 @@ class ImpactResult:
             v.status[q] for q in QUANTITIES)
         self.reason_code = ";".join(v.codes)
         withheld = [q for q in QUANTITIES if v.status[q] != "ok"]
-        if v.excluded:  # every finding, faults first, then what withheld TC or COR by its budget alone
+        if v.excluded:  # the faults; without one, every finding and what withheld TC or COR by its budget alone
             messages = [p.message for p in self.problems if check_of(p.kind).fault]
-            messages += [p.message for p in self.problems]
+            messages = messages or [p.message for p in self.problems]
             messages += [m for q in ("contact_time", "cor") if q in withheld for m in v.why[q].split("; ") if m]
             self.reason, self.withheld_note, self.peak_note = "; ".join(dict.fromkeys(messages)), "", ""
         else:
