@@ -442,10 +442,12 @@ def _counts_block(fig, cur, ds) -> None:
     ok = ar.impacts(ds, status="ok") if n_total else np.empty(0, dtype=int)
     n_ok = ok.size
     cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
-    notes = ar.text_values(ds["peak_note"].values) if "peak_note" in ds else []
-    withheld = sum(bool(_text(notes[i])) for i in ok) if len(notes) else 0
-    peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
-             "the peak alone, with an alias and a rounded front ruled out: impacts.csv peak_note)." if withheld else "")
+    peaks = ""
+    for q, what in (("kcal", "kCAL (and the force in newtons)"), ("peak", "peak force")):
+        status = ar.text_values(ds[f"{q}_status"].values) if f"{q}_status" in ds else np.array([])
+        n = int(sum(status[i] == "withheld" for i in ok)) if status.size else 0
+        peaks += (f" The {what} of {n} good impact{'s' if n != 1 else ''} is withheld (impacts.csv withheld_note, "
+                  "reason_code)." if n else "")
     n_warned = len(ar.validate_warnings(ds))
     warned = (f" Reading the session gave {n_warned} warning{'s' if n_warned != 1 else ''}: see the start of that "
               "list." if n_warned else "")
