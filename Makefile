@@ -9,7 +9,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 CORES ?= 2
 
-.PHONY: run test bench mutation clean-results setup check-python
+.PHONY: run test docs bench mutation clean-results setup check-python
 
 setup: $(VENV)/.installed
 
@@ -32,6 +32,16 @@ TEST_WORKERS ?= 2
 
 test: setup
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
+
+# The documentation site into site/ (not committed), strict: a warning (broken link, missing
+# page, unresolved API reference) fails the build. The figures are made from the demo
+# session by docs/gen_figures.py, called by docs/hooks.py when they are missing or stale.
+$(VENV)/.docs-installed: $(VENV)/.installed
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
+	touch $@
+
+docs: $(VENV)/.docs-installed
+	NO_MKDOCS_2_WARNING=1 $(BIN)/python -m mkdocs build --strict --site-dir site
 
 bench: setup
 	$(BIN)/python bench/run.py
