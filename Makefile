@@ -25,9 +25,9 @@ $(VENV)/.installed: pyproject.toml | check-python
 run: setup
 	$(BIN)/snakemake --cores $(CORES)
 
-# the suite in TEST_WORKERS processes (pytest-xdist): on 027a4de, on a 2-core machine, `pytest -q` took 9 min 26 s
-# and `pytest -q -n 2` 5 min 43 s. The fixtures that run a whole workflow (the demo run, mixed_run, the reruns' run)
-# are built once per test run, not once per worker (tests/shared_fixture.py).
+# the suite in TEST_WORKERS processes (pytest-xdist; its time: docs/development.md). The fixtures that run a whole
+# workflow (the demo run, mixed_run, the reruns' run) are built once per test run, not once per worker
+# (tests/shared_fixture.py).
 TEST_WORKERS ?= 2
 
 test: setup
@@ -51,7 +51,7 @@ bench: setup
 # their own fast tests (mutmut 3, config in pyproject.toml [tool.mutmut]); not part of
 # `make test` or CI. By default a seeded random sample of MUTATION_SAMPLE mutants per module
 # (score with a 95 % interval); MUTATION_SAMPLE=all runs the whole selection (hours on 2
-# cores). Budget and measured time: README "Mutation testing".
+# cores). Budget and measured time: docs/mutation-testing.md.
 MUTATION_SAMPLE ?= 150
 MUTATION_SEED ?= 0
 mutation: setup

@@ -355,7 +355,7 @@ def impact_conditioning(ds, i: int) -> str:
     Noise [mV], hum [mV] at the mains frequency [Hz] and its source, the
     charge-amplifier time constant [s] and its source, and the plate resonance [kHz]
     undone. (No standard error of an estimated time constant: it does not count the
-    choice of hum model on a short record; README, Accuracy.)
+    choice of hum model on a short record; docs/accuracy.md.)
     """
     def num(name):
         return float(np.asarray(ds[name].values, dtype=float)[i])
