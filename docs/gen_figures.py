@@ -8,7 +8,8 @@ older than the code; by hand::
 ``demo``: raw/demo-2004 processed, fitted and reported in a temporary folder with the
 pipeline's own functions (the calls of rules ``session_impacts`` and
 ``session_outputs``); every figure file of the session is copied to ``<out>/demo/`` and
-every page of its report drawn to ``<out>/demo/report-page-NN.png``.
+every page of its report drawn to ``<out>/demo/report-page-NN.png``, and the report
+itself copied to ``<out>/demo/report.pdf``.
 
 ``steps``: one impact of Table 2's ball 1 at 20 m/s, simulated by the model and passed
 through the synthetic sensor chain of ``ballimpact.synth``, then each main step of the
@@ -39,7 +40,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 DEMO = REPO / "raw" / "demo-2004"
-REPORT_DPI = 60  # an A4 page of 8.27 x 11.69 in: 496 x 701 pixels
+REPORT_DPI = 90  # an A4 page of 8.27 x 11.69 in: 744 x 1052 pixels
 STEP_DPI = 110
 VIN_M_S = 20.0  # [m/s] the impact of the step figures
 FS_HZ = 100_000.0  # [Hz] its sample rate
@@ -70,6 +71,8 @@ def demo_figures(out: Path, *, bootstrap: int = 200, seed: int = 0) -> list[Path
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(png, target)
             written.append(target)
+        shutil.copyfile(work / "report.pdf", out / "report.pdf")
+        written.append(out / "report.pdf")
         ds = archive.open_dataset(work / "demo-2004.nc")
         for number, page in enumerate(report.report_pages(ds, figures_dir), 1):
             target = out / f"report-page-{number:02d}.png"
