@@ -317,14 +317,14 @@ ZOO_EDGE_BUMP = [
 
 
 #: Traces of the benchmark still ok but wrong on main (strict xfail: this test turns red when one is fixed,
-#: so that it moves to ZOO_REGRESSION): the kinds the README lists under "What remains".
+#: so that it moves to ZOO_REGRESSION): the kinds docs/robustness.md lists under "What remains".
 ZOO_STILL_WRONG: list = [
     # ("plate-15.5kHz-above-nyquist", 1, 1220, ...): excluded since the first-overshoot check, ZOO_ALIAS_EXCLUDED
     # ("plate-20.5kHz-above-nyquist", 2, 710, ...): kCAL +1.9 %, peak -14.6 %; excluded since the end's bend is
     # taken without a price, for its end (the bent hinge's uncertainty), not for the alias: the class stands
     ("plate-26.4kHz-above-nyquist", 1, 248, "26.4 kHz plate sampled at 20.1 kHz, no anti-aliasing: kCAL +1.08 %"),
     # held-out seed 28 (first run on d43008f): the plate's overshoot of the jump rides on the pre-buckling spike at
-    # 3.6 samples a period, its ringing hidden in the buckling drop (README, "What remains")
+    # 3.6 samples a period, its ringing hidden in the buckling drop (docs/robustness.md, "What remains")
     ("plate-10.1kHz-overshoot-on-the-spike-36kHz", 28, 896, "10.1 kHz plate at 36.3 kHz: peak +17.5 %"),
     # held-out seed 34 (first run on 8738d3e): noise 0.7 % of a 0.55 V peak and a 12.4 kHz plate at 3.9 samples a
     # period that nothing identifies; its rise puts the start 0.68 samples late (the hinge's own uncertainty 0.1), and
@@ -877,7 +877,7 @@ def test_zoo_contact_front_ringing_near_half_the_sample_rate(name, seed, overrid
 #: traces of seeds 0-3, docs/robustness-history.md, cfca54b).
 ZOO_SPIKE_TOP = [
     # with the end's bent hinge (contact._bent_corner) excluded for its end (TC known to +-1 % only; the line's
-    # end had it +1.13 %), not for its peak, still -5.8 %: the class stands (README, "What remains")
+    # end had it +1.13 %), not for its peak, still -5.8 %: the class stands (docs/robustness.md, "What remains")
     ("spike-lower-maximum-at-23.9kHz", 5,
      dict(ball="pressurised", scale=(0.9567, 1.166, 1.023, 1.014, 1.089), vin_m_s=29.28, sample_rate_hz=23854.0,
           noise_V=0.01616, mode="noise"), "ok but wrong on ffc2770: peak -5.7 % (the spike's top between samples)",

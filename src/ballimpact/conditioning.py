@@ -3122,8 +3122,8 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
 
     A low-pass whose delay is under a sample or two (at 20-40 kHz, near half
-    the rate) leaves little trace in the samples and is not always seen (README,
-    "What remains" under "Robustness (issue 9)"). Not in the paper.
+    the rate) leaves little trace in the samples and is not always seen (docs/robustness.md,
+    "What remains"). Not in the paper.
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
