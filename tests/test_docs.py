@@ -154,7 +154,7 @@ def test_every_page_of_the_docs_folder_is_in_the_nav():
     in_nav = set(_nav_pages())
     assert in_nav <= pages, sorted(in_nav - pages)
     # a page written by a generator may exist before it is added to the nav
-    assert pages - in_nav <= {"checks.md"}, sorted(pages - in_nav)
+    assert pages == in_nav or pages - in_nav == set(), sorted(pages - in_nav)
 
 
 @pytest.mark.parametrize("page", ["accuracy.md", "coverage.md", "robustness.md"])
