@@ -56,7 +56,7 @@ FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the ti
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
 _KNOWN_SECTION_KEYS = {
-    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
+    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s", "resonance_hz", "damping_ratio"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz", "bandwidth_hz"},
     "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
     "rig": {"orientation", "air_density_kg_m3"},
@@ -156,6 +156,8 @@ class SessionMeta:
     air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
     time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
     bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency at the ADC; None = unknown
+    # v1.2: ([Hz], [-]) optional `plate.resonance_hz` and `plate.damping_ratio` (a tap test); None = identify them
+    plate_resonance: tuple[float, float] | None = None
 
 
 @dataclass
@@ -451,7 +453,7 @@ def _parse_date(data: dict, file: str) -> str:
     return date
 
 
-def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None, float | None]:
+def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None, float | None, tuple | None]:
     plate = _section(data, "plate", file)
     polarity_value = _require(plate, "polarity", "plate.polarity", file)
     polarity_number = _to_float(polarity_value)
@@ -470,8 +472,21 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
     time_constant_s = None
     if plate.get("time_constant_s") is not None:
         time_constant_s = _number(plate["time_constant_s"], "plate.time_constant_s", file, positive=True)
+    stated = [plate.get(k) is not None for k in ("resonance_hz", "damping_ratio")]
+    resonance = None
+    if any(stated):
+        if not all(stated):
+            given, missing = ("resonance_hz", "damping_ratio") if stated[0] else ("damping_ratio", "resonance_hz")
+            raise SessionError(f"{file}: key 'plate.{given}' is given without 'plate.{missing}': a tap test gives "
+                               "both (state both, or neither to identify the plate from the session)")
+        fn = _number(plate["resonance_hz"], "plate.resonance_hz", file, positive=True)
+        zeta = _number(plate["damping_ratio"], "plate.damping_ratio", file, positive=True)
+        if not zeta < 1.0:
+            raise SessionError(f"{file}: key 'plate.damping_ratio' must be below 1 (a resonance rings), "
+                               f"got {plate['damping_ratio']!r}")
+        resonance = (fn, zeta)
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
-    return int(polarity_number), kcal_range, time_constant_s
+    return int(polarity_number), kcal_range, time_constant_s, resonance
 
 
 def alias_risk(sample_rate_hz: float) -> str:
@@ -657,7 +672,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         if own:
             _raise_collected(collect.problems)
         return None
-    polarity, kcal_range, time_constant_s = plate
+    polarity, kcal_range, time_constant_s, resonance = plate
     sample_rate_hz, adc, mains_hz, bandwidth_hz = daq
     spacing_m, resolution_s, distance_to_plate_m = gates
     orientation, air_density = rig
@@ -681,6 +696,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         air_density_kg_m3=air_density,
         time_constant_s=time_constant_s,
         bandwidth_hz=bandwidth_hz,
+        plate_resonance=resonance,
     )
 
 
