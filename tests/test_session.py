@@ -5,6 +5,7 @@ import hashlib
 import math
 import os
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -605,6 +606,32 @@ def test_key_typo_names_the_key_it_misses(tmp_path):
                                             r"effect"):
         session = read_session(folder)
     assert session.meta.balls["pressureless"].kb0_N_m is None
+
+
+def test_top_level_typo_names_the_key_it_resembles(tmp_path):
+    """raw-format v1.2: a misspelt top-level key (descripton:) is warned about with the key it resembles."""
+    meta = copy.deepcopy(BASE_META)
+    meta.pop("description", None)
+    meta["descripton"] = "Four ball types"
+    meta["lab_notes"] = "kept"
+    folder = make_session(tmp_path, meta=meta)
+    with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'descripton', 'lab_notes'.*did you mean "
+                                            r"'description'\? 'descripton' has no effect") as caught:
+        session = read_session(folder)
+    assert session.meta.description == ""
+    assert session.meta.raw["lab_notes"] == "kept"
+    assert not any("'lab_notes' has no effect" in str(w.message) for w in caught)
+
+
+def test_known_top_level_keys_give_no_unknown_key_warning(tmp_path):
+    meta = copy.deepcopy(BASE_META)
+    meta.update(operator="A. Tester", description="x", synthetic=False,
+                rig={"orientation": "horizontal"})
+    folder = make_session(tmp_path, meta=meta)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_session(folder)
+    assert not [w for w in caught if "unknown key" in str(w.message)]
 
 
 # --------------------------------------------------------- v1.1 flight and ITF keys

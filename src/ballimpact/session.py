@@ -62,6 +62,9 @@ _KNOWN_SECTION_KEYS = {
     "rig": {"orientation", "air_density_kg_m3"},
 }
 _KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m", "itf_rebound_cm"}
+#: The top-level keys of session.yaml (raw-format.md): any other is kept, and warned about.
+_KNOWN_TOP_KEYS = {"session_id", "date", "operator", "description", "synthetic", "plate", "daq", "gates", "rig",
+                   "balls"}
 #: File names a lab may give session.yaml / impacts.csv by mistake (near misses).
 _NEAR_MISS_NAMES = {
     SESSION_FILE: ("session.yml", "Session.yaml", "SESSION.yaml", "session.YAML", "session.yaml.txt",
@@ -368,6 +371,11 @@ def _text(value, dotted: str, file: str) -> str:
 
 
 def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> None:
+    """Warn of the keys of ``mapping`` that are not in ``known``, naming the known key each resembles.
+
+    ``prefix`` is the dotted path of the mapping ("" for the top level of session.yaml).
+    """
+    dotted = (lambda k: f"{prefix}.{k}") if prefix else str
     unknown = [str(k) for k in mapping if k not in known]
     if unknown:
         import difflib
@@ -377,9 +385,9 @@ def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> Non
         for k in unknown:  # a near miss, e.g. kb0_kn_m for kb0_kN_m: say what it silently changes
             close = lowered.get(k.lower()) or next(iter(difflib.get_close_matches(k, sorted(known), 1, 0.8)), None)
             if close is not None:
-                hints.append(f"did you mean '{prefix}.{close}'? '{prefix}.{k}' has no effect")
+                hints.append(f"did you mean '{dotted(close)}'? '{dotted(k)}' has no effect")
         warnings.warn(
-            f"{file}: unknown key(s) {', '.join(repr(f'{prefix}.{k}') for k in unknown)} "
+            f"{file}: unknown key(s) {', '.join(repr(dotted(k)) for k in unknown)} "
             f"(kept in raw, not used; known: {', '.join(sorted(known))})"
             + "".join(f"; {h}" for h in hints),
             SessionWarning,
@@ -653,6 +661,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
     synthetic = collect(_parse_synthetic, data, file)
     operator = collect(_text, data.get("operator"), "operator", file)
     description = collect(_text, data.get("description"), "description", file)
+    _warn_unknown(data, _KNOWN_TOP_KEYS, "", file)
     if len(collect.problems) > n_before:
         if own:
             _raise_collected(collect.problems)
