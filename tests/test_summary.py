@@ -156,3 +156,34 @@ def test_large_residual_is_a_fit_warning():
     text = parameters_table(_ball_ds([row])).loc[0, "fit_warnings"]
     assert text.startswith("TC residual 78.0 % RMS (> 5 %): the model does not describe these impacts")
     assert "COR residual" not in text
+
+
+def _exclusions(tmp_path, reasons):
+    folder = _results(tmp_path)
+    pd.DataFrame({"impact_id": [f"i{k}" for k in range(len(reasons))], "ball": ["b1"] * len(reasons),
+                  "status": ["excluded"] * len(reasons), "reason": reasons}).to_csv(folder / "impacts.csv",
+                                                                                     index=False)
+    return [line for line in session_summary(folder) if line.startswith("    excluded")]
+
+
+def test_summary_labels_carry_no_stray_value_marks(tmp_path):
+    """Issue 49: "inbound speed # ... outside physical bounds": a value's number and unit both go."""
+    lines = _exclusions(tmp_path, ["inbound speed 0.014 m/s outside physical bounds (2.0, 80.0)",
+                                   "inbound speed 0.017 m/s outside physical bounds (2.0, 80.0)",
+                                   "contact time 8.60 ms outside physical bounds (1.0, 12.0)",
+                                   "calibration factor 125.0 N/V is 50 % from the session median 250.0 N/V "
+                                   "(robust z = 10591.7)"])
+    assert lines == ["    excluded   2 x inbound speed outside physical bounds",
+                     "    excluded   1 x contact time outside physical bounds",
+                     "    excluded   1 x calibration factor far from the session median"], lines
+
+
+def test_summary_says_why_a_trace_is_unreadable(tmp_path):
+    """Issue 49: "unreadable trace" alone hid the cause (an unknown extension); the file name is left out."""
+    lines = _exclusions(tmp_path, [
+        "unreadable trace: raw/s1/traces/shot05.lvm: unknown trace file extension '.lvm' (expected .csv or .tdms)",
+        "unreadable trace: raw/s1/traces/shot06.lvm: unknown trace file extension '.lvm' (expected .csv or .tdms)",
+        "unreadable trace: /data/raw/s1/traces/b.csv: line 4: non-numeric value 'spike!'"])
+    assert lines == ["    excluded   2 x unreadable trace: unknown trace file extension '.lvm' "
+                     "(expected .csv or .tdms)",
+                     "    excluded   1 x unreadable trace: non-numeric value 'spike!'"], lines

@@ -141,7 +141,8 @@ def snapshot_session(session_dir, out_json) -> dict:
     # issue 14: the checks of `ballimpact validate` (trace headers only), so that its
     # warnings reach the run's output and summary; every session-level problem at once
     quick = validate_session(session_dir, read_traces=False)
-    for message in quick.warnings:
+    found = list(quick.causes) + list(quick.warnings)  # a cause behind many exclusions first
+    for message in found:
         logger.warning("validate: %s", message)
     session = read_session(session_dir)
     root = session.path.resolve()
@@ -163,7 +164,7 @@ def snapshot_session(session_dir, out_json) -> dict:
         "impacts_per_ball": {key: per_ball[key] for key in session.meta.balls if per_ball[key]},
         "impact_problems": {r.impact_id: [p.message for p in r.problems] for r in session.impacts if r.problems},
         "raw_sha256": raw_sha256,
-        "warnings": list(quick.warnings),
+        "warnings": found,
     }
     if Path(out_json).parent.name == "work":
         clear_stale(Path(out_json).parent.parent)  # results/<session>/ is processed again

@@ -484,7 +484,7 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
 
 def alias_risk(sample_rate_hz: float) -> str:
     """
-    What a rig sampled below twice PLATE_RESONANCE_MAX_HZ risks without `daq.bandwidth_hz`, and what to state.
+    What a rig sampled below twice PLATE_RESONANCE_MAX_HZ risks without `daq.bandwidth_hz`, and where to find it.
 
     The text of the warnings of :func:`read_session` (daq.sample_rate_hz) and of
     ``ballimpact.validation.validate_session`` (a trace's own rate).
@@ -499,10 +499,9 @@ def alias_risk(sample_rate_hz: float) -> str:
     str
         One sentence, starting "at ... kHz".
     """
-    return (f"at {sample_rate_hz / 1e3:g} kHz a plate resonance between {sample_rate_hz / 2e3:g} and "
-            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz) reaches "
-            "the samples through its alias, which no check can tell from the force: give the anti-aliasing "
-            "filter's cut-off, or the plate's highest resonance (docs/raw-format.md)")
+    return (f"at {sample_rate_hz / 1e3:g} kHz a plate resonance above {sample_rate_hz / 2e3:g} kHz would alias "
+            "into the force unseen; give the anti-aliasing filter's cut-off or the plate's highest resonance "
+            "(data sheet, or a tap test)")
 
 
 def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None, float | None]:
@@ -523,7 +522,7 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     if daq.get("bandwidth_hz") is not None:
         bandwidth_hz = _number(daq["bandwidth_hz"], "daq.bandwidth_hz", file, positive=True)
     elif sample_rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
-        warnings.warn(f"{file}: key 'daq.bandwidth_hz' not given, and {alias_risk(sample_rate_hz)}",
+        warnings.warn(f"{file}: daq.bandwidth_hz not given: {alias_risk(sample_rate_hz)}",
                       SessionWarning, stacklevel=3)
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
     return sample_rate_hz, (adc[0], adc[1]), mains_hz, bandwidth_hz

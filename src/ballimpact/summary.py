@@ -217,16 +217,37 @@ def clear_stale(results_session_dir) -> None:
 # ---------------------------------------------------------------------- the summary
 
 
+#: Summary labels of the exclusion kinds whose message reads badly with its numbers left out.
+_SUMMARY_LABELS = {ProblemKind.KCAL_OUTLIER: "calibration factor far from the session median",
+                   ProblemKind.TOO_FEW_SAMPLES: "too few samples in the contact"}
+#: A number with its unit (the value of one impact: left out of a label) [m/s, ms, s, N/V, N, %, Hz, kHz, V, mm, m].
+_VALUE = re.compile(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?(\s*(m/s|ms|s|N/V|N|%|Hz|kHz|V|mm|m)(?![\w/]))?")
+_LOCATION = re.compile(r"^(line \d+|channel .* sample \d+|LVM segment \d+)$")
+
+
+def _trace_fault_label(first: str) -> str:
+    """"unreadable trace: <file>: line 7: <what>" -> "unreadable trace: <what>" (the file and place left out)."""
+    head, *parts = first.split(": ")
+    parts = [p for p in parts if not ("/" in p or "\\" in p or _LOCATION.match(p.strip()))]
+    return f"{head}: {parts[0]}" if parts else head
+
+
 def _reason_kind(reason: str) -> str:
-    """The summary label of an exclusion reason: its first reason, file names and numbers left out."""
+    """The summary label of an exclusion reason: its first reason, file names and values left out."""
     first = str(reason).split("; ")[0].strip()
-    if kind_of_message(first) is ProblemKind.POLARITY:
+    kind = kind_of_message(first)
+    if kind is ProblemKind.POLARITY:
         return first  # "pulse is negative: plate.polarity is +1" says it all
-    first = re.sub(r"\s*\([^()]*\d[^()]*\)", "", first)  # "(3 found: second contact at ...)" and the like
-    first = first.split(": ")[0]
-    first = re.sub(r"\S*/\S*", "...", first)
-    first = re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first)
-    return re.sub(r"\s*\([^)]*#[^)]*\)", "", first).strip()  # "(2 found)" and the like
+    if kind in _SUMMARY_LABELS:
+        return _SUMMARY_LABELS[kind]
+    first = re.sub(r"\s*[(\[][^()\[\]]*\d[^()\[\]]*[)\]](\s*N/V)?", "", first)  # "(3 found: ...)", "[100, 400] N/V"
+    if kind in (ProblemKind.TRACE_UNREADABLE, ProblemKind.TRACE_UNUSABLE):
+        first = _trace_fault_label(first)
+    else:
+        first = first.split(": ")[0]
+    first = _VALUE.sub("", first)  # "0.014 m/s", "1.200": one impact's values
+    first = re.sub(r"\S*/\S*", "...", first)  # a path
+    return " ".join(first.split())
 
 
 def _read_csv_rows(path: Path) -> list[dict]:
