@@ -18,6 +18,7 @@ from . import figures as _fig
 from . import summary as _summary
 from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
+from .model_data import force_agreement
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "conditioning_summary", "impact_conditioning", "itf_comparison",
            "session_warnings", "write_report", "report_page_count"]
@@ -505,8 +506,10 @@ def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
     undetermined = _summary.undetermined_parameters(
         {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
         fit_message)
-    warn_text = _summary.fit_warnings(fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"),
-                                      cor_rmse_pct=get("cor_rmse_pct"))
+    warn_text = _summary.fit_warnings(
+        fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"), cor_rmse_pct=get("cor_rmse_pct"),
+        values={k: get(k) for k in ("ak_lo", "ak_hi", "ac_lo", "ac_hi")},
+        force_agreement=force_agreement(ds).get(ball, math.nan))
     fitted = [
         "\n".join(textwrap.wrap(ar.ball_label(ds, ball), 22)[:2]),
         "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
@@ -517,8 +520,11 @@ def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
         _fmt(get("cor_rmse_pct"), ".2f"),
     ]
     for col, (key, fmt) in zip((4, 5, 6), (("ak_kN_m", ",.0f"), ("a", ".3f"), ("ac_kN_s_m3", ".2f"))):
-        if key.split("_")[0] in undetermined and fitted[col] != "-":
+        verdict = undetermined.get(key.split("_")[0])
+        if verdict == _summary.NOT_DETERMINED and fitted[col] != "-":
             fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined\n(at bound)"
+        elif verdict == _summary.OPEN_INTERVAL and fitted[col] != "-":
+            fitted[col] = f"{_fmt(get(key), fmt)}\ninterval open\n(reaches bound)"
     if warn_text and not all(c == "-" for c in fitted[3:7]):
         fitted[0] += f"\n(see fit warning {len(fit_notes) + 1})"
         fit_notes.append(f"Fit warning {len(fit_notes) + 1}, {ar.ball_label(ds, ball)}: {warn_text}")

@@ -126,6 +126,7 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
         Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
         a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
     """
+    from .model_data import force_agreement
     from .summary import parameter_fit_warnings
 
     n = ds.sizes.get("ball", 0)
@@ -142,7 +143,10 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
             )
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)
-    table = pd.DataFrame(data, columns=[c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS])
+    agreement = force_agreement(ds)
+    data["force_agreement"] = [agreement.get(str(b), np.nan) for b in data["ball"]]
+    columns = [c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS] + ["force_agreement"]
+    table = pd.DataFrame(data, columns=columns)
     return parameter_fit_warnings(table)[PARAMETER_COLUMNS]
 
 
