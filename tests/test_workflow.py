@@ -159,8 +159,8 @@ def test_number_of_chunks(synth_raw, tmp_path, chunk_size, min_chunks, expected)
 def test_dry_run_slurm_profile(synth_raw, tmp_path):
     """The SLURM profile's dry run needs no sbatch (the dry-run executor runs nothing)."""
     proc = run_snakemake(
-        "-n", "--profile", "profiles/slurm", *config_args(synth_raw, tmp_path / "results", "fit_batch_impacts=0"),
-        check=True
+        "-n", "--profile", "profiles/slurm", "--quiet", "host",  # job details: profiles/default hides them
+        *config_args(synth_raw, tmp_path / "results", "fit_batch_impacts=0"), check=True
     )
     assert "profiles/slurm" in proc.stdout
     assert job_counts(proc.stdout)["fit_ball"] == n_balls_used(synth_raw / "s1")

@@ -741,7 +741,9 @@ def write_catalogue(session_results_dirs: Sequence, out_csv, out_nc, out_pdf, *,
     for path in (out_csv, out_nc, out_pdf):
         Path(path).parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(out_csv) as tmp:
-        table.to_csv(tmp, index=False, float_format="%.12g")
+        from .tables import write_csv
+
+        write_csv(table, tmp)
     archive.write_dataset(ds, out_nc)
     write_catalogue_pdf(ds, table, tests, ranking, out_pdf)
     return {"table": table, "tests": tests, "ranking": ranking}

@@ -19,6 +19,7 @@ from .atomic import atomic_path
 # sub-folder of QC pages (both from the figure registry, where the workflow reads them too)
 from .figure_registry import FIGURE_STEMS, QC_DIR_NAME
 from .problems import TRACE_FILE_KINDS, has_kind
+from . import tables
 
 __all__ = [
     "FIGURE_STEMS",
@@ -38,7 +39,6 @@ __all__ = [
 ]
 
 SNAPSHOT_FORMAT_VERSION = 1  # version of the work/session.json layout
-CSV_FLOAT_FORMAT = "%.12g"  # numbers in impacts.csv / parameters.csv: 12 significant digits
 
 logger = logging.getLogger(__name__)
 
@@ -367,7 +367,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     archive.write_dataset(ds, out_nc)
     table = archive.impacts_table(ds)
     with atomic_path(out_csv) as tmp:
-        table.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+        tables.write_csv(table, tmp)
     n_excluded = int((table["status"] == "excluded").sum())
     logger.info("collected %d impacts from %d chunks: %d ok, %d excluded",
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
@@ -719,7 +719,7 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv, 
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
     with atomic_path(out_parameters_csv) as tmp:
-        archive.parameters_table(ds).to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+        tables.write_csv(archive.parameters_table(ds), tmp)
     logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
 
 
