@@ -41,14 +41,14 @@ def _agreement(session_dir: Path, work: Path) -> dict[str, tuple[float, float, i
         session_impacts(session_dir, work / "session.json", work / "impacts.csv", work / "impacts.nc")
         balls = [b for b in read_session(session_dir).meta.balls]
         with xr.open_dataset(work / "impacts.nc") as impacts:
-            used = sorted(set(str(b) for b in impacts["impact_ball"].values), key=balls.index)
+            used = sorted(set(str(b) for b in impacts["ball_type"].values), key=balls.index)
         fit_balls(work / "impacts.nc", used, session_dir, work / "fits.nc", n_bootstrap=10, seed=0)
         write_archive(session_dir, work / "impacts.nc", [work / "fits.nc"], work / "archive.nc",
                       work / "parameters.csv")
     with xr.open_dataset(work / "archive.nc") as ds:
         share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
         ok = np.array([str(s) == "ok" for s in ds["status"].values])
-        per_impact = np.array([str(b) for b in ds["impact_ball"].values])
+        per_impact = np.array([str(b) for b in ds["ball_type"].values])
     out = {}
     for ball in used:
         use = ok & (per_impact == ball) & np.isfinite(share)

@@ -216,7 +216,7 @@ def test_a_model_force_unlike_the_measured_one_is_a_fit_warning():
     `a` was warned about. The median impact's agreement below FORCE_AGREEMENT_WARNING is a fit warning."""
     ds = _ball_ds([{"ball": "b1", **GOOD, "fit_message": "ok"}, {"ball": "b2", **GOOD, "fit_message": "ok"}])
     ds["model_agreement_fraction"] = ("impact", [0.25, 0.32, 0.30, 0.2, 1.0, 0.99, 1.0])
-    ds["impact_ball"] = ("impact", np.array(["b1"] * 4 + ["b2"] * 3, dtype=object))
+    ds["ball_type"] = ("impact", np.array(["b1"] * 4 + ["b2"] * 3, dtype=object))
     ds["status"] = ("impact", np.array(["ok"] * 3 + ["excluded"] + ["ok"] * 3, dtype=object))
     table = parameters_table(ds).set_index("ball")
     assert table.loc["b1", "fit_warnings"].startswith(

@@ -932,7 +932,7 @@ def draw_qc(fig, ds, impact_id, *, wrap=90):
     """Draw the raw voltage [V] against time [ms] of one impact (:func:`fig_qc_impact`) into ``fig``;
     the title is wrapped at ``wrap`` characters."""
     i = ar.impact_position(ds, impact_id)
-    ball = ar.text_values(ds["impact_ball"].values)[i]
+    ball = ar.text_values(ds["ball_type"].values)[i]
     status = ar.text_values(ds["status"].values)[i]
     reason = ar.text_values(ds["reason"].values)[i] or "(no reason given)"
     rt = np.asarray(ds["raw_time_s"].values[i], dtype=float) if "raw_time_s" in ds else np.empty(0)

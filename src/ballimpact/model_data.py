@@ -420,7 +420,7 @@ def add_model_forces(ds):
     model_force = np.full((n_impact, n_sample), np.nan)
     agreement = np.full(n_impact, np.nan)
     rms = np.full(n_impact, np.nan)
-    balls = ds["impact_ball"].values.astype(str) if n_impact else np.array([], dtype=str)
+    balls = ds["ball_type"].values.astype(str) if n_impact else np.array([], dtype=str)
     for ball in np.unique(balls):
         params = fitted_parameters(ds, ball)
         if params is None:
@@ -462,7 +462,7 @@ def force_agreement(ds) -> dict[str, float]:
     """
     from .archive_read import text_values
 
-    ball_name = "impact_ball" if "impact_ball" in ds else "ball_of_impact"
+    ball_name = "ball_type"
     if "model_agreement_fraction" not in ds or "status" not in ds or ball_name not in ds:
         return {}
     share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)

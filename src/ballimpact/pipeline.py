@@ -436,7 +436,7 @@ def _fit_mask(ds, ball: str):
     cor = np.asarray(ds["cor"].values, dtype=float)
     with np.errstate(invalid="ignore"):
         return (
-            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
+            (np.array([str(b) for b in ds["ball_type"].values]) == ball)
             & (np.array([str(v) for v in ds["status"].values]) == "ok")
             & (vin > 0) & (tc_s > 0) & (cor > 0)
         )

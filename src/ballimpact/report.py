@@ -227,10 +227,10 @@ def _interval(value, lo, hi, fmt) -> str:
 def _force_curve_validation(ds) -> list[str]:
     """One line per ball: mean share of the contact after 0.2 ms where model and measured
     force agree within 10 % of the peak, and the mean RMS difference [N]."""
-    needed = ("model_agreement_fraction", "model_rms_N", "impact_ball", "status")
+    needed = ("model_agreement_fraction", "model_rms_N", "ball_type", "status")
     if not all(name in ds for name in needed):
         return []
-    balls = np.array([str(b) for b in ds["impact_ball"].values])
+    balls = np.array([str(b) for b in ds["ball_type"].values])
     ok = np.array([str(v) == "ok" for v in ds["status"].values])
     share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
     rms = np.asarray(ds["model_rms_N"].values, dtype=float)
@@ -784,7 +784,7 @@ def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
     """(impact_id, ball, note) of every good impact left out of its ball type's fit."""
     if ds.sizes.get("impact", 0) == 0 or "used_in_fit" not in ds:
         return []
-    ids, balls, status = (ar.text_values(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
+    ids, balls, status = (ar.text_values(ds[n].values) for n in ("impact_id", "ball_type", "status"))
     used = np.asarray(ds["used_in_fit"].values, dtype=float) > 0
     notes = ar.text_values(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
     return [(ids[i], balls[i], "left out of the fit (status ok): " + (notes[i] or "fit outlier"))
@@ -866,7 +866,7 @@ def _hline(fig, y_in):
 def _qc_page(ds, info, impact_id, number, n_total, figures_dir, images=None) -> Figure:
     w, h = A4_PORTRAIT_IN
     i = ar.impact_position(ds, impact_id)
-    ball = _text(ar.text_values(ds["impact_ball"].values)[i])
+    ball = _text(ar.text_values(ds["ball_type"].values)[i])
     reason = _text(ar.text_values(ds["reason"].values)[i]) or "(no reason given)"
     png = _figure_file(figures_dir, f"{QC_DIR_NAME}/{_fig.qc_file_stem(impact_id)}.png", images)
     use_png = png is not None

@@ -95,7 +95,7 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
         if col == "impact_id":
             data[col] = _column(ds, "impact_id", n, text=True)
         elif col == "ball":
-            data[col] = _column(ds, "impact_ball", n, text=True)
+            data[col] = _column(ds, "ball_type", n, text=True)
         elif col in ("status", "reason"):
             data[col] = _column(ds, col, n, text=True)
         elif col == "used_in_fit":
