@@ -466,9 +466,12 @@ def _four_balls_with_fit_warnings():
         values = ds[name].values.copy()
         values[0] = value
         ds[name] = ("ball", values, ds[name].attrs)
-    message = np.array(["ok"] * ds.sizes["ball"], dtype=object)
-    message[0] = "ok; only 41 of 200 bootstrap refits converged; bands unreliable"
-    message[2] = "ok; AC sits on its search bound; the data do not constrain it, treat it with care"
+    rough = ("only 3 impacts: the intervals are rough; the ak interval reaches the end of its profile grid: the data "
+             "barely constrain it; the a interval reaches the end of its profile grid: the data barely constrain it; "
+             "the kb_10mm interval reaches the end of its profile grid: the data barely constrain it")
+    message = np.array([f"ok; {rough}"] * ds.sizes["ball"], dtype=object)
+    message[0] = f"ok; only 41 of 200 bootstrap refits converged; bands unreliable; {rough}"
+    message[2] = f"ok; AC sits on its search bound; the data do not constrain it, treat it with care; {rough}"
     ds["fit_message"] = ("ball", message, ds["fit_message"].attrs)
     return ds
 

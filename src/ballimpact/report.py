@@ -40,6 +40,7 @@ MIN_DESCRIPTION_LINES = 3  # fewest lines of it when the parameter table needs t
 LEGIBLE_TABLE_PT = 6.5  # smallest font [pt] of the parameter table before the description gives up lines
 _NOTES_RESERVE_IN = 0.55  # room kept under the table and its fit warnings for the no-fit notes and the reference [in]
 MAX_NOTE_LINES = 8  # lines of one fit warning under the parameter table [-]
+MIN_NOTE_LINES = 2  # fewest lines of it when the parameter table needs the room [-]
 NOTE_CHARS = 98  # characters of a line of a fit warning (8.5 pt bold, the text width) [-]
 MAX_WARNING_LINES = 24  # lines of session warnings before the list of excluded impacts; the rest are counted [-]
 
@@ -423,34 +424,33 @@ def impact_conditioning(ds, i: int) -> str:
     return ", ".join(parts)
 
 
-def _summary_page(ds, info, description_lines: int = DESCRIPTION_LINES) -> Figure:
+def _summary_page(ds, info, description_lines: int = DESCRIPTION_LINES, note_lines: int = MAX_NOTE_LINES,
+                  compact: bool = False) -> Figure:
     """Page 1; when the parameter table would need a font below LEGIBLE_TABLE_PT, the page is laid out again with
-    fewer lines of the session description (never fewer than MIN_DESCRIPTION_LINES)."""
+    fewer lines of the session description (down to MIN_DESCRIPTION_LINES), then of each fit warning (down to
+    MIN_NOTE_LINES; parameters.csv has them in full), then with the table's explanation in brief (``compact``)."""
     fig = _page()
     cur = _Cursor(fig)
     _summary_header(fig, cur, info, description_lines)
     _counts_block(fig, cur, ds)
     cur.text(_MARGIN_IN, "Fitted model parameters (95 % intervals) beside the paper's Table 2", size=12,
              weight="bold", dy=0.28)
-    cur.text(
-        _MARGIN_IN,
-        "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
-        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
-        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
-        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
-        "TC and COR over the impacts used in the fit."
-        + _conditional_note(ds),
-        size=8, color="0.25",
-    )
+    cur.text(_MARGIN_IN, _TABLE_BRIEF + _conditional_note(ds, brief=True) if compact else _TABLE_EXPLAINED
+             + _conditional_note(ds), size=8, color="0.25")
     cur.skip(0.08)
     cells, shade, no_fit_notes, fit_notes = _parameter_cells(ds)
     # room for the fit warnings under the table (issue 14): they must stay visible
-    notes_h = sum(min(MAX_NOTE_LINES, len(textwrap.wrap(note, NOTE_CHARS))) * 8.5 * 1.45 / 72 for note in fit_notes)
+    notes_h = sum(min(note_lines, len(textwrap.wrap(note, NOTE_CHARS))) * 8.5 * 1.45 / 72 for note in fit_notes)
     missing = _parameter_table(fig, cur, cells, shade, notes_h)
     if missing > 0 and description_lines > MIN_DESCRIPTION_LINES:
         fewer = max(MIN_DESCRIPTION_LINES, description_lines - math.ceil(missing / (9.5 * 1.45 / 72)))
-        return _summary_page(ds, info, fewer)
-    _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h)
+        return _summary_page(ds, info, fewer, note_lines)
+    if missing > 0 and note_lines > MIN_NOTE_LINES and fit_notes:
+        fewer = max(MIN_NOTE_LINES, note_lines - math.ceil(missing / (8.5 * 1.45 / 72) / len(fit_notes)))
+        return _summary_page(ds, info, description_lines, fewer)
+    if missing > 0 and not compact:
+        return _summary_page(ds, info, description_lines, note_lines, compact=True)
+    _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h, note_lines)
     _footer(fig, info, "page 1: summary")
     return fig
 
@@ -603,6 +603,7 @@ def _parameter_table(fig, cur, cells, shade, notes_h) -> float:
     total_h = sum(heights) * line_h + 0.06 * len(cells)
     font = 8.0
     missing = max(0.0, total_h * LEGIBLE_TABLE_PT / font - available)
+    available = max(available, 0.5)  # the first layout of a crowded page; it is laid out again (_summary_page)
     if total_h > available:  # many ball types: shrink the table to fit the page
         scale = available / total_h
         total_h, font = available, max(5.0, 8.0 * scale)
@@ -626,7 +627,7 @@ def _parameter_table(fig, cur, cells, shade, notes_h) -> float:
     return missing
 
 
-def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h) -> None:
+def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h, note_lines: int = MAX_NOTE_LINES) -> None:
     """The no-fit and fit-warning notes under the table, and the reference."""
     h = A4_PORTRAIT_IN[1]
     x0 = _MARGIN_IN
@@ -636,8 +637,8 @@ def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h) -> None:
     for note in fit_notes:
         if cur.y < h - _MARGIN_IN - _NOTES_RESERVE_IN + notes_h:
             lines = textwrap.wrap(note, NOTE_CHARS)
-            if len(lines) > MAX_NOTE_LINES:
-                lines = lines[:MAX_NOTE_LINES - 1] + ["... (in full: parameters.csv, column fit_warnings)"]
+            if len(lines) > note_lines:
+                lines = lines[:note_lines - 1] + ["... (in full: parameters.csv, column fit_warnings)"]
             cur.text(x0, "\n".join(lines), size=8.5, color="#8a4b00", weight="bold")
     cur.skip(0.1)
     if cur.y < h - _MARGIN_IN - 0.35:
@@ -768,8 +769,19 @@ def _figure_page(ds, info, name, number, figures_dir, images=None) -> Figure:
     return fig
 
 
-def _conditional_note(ds) -> str:
-    """The sentence saying AK and a are conditional on kB(0) from the config, when one is."""
+_TABLE_EXPLAINED = (
+    "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
+    "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
+    "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
+    "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
+    "TC and COR over the impacts used in the fit.")
+_TABLE_BRIEF = ("kB = kB(0) + AK x^a (Eq. 4, x in m), cB = AC dCONT\u00b2 (Eq. 7), Table 2 units; brackets: 95 %\n"
+                "interval; RMSE: relative RMS residual (docs/outputs.md).")
+
+
+def _conditional_note(ds, *, brief: bool = False) -> str:
+    """The sentence saying AK and a are conditional on kB(0) from the config, when one is (``brief``: without
+    naming the balls)."""
     if "kb0_source" not in ds:
         return ""
     labels = [ar.ball_label(ds, b) for b in ar.balls(ds) if _text(ar.ball_value(ds, "kb0_source", b, "")) == "config"]
@@ -777,6 +789,8 @@ def _conditional_note(ds) -> str:
         return ""
     text = ("AK and a are conditional on kB(0) from config (" + ", ".join(labels)
             + "): their intervals do not include kB(0)'s uncertainty.")
+    if brief:
+        text = "AK and a of a kB(0) from config leave its uncertainty out of their intervals."
     return "\n" + "\n".join(textwrap.wrap(text, 118))
 
 
