@@ -324,7 +324,9 @@ def mixed_run(synth_raw, tmp_path_factory):
         csv_path.write_text("".join(lines), encoding="utf-8")
 
         results = tmp / "results"
-        proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+        # the failed jobs' blocks ("Error in rule ...") are read: shown with every job's details
+        proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), "--quiet", "host",
+                             check=False)
         return {"raw": raw, "results": results, "proc": proc, "hostile_ids": hostile_ids, "first_ball": first_ball}
 
     return build_once(tmp_path_factory, "mixed-run", run)

@@ -171,7 +171,7 @@ def read_session_results(session_results_dir) -> SessionResults:
         raise ValueError(f"{csv_path}: no column 'ball'")
     parameters["kb0_source"] = parameters.get("kb0_source", pd.Series([""] * len(parameters))).fillna("")
     with xr.open_dataset(nc_path, engine="netcdf4", decode_times=False, decode_timedelta=False) as opened:
-        from .archive import current_names
+        from .archive_names import current_names
 
         f = current_names(opened)  # an archive of an earlier version: impact_ball, ...
         archived = str(f.attrs.get("session_id", session_id))
