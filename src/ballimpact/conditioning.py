@@ -937,7 +937,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     plate : tuple of float, optional
         A stated resonance (frequency [Hz], damping ratio [-]), e.g. from a tap
         test (session.yaml ``plate.resonance_hz``, ``plate.damping_ratio``):
-        undone exactly on every trace, neither identified nor refined.
+        undone exactly on every trace, neither identified nor refined; where the
+        force so undone fails the undone force's checks, the resonance is
+        identified from the trace instead, as without it.
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the
@@ -1039,10 +1041,12 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         staircase += _baseline_step_problems(it.x, fs, it.fit, contact, t0_s, scale, tau_given=tau_s is not None)
         problems.extend(staircase)
         stated = []  # a stated plate's peak problems (its undone force kept, the peak withheld)
-        if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly
+        undone = None
+        if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
             undone, stated = _stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate)
-        else:
-            undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
+        if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
+            identified = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s)
+            undone = identified if identified is not None and not isinstance(identified, str) else undone
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:

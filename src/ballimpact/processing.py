@@ -560,7 +560,10 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     peak_alone = peak_can_be_withheld(meta.bandwidth_hz, res.sample_rate_hz, contact.contact_time_s,
                                       None if cond.plate is None else cond.plate.frequency_hz)
     for problem in cond.problems:
-        if problem.kind in PEAK_KINDS and not peak_alone:  # a rounded front or an alias may hide behind it
+        # with daq.bandwidth_hz stated, a peak problem where that band limit may round the front unseen (or alias)
+        # may hide a TC too long; without the key, an alias withholds kCAL and the peak (_aliasing_problem) and a
+        # rounded front is judged by the ends' own checks, as at 60 kHz or faster
+        if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone:
             problem = Problem(problem.kind, problem.message, data={**problem.data,
                                                                    "also_biases": ("contact_time", "kcal")})
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
