@@ -479,8 +479,10 @@ def test_zoo_peak_alone_withheld_when_aliasing_and_rounding_are_ruled_out(name, 
 
     trace = zoo.trace_for(seed, index)
     assert trace.rig.plate_hz is None and trace.truth.measurable, name
-    excluded, _ = zoo.run_trace(trace, tmp_path)  # bandwidth unknown: an alias is not ruled out
-    assert excluded.status == "excluded" and ProblemKind.PEAK_BETWEEN_SAMPLES in {p.kind for p in excluded.problems}
+    keyless, j0 = zoo.run_trace(trace, tmp_path)  # bandwidth unknown: an alias withholds kCAL and the peak, TC kept
+    assert_invariant(trace, keyless, j0, must_be_ok=True)
+    assert keyless.kcal_status == keyless.peak_status == "withheld", keyless.withheld_note
+    assert ProblemKind.PEAK_BETWEEN_SAMPLES in {p.kind for p in keyless.problems}
     fs = trace.sample_rate_hz
     assert peak_can_be_withheld(0.5 * fs, fs, trace.truth.tc_s) is withheld, name
     result, judgement = zoo.run_trace(trace, tmp_path, daq_extra={"bandwidth_hz": 0.5 * fs})
@@ -639,8 +641,9 @@ def test_zoo_peak_withheld_where_alias_is_ruled_out_and_the_band_limit_is_the_pl
     if withheld:
         assert judgement.category == "ok_right" and result.peak_note, (judgement.errors, result.reason)
         assert result.peak_status == "withheld" and result.peak_note.startswith("peak force"), result.peak_note
-    else:
-        assert result.status == "excluded" and "peak force" in result.reason, result.reason
+    else:  # without the key below 60 kHz: the peak and kCAL withheld (an alias not ruled out), TC kept
+        assert result.peak_status == result.kcal_status == "withheld", result.withheld_note
+        assert "peak force" in result.withheld_note + result.reason, result.withheld_note
 
 
 #: Of those, excluded since commit a56273e for their peak: a lower sampled maximum after a steep rise (its top may

@@ -1046,7 +1046,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             undone, stated = _stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate)
         if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
             identified = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s)
-            undone = identified if identified is not None and not isinstance(identified, str) else undone
+            if plate is None or (identified is not None and not isinstance(identified, str)):
+                undone = identified
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:
