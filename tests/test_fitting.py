@@ -438,7 +438,7 @@ def test_coverage_of_replicate_intervals_judged_from_both_sides(replicate_fits):
     inside the half-width interval with probability >= 0.96. Intervals half as wide miss
     about a third of the time (too many misses, about 6 inside the half); twice as wide put
     nearly every truth inside the half-width interval (~15 of 16). (16 replicates cannot
-    judge the nominal 0.95 itself to +-0.02; `bench/interval_coverage.py` does, with many more.)"""
+    judge the nominal 0.95 itself to +-0.02; `bench/coverage.py` does, with many more.)"""
     truth, fits = replicate_fits
     for name, rows in fits.items():
         value, lo, hi = rows.T

@@ -105,7 +105,7 @@ def test_no_developer_wording():
     text = README.read_text(encoding="utf-8")
     for phrase in ("the issue's targets", "on this 2-core machine", "on this machine", "../shared", "shared/spec"):
         assert phrase not in text, phrase
-    # one wording for the intervals: nominal 95 %, with the coverage measured by bench/interval_coverage.py
+    # one wording for the intervals: nominal 95 %, with the coverage measured by bench/coverage.py
     assert "nominal 95 %" in text and "read them as about 90 %" not in text
     assert "0.948-0.951 for AK, a, AC and kB(20 mm)" in text
 

@@ -22,7 +22,7 @@ What the code does (details in :func:`fit_ball_model`):
   COR scatter, fitted in the linearised model with the scatters re-estimated, the 0.95
   quantile of their statistic), in place of the F(1, nu) quantile with Satterthwaite's
   nu, which only approximates the effect of two scatters estimated from few residuals.
-  ``bench/interval_coverage.py`` measures their coverage.
+  ``bench/coverage.py`` measures their coverage.
 * A case-resampling bootstrap over impacts gives the AK-a correlation and the
   confidence bands of the model curves; :func:`model_curves` adds the impacts'
   own scatter for prediction bands.
@@ -222,7 +222,7 @@ class BallFit:
     free_kb0_intervals : dict
         When kB(0) is extrapolated: the profile intervals of the fit with kB(0) free
         alone, {"ak", "a", "ac", "kb_10mm", "kb_20mm", "kb0": (lo, hi)} (SI, as above),
-        one half of the reported hull (``bench/interval_coverage.py`` measures their coverage
+        one half of the reported hull (``bench/coverage.py`` measures their coverage
         too); else empty.
     """
 
@@ -987,7 +987,7 @@ def _calibrated_critical_values(vin, tc, cor, mass, kb0, theta, sigma_tc, sigma_
     in a linear model. At the bench's noise (10 impacts, TC 0.4 %, COR 0.003) the model is
     close enough to linear: on sessions simulated at known parameters and refitted with the
     full model, the profile deviance at the truth stays below this critical value in
-    0.950-0.955 of them per quantity (``python bench/interval_coverage.py --lr-check --seeds 8
+    0.950-0.955 of them per quantity (``python bench/coverage.py --lr-check --seeds 8
     --sessions 500``).
 
     Returns {key: critical value [-]}; empty (the F(1, nu) quantile is then used) when

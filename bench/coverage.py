@@ -11,21 +11,26 @@ intervals, the median relative interval width, how often the planted outlier was
 and how many good impacts were removed (sessions of the four Table 2 balls with no
 removal at all).
 
-    python bench/interval_coverage.py --seeds 100 --kb0 config|extrapolated|both --outlier no|yes|both \
+    python bench/coverage.py --seeds 100 --kb0 config|extrapolated|both --outlier no|yes|both \
         [--jsonl bench/out/records.jsonl] [--json]
-    python bench/interval_coverage.py --summarise bench/out/*.jsonl     # table from stored records
-    python bench/interval_coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
-    python bench/interval_coverage.py --calibration-check [--refits 1000]  # the critical values themselves
-    python bench/interval_coverage.py --truth-world --seeds 12 [--sessions 400] [--first-seed 0]  # many sessions
-    python bench/interval_coverage.py --diagnose --seeds 20 [--first-seed 0]  # where kB(0)-fixed misses come from
-    python bench/interval_coverage.py --truth-stat --seeds 100 [--first-seed 0] --jsonl bench/out/ts.jsonl  # same sessions
-    python bench/interval_coverage.py --lr-check --seeds 12 [--sessions 400]  # likelihood ratio at the truth
+    python bench/coverage.py --summarise bench/out/*.jsonl     # table from stored records
+    python bench/coverage.py --noise-free [--vmin 5]           # kB(0) on noise-free impacts
+    python bench/coverage.py --calibration-check [--refits 1000]  # the critical values themselves
+    python bench/coverage.py --truth-world --seeds 12 [--sessions 400] [--first-seed 0]  # many sessions
+    python bench/coverage.py --diagnose --seeds 20 [--first-seed 0]  # where kB(0)-fixed misses come from
+    python bench/coverage.py --truth-stat --seeds 100 [--first-seed 0] --jsonl bench/out/ts.jsonl  # same sessions
+    python bench/coverage.py --lr-check --seeds 12 [--sessions 400]  # likelihood ratio at the truth
 
 With ``--jsonl`` every fit is appended as one record as soon as it is done, so a long
 run can be stopped and summarised at any time.
 """
 
 from __future__ import annotations
+
+if __name__ == "coverage":
+    # imported as the coverage package: a script run from bench/ has bench/ first on sys.path,
+    # and numba (the compiled model loop) tries `import coverage`; this file is not that package
+    raise ImportError("bench/coverage.py is a script, not the coverage package")
 
 import argparse
 import json
