@@ -225,9 +225,9 @@ def simulate_impact(
 
     All array arguments broadcast against each other: one call simulates many
     impacts (speeds and/or parameter sets) at once. A call of fewer than
-    :data:`COMPILED_LOOP_MAX_IMPACTS` impacts runs the same steps compiled, impact by
-    impact (:func:`ballimpact.model_loop.run_impacts`); a larger one steps them all
-    together in numpy: :func:`_step_force`
+    :data:`COMPILED_LOOP_MAX_IMPACTS` impacts runs the same steps compiled
+    (:func:`ballimpact.model_loop.run_impacts`); a larger one runs them in numpy, on
+    all impacts at once: :func:`_step_force`
     (the force, Eqs. (4), (5), (7), (13), (14)), :func:`_apply_cloth`,
     :meth:`_Active.retire` (end of contact, interpolated) and :meth:`_Active.advance`
     (Eq. (16)).
@@ -277,8 +277,9 @@ def simulate_impact(
     if vin.size < COMPILED_LOOP_MAX_IMPACTS:
         from .model_loop import simulate_flat
 
-        out, rec, last = simulate_flat((vin, mass, kb0, ak_, a_, ac_), n_steps, dt_s, int(round(buckling_time_s / dt_s)),
-                                       (k_const_N_m, rho_area_kg_m2, cloth_displacement_m, cloth_stiffness_N_m), record)
+        constants = (k_const_N_m, rho_area_kg_m2, cloth_displacement_m, cloth_stiffness_N_m)
+        out, rec, last = simulate_flat((vin, mass, kb0, ak_, a_, ac_), n_steps, dt_s,
+                                       int(round(buckling_time_s / dt_s)), constants, record)
         return _loop_result(out, rec, vin, shape, max_contact_time_s, last, dt_s)
     c = _StepConstants(dt_s, int(round(buckling_time_s / dt_s)), k_const_N_m, rho_area_kg_m2 * np.pi / 4.0,
                        cloth_displacement_m, cloth_stiffness_N_m)

@@ -1,16 +1,17 @@
 """Compiled time loop of the Goodwill & Haake 2004 ball model (Eqs. (4), (5), (7), (13), (14), (16)).
 
-:func:`ballimpact.model.simulate_impact` validates and broadcasts its arguments and
-calls :func:`run_impacts`; this module holds the loop alone. It is compiled by numba
+:func:`ballimpact.model.simulate_impact` validates and broadcasts its arguments and,
+for calls of fewer than ``model.COMPILED_LOOP_MAX_IMPACTS`` impacts, calls
+:func:`simulate_flat`; this module holds the loop alone. It is compiled by numba
 (``cache=True``: compiled once per machine and Python, then loaded from the cache
 beside this file) and steps every impact still in contact at each time step, so that
 an impact costs its own steps only, with no per-step call overhead, whether one or
 thousands of impacts are simulated.
 
-The arithmetic is written operation by operation in the order of the paper's
-equations as implemented before in numpy (Horner form of Eq. (5), force
+The arithmetic is written operation by operation in the order of the numpy loop of
+:mod:`ballimpact.model`, which runs the larger calls (Horner form of Eq. (5), force
 kB x + (cB + cM) x', or kB x + cB x' + cM x' when the components are recorded), so
-that the numbers are those of the vectorised loop to rounding.
+that the two give the same numbers to rounding.
 """
 
 from __future__ import annotations
