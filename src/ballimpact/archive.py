@@ -4,7 +4,7 @@ Layout (one root group, see docs/outputs.md):
 
 * dims ``impact``, ``sample`` (contact series, NaN padded), ``raw_sample`` (whole
   trace, NaN padded), ``ball``, ``speed``, ``model_time``, ``stiffness_x``;
-* per impact: ``impact_id`` (coordinate), ``impact_ball``, ``status``, ``reason``,
+* per impact: ``impact`` (the index: impact ids), ``impact_id`` (the same), ``ball_type``, ``status``, ``reason``,
   ``trace_file``, ``trace_sha256`` and the scalar results of :data:`IMPACT_COLUMNS`,
   plus ``impact_mass_kg`` and ``sample_rate_hz``, ``model_agreement_fraction`` and
   ``model_rms_N``, and how the trace was conditioned: ``noise_rms_V``,
@@ -52,6 +52,8 @@ from .model_data import (  # noqa: F401
     speed_curves,
     stiffness_curve,
 )
+from .archive_attrs import AK_UNITS as _AK_UNITS, VARIABLE_ATTRS  # noqa: F401  (re-exported)
+from .archive_names import current_names, short_long_name, with_impact_index
 from .tables import IMPACT_COLUMNS, PARAMETER_COLUMNS, impacts_table, parameters_table  # noqa: F401
 
 __all__ = [
@@ -85,7 +87,6 @@ PAPER_REFERENCE = (
 )
 
 
-_AK_UNITS = "kN m-(1+a)"
 #: ACDD-1.3 ``keywords`` of every archive.
 ACDD_KEYWORDS = ("tennis ball, impact, coefficient of restitution, contact time, force platform, "
                  "viscoelastic model, Goodwill and Haake 2004, sports engineering")
@@ -96,12 +97,13 @@ _AK_COMMENT = (
 )
 #: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
 _CONTENT_TYPES = (
-    (("status", "reason", "peak_note", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
+    (("status", "reason", "peak_note", "withheld_note", "reason_code", "finding_", "contact_time_status", "kcal_status",
+      "peak_status", "cor_status", "contact_time_u", "kcal_u", "peak_force_u", "cor_u", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
      "modelResult"),
-    (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
+    (("ball_type", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
       "amplifier_time_constant_source"),
      "auxiliaryInformation"),
 )
@@ -130,146 +132,27 @@ _PER_IMPACT_SCALARS = [
     ("amplifier_time_constant_se_s", "tau_se_s"),
     ("plate_resonance_hz", "plate_resonance_hz"),
     ("plate_damping_ratio", "plate_damping_ratio"),
+    # v1.2: each quantity's standard uncertainty, from its error budget (ballimpact.verdicts)
+    ("contact_time_u_ms", "contact_time_u_ms"),
+    ("kcal_u_N_per_V", "kcal_u_N_per_V"),
+    ("peak_force_u_N", "peak_force_u_N"),
+    ("cor_u", "cor_u"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
-#: units and long_name of every archive variable (CF-style unit strings).
-VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
-    # coordinates
-    "impact_id": ("1", "impact identifier from the raw impacts.csv"),
-    "ball": ("1", "ball type key from session.yaml"),
-    "speed_m_s": ("m s-1", "inbound speed of the model curves"),
-    "model_time_s": ("s", "time since first contact of the modelled 20 m/s impact"),
-    "stiffness_x_m": ("m", "centre-of-mass displacement of the stiffness curve"),
-    # per impact
-    "impact_ball": ("1", "ball type key of the impact"),
-    "status": ("1", "processing status: ok or excluded"),
-    "reason": ("1", "why the impact was excluded (empty when ok)"),
-    "trace_file": ("1", "trace file path relative to the session folder"),
-    "trace_sha256": ("1", "SHA-256 digest of the trace file"),
-    "vin_m_s": ("m s-1", "inbound ball speed VB at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
-    "vout_m_s": ("m s-1", "rebound ball speed VB' at the plate (the gate speed unless gates.distance_to_plate_m is given)"),
-    "vin_gate_m_s": ("m s-1", "inbound ball speed from the light gates, spacing / interval"),
-    "vout_gate_m_s": ("m s-1", "rebound ball speed from the light gates, spacing / interval"),
-    "cor": ("1", "coefficient of restitution VB'/VB"),
-    "contact_time_ms": ("ms", "contact time TC"),
-    "kcal_N_per_V": ("N V-1", "force-plate calibration factor kCAL of this impact"),
-    "impulse_N_s": ("N s", "impulse m (VB + VB')"),
-    "peak_force_N": ("N", "peak calibrated force"),
-    "time_to_peak_ms": ("ms", "time from contact start to peak force"),
-    "max_displacement_mm": ("mm", "largest centre-of-mass displacement during contact"),
-    "kv_stiffness_kN_m": ("kN m-1", "Kelvin-Voigt stiffness kB = m pi^2 / TC^2 (Eq. 2)"),
-    "kv_damping_N_s_m": ("N s m-1", "Kelvin-Voigt damping cB = -2 m ln(COR) / TC (Eq. 3)"),
-    "impact_mass_kg": ("kg", "ball mass used for this impact"),
-    "sample_rate_hz": ("Hz", "sample rate of the trace"),
-    "noise_rms_V": ("V", "noise standard deviation of the trace's quiet baseline (robust)"),
-    "hum_amplitude_V": ("V", "peak amplitude of the mains hum's fundamental removed (0 when none was fitted)"),
-    "mains_frequency_hz": ("Hz", "mains frequency whose hum was removed (0 when none was)"),
-    "mains_source": ("1", "where the mains frequency came from: given (daq.mains_hz), detected or none"),
-    "peak_note": ("1", "why peak_force_N and time_to_peak_ms are withheld (NaN) on an ok impact: a problem of the "
-                       "peak alone, with an alias and a rounded front ruled out (daq.bandwidth_hz, or sampled at "
-                       "60 kHz or faster); else empty"),
-    "amplifier_time_constant_s": (
-        "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
-    "amplifier_time_constant_se_s": (
-        "s", "standard error of the time constant estimated from the trace, from the noise (and its correlation "
-             "over 2 ms) and the contact's sampling (not the choice of hum model on a record of about a mains "
-             "period); NaN when given or none"),
-    "amplifier_time_constant_source": (
-        "1", "where the time constant came from: given (plate.time_constant_s), estimated or none"),
-    "plate_resonance_hz": ("Hz", "plate resonance identified from its ringing and undone (NaN when none was)"),
-    "plate_damping_ratio": ("1", "damping ratio of the plate resonance undone (NaN when none was)"),
-    "model_agreement_fraction": (
-        "1",
-        "share of the contact after 0.2 ms where the fitted model force is within 10 % of the measured peak",
-    ),
-    "model_rms_N": ("N", "RMS difference between fitted model and measured force over the contact"),
-    "used_in_fit": ("1", "1 when this ok impact was used in its ball type's fit, 0 otherwise"),
-    "fit_note": ("1", "why an ok impact was left out of the fit (fit outlier: its residuals and the test), else empty"),
-    # series (impact, sample)
-    "time_s": ("s", "time since contact start"),
-    "voltage_V": ("V", "force-plate voltage over the contact (conditioned, polarity applied)"),
-    "force_N": ("N", "calibrated contact force on the ball"),
-    "velocity_m_s": ("m s-1", "ball centre-of-mass velocity towards the plate"),
-    "displacement_m": ("m", "ball centre-of-mass displacement towards the plate"),
-    "model_force_N": ("N", "fitted improved-model force at this impact's inbound speed (Eq. 14)"),
-    "kv_force_N": ("N", "Kelvin-Voigt model force of this impact (Eqs. 1-3)"),
-    # raw (impact, raw_sample)
-    "raw_time_s": ("s", "time of the raw sample, from contact start when found, else from the first sample"),
-    "raw_voltage_V": ("V", "raw trace voltage, polarity applied"),
-    # per ball
-    "ball_label": ("1", "ball label for figures"),
-    "mass_kg": ("kg", "ball type mass used in the fit"),
-    "n_impacts": ("1", "number of impacts used in the fit"),
-    "kb0_kN_m": ("kN m-1", "stiffness at zero displacement kB(0) (Eq. 4)"),
-    "kb0_source": ("1", "origin of kB(0): config or extrapolated"),
-    "kb0_lo": ("kN m-1", "lower end of the 95 % interval of kB(0)"),
-    "kb0_hi": ("kN m-1", "upper end of the 95 % interval of kB(0)"),
-    "ak_kN_m": (_AK_UNITS, "stiffness coefficient AK, x in metres (Eq. 4)"),
-    "ak_lo": (_AK_UNITS, "lower end of the 95 % interval of AK"),
-    "ak_hi": (_AK_UNITS, "upper end of the 95 % interval of AK"),
-    "a": ("1", "stiffness exponent a (Eq. 4)"),
-    "a_lo": ("1", "lower end of the 95 % interval of a"),
-    "a_hi": ("1", "upper end of the 95 % interval of a"),
-    "ac_kN_s_m3": ("kN s m-3", "damping area constant AC (Eq. 7)"),
-    "ac_lo": ("kN s m-3", "lower end of the 95 % interval of AC"),
-    "ac_hi": ("kN s m-3", "upper end of the 95 % interval of AC"),
-    "ak_a_correlation": ("1", "correlation between the AK and a estimates"),
-    "contact_time_rmse_pct": ("percent", "relative RMS contact-time residual over the impacts used"),
-    "cor_rmse_pct": ("percent", "relative RMS COR residual over the impacts used"),
-    "fit_message": ("1", "fit status message"),
-    "kb_10mm_kN_m": ("kN m-1", "structural stiffness kB at 10 mm displacement, kB(0) + AK x^a (Eq. 4)"),
-    "kb_10mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(10 mm)"),
-    "kb_10mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(10 mm)"),
-    "kb_20mm_kN_m": ("kN m-1", "structural stiffness kB at 20 mm displacement, kB(0) + AK x^a (Eq. 4)"),
-    "kb_20mm_lo": ("kN m-1", "lower end of the 95 % interval of kB(20 mm)"),
-    "kb_20mm_hi": ("kN m-1", "upper end of the 95 % interval of kB(20 mm)"),
-    "contact_time_scatter_pct": ("percent", "relative scatter of the impacts about the fitted TC curve (unbiased)"),
-    "cor_scatter_pct": ("percent", "relative scatter of the impacts about the fitted COR curve (unbiased)"),
-    "bootstrap_dropped": ("1", "bootstrap resamples dropped (refit not converged)"),
-    "n_fit_outliers": ("1", "ok impacts of the ball type left out of the fit as fit outliers"),
-    "interval_method": ("1", "how the 95 % intervals were obtained"),
-    "paper_kb0_kN_m": ("kN m-1", "kB(0) of Table 2 in Goodwill & Haake 2004"),
-    "paper_ak_kN_m": (_AK_UNITS, "AK of Table 2 in Goodwill & Haake 2004"),
-    "paper_a": ("1", "a of Table 2 in Goodwill & Haake 2004"),
-    "paper_ac_kN_s_m3": ("kN s m-3", "AC of Table 2 in Goodwill & Haake 2004"),
-    "fit_vin_min_m_s": ("m s-1", "slowest inbound speed of the impacts used in the fit (model curves below: extrapolated)"),
-    "fit_vin_max_m_s": ("m s-1", "fastest inbound speed of the impacts used in the fit (model curves above: extrapolated)"),
-    "itf_impact_speed_m_s": ("m s-1", "impact speed of the ITF 254 cm drop test, with air drag on the fall"),
-    "itf_model_cor": ("1", "fitted model COR at the ITF drop-test impact speed"),
-    "itf_rebound_pred_cm": ("cm", "ITF 254 cm drop-test rebound predicted by the fitted model, with air drag"),
-    "itf_rebound_pred_cm_lo": ("cm", "lower end of the 95 % bootstrap interval of the predicted ITF rebound"),
-    "itf_rebound_pred_cm_hi": ("cm", "upper end of the 95 % bootstrap interval of the predicted ITF rebound"),
-    "itf_rebound_cm": ("cm", "measured ITF 254 cm drop-test rebound from session.yaml (NaN when not given)"),
-    "itf_drop_test_cor": ("1", "COR of the measured ITF drop test (rebound and fall with air drag)"),
-    # model curves (ball, speed)
-    "model_contact_time_ms": ("ms", "fitted model contact time"),
-    "model_contact_time_ms_lo": ("ms", "lower end of the 95 % band of the model contact time"),
-    "model_contact_time_ms_hi": ("ms", "upper end of the 95 % band of the model contact time"),
-    "model_cor": ("1", "fitted model coefficient of restitution"),
-    "model_cor_lo": ("1", "lower end of the 95 % band of the model COR"),
-    "model_cor_hi": ("1", "upper end of the 95 % band of the model COR"),
-    "model_peak_force_N": ("N", "fitted model peak force"),
-    "model_contact_time_ms_pred_lo": ("ms", "lower end of the 95 % prediction band of one impact's contact time"),
-    "model_contact_time_ms_pred_hi": ("ms", "upper end of the 95 % prediction band of one impact's contact time"),
-    "model_cor_pred_lo": ("1", "lower end of the 95 % prediction band of one impact's COR"),
-    "model_cor_pred_hi": ("1", "upper end of the 95 % prediction band of one impact's COR"),
-    # components (ball, model_time)
-    "comp_total_force_N": ("N", "total model force at 20 m/s (Eq. 14)"),
-    "comp_stiffness_force_N": ("N", "structural stiffness force kB x at 20 m/s"),
-    "comp_damping_force_N": ("N", "material damping force cB x' at 20 m/s"),
-    "comp_momentum_flux_force_N": ("N", "momentum flux force cM x' at 20 m/s"),
-    "comp_displacement_m": ("m", "model centre-of-mass displacement at 20 m/s"),
-    # stiffness curve (ball, stiffness_x)
-    "model_stiffness_kN_m": ("kN m-1", "fitted structural stiffness kB(x) (Eq. 4)"),
-}
-
-_TEXT_PER_IMPACT = ["impact_ball", "status", "reason", "trace_file", "trace_sha256"]
+_TEXT_PER_IMPACT = ["ball_type", "status", "reason", "trace_file", "trace_sha256"]
 _CONDITIONING_TEXT = [
     # (archive name, ImpactResult attribute)
     ("mains_source", "mains_source"),
     ("amplifier_time_constant_source", "tau_source"),
     ("peak_note", "peak_note"),
+    # v1.2 per-quantity verdicts
+    ("contact_time_status", "contact_time_status"),
+    ("kcal_status", "kcal_status"),
+    ("peak_status", "peak_status"),
+    ("cor_status", "cor_status"),
+    ("reason_code", "reason_code"),
+    ("withheld_note", "withheld_note"),
 ]
 
 
@@ -321,7 +204,8 @@ def coverage_content_type(name: str) -> str:
 
 
 def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset:
-    """Fill ``units`` and ``long_name`` of every known variable from :data:`VARIABLE_ATTRS`.
+    """Fill ``units``, ``long_name`` (short) and ``comment`` (the rest) of every known variable from
+    :data:`VARIABLE_ATTRS`.
 
     Parameters
     ----------
@@ -339,16 +223,19 @@ def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset
     for name in list(ds.variables):
         attrs = ds[name].attrs
         if name in VARIABLE_ATTRS:
-            units, long_name = VARIABLE_ATTRS[name]
+            units, description = VARIABLE_ATTRS[name]
+            long_name, comment = short_long_name(name, description)
             if units == _AK_UNITS:
                 # kN m-(1+a) changes with each ball's a: no UDUNITS unit exists for it
                 attrs.pop("units", None)
                 attrs["units_metadata"] = f"non-UDUNITS: {_AK_UNITS}"
-                attrs["comment"] = _AK_COMMENT
+                comment = f"{comment} {_AK_COMMENT}".strip()
             elif overwrite or "units" not in attrs:
                 attrs["units"] = units
             if overwrite or "long_name" not in attrs:
                 attrs["long_name"] = long_name
+                if comment:
+                    attrs["comment"] = comment
         elif "units" not in attrs or "long_name" not in attrs:
             warnings.warn(
                 f"archive variable {name!r} has no units/long_name and is not in VARIABLE_ATTRS",
@@ -404,6 +291,7 @@ class _ImpactColumns:
 
     def __init__(self):
         self.ids = []
+        self.findings = []  # per impact: {check code: (count, message, effects)}
         self.text = {k: [] for k in _TEXT_PER_IMPACT + [name for name, _ in _CONDITIONING_TEXT]}
         self.scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
         self.series = {k: [] for k in _SERIES}
@@ -422,7 +310,7 @@ class _ImpactColumns:
             impact_id,
             (getattr(r, "trace_file", None) or getattr(r, "trace", None) or "", getattr(r, "trace_sha256", "") or ""),
         )
-        self.text["impact_ball"].append(r.ball)
+        self.text["ball_type"].append(r.ball)
         self.text["status"].append(status)
         self.text["reason"].append("" if status == "ok" else (r.reason or ""))
         self.text["trace_file"].append(trace_file)
@@ -436,6 +324,12 @@ class _ImpactColumns:
             self.scalars[name].append(value)
         self._add_series(r, impact_id)
         self._add_raw(r, impact_id, max_raw_samples)
+        found = {}
+        for p in getattr(r, "problems", []) or []:
+            count, message, effects = found.get(p.kind.value, (0, p.message, {}))
+            merged = {q: max(effects.get(q, -math.inf), float(v)) for q, v in p.effects.items()}
+            found[p.kind.value] = (count + 1, message, {**effects, **merged})
+        self.findings.append(found)
 
     def _add_series(self, r, impact_id) -> None:
         n = _as_1d(getattr(r, "time_s", None)).size
@@ -480,9 +374,34 @@ class _ImpactColumns:
         data_vars["model_force_N"] = (dims, np.full((n_impact, n_sample), np.nan))
         data_vars["model_agreement_fraction"] = ("impact", np.full(n_impact, np.nan))
         data_vars["model_rms_N"] = ("impact", np.full(n_impact, np.nan))
+        data_vars.update(_findings_variables(self.findings))
         data_vars["raw_time_s"] = (raw_dims, _pad(self.raw_t, n_raw, np.float32))
         data_vars["raw_voltage_V"] = (raw_dims, _pad(self.raw_v, n_raw, np.float32))
         return xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(self.ids))})
+
+
+def _findings_variables(findings: list) -> dict:
+    """The (impact, check) variables of every finding: how many, the first message, and each estimated effect."""
+    from .checks import CHECKS
+
+    codes = list(CHECKS)
+    n = len(findings)
+    count = np.zeros((n, len(codes)), dtype=np.int16)
+    message = np.full((n, len(codes)), "", dtype=object)
+    effects = {q: np.full((n, len(codes)), np.nan) for q in ("contact_time", "kcal", "peak")}
+    for i, found in enumerate(findings):
+        for code, (k, text, eff) in found.items():
+            j = codes.index(code)
+            count[i, j], message[i, j] = k, text
+            for q, v in eff.items():
+                if q in effects and math.isfinite(v):
+                    effects[q][i, j] = v
+    dims = ("impact", "check")
+    out = {"finding_count": (dims, count), "finding_message": (dims, _text_array(message.ravel()).reshape(n, -1)
+                                                                if n else np.empty((0, len(codes)), dtype=object))}
+    out.update({f"finding_effect_{q}": (dims, v) for q, v in effects.items()})
+    out["check"] = ("check", _text_array(codes))
+    return out
 
 
 def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:
@@ -859,7 +778,7 @@ def write_dataset(ds: xr.Dataset, path) -> Path:
     path = Path(path)
     if not path.parent.is_dir():
         raise FileNotFoundError(f"cannot write {path}: folder {path.parent} does not exist")
-    ds = _text_to_object(ds)
+    ds = _text_to_object(with_impact_index(ds))
     for var in ds.variables.values():
         var.encoding = {}
     with atomic_path(path) as tmp:
@@ -885,4 +804,4 @@ def open_dataset(path) -> xr.Dataset:
         raise FileNotFoundError(f"archive not found: {path}")
     with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as f:
         ds = f.load()
-    return _text_to_object(ds)
+    return _text_to_object(current_names(ds).drop_vars("impact", errors="ignore"))
