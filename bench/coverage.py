@@ -27,6 +27,11 @@ run can be stopped and summarised at any time.
 
 from __future__ import annotations
 
+if __name__ == "coverage":
+    # imported as the coverage package: a script run from bench/ has bench/ first on sys.path,
+    # and numba (the compiled model loop) tries `import coverage`; this file is not that package
+    raise ImportError("bench/coverage.py is a script, not the coverage package")
+
 import argparse
 import json
 import time

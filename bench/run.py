@@ -31,6 +31,12 @@ Keys:
                             ("snakemake": its main process), recorded by bench/cpu_hook/sitecustomize.py
   model_call_cpu_ms_<n>     (--model-only, with model_impacts_per_s) CPU time of one simulate_impact call of n
                             impacts: 9 and 36 as a fit's Levenberg-Marquardt batches, 7200 as a bootstrap's
+  model_impacts_per_s_<n>   (--model-only) throughput of calls of n impacts (40: a session's), model_loop_<n>
+                            the loop that ran (compiled or numpy), model_vs_c_<n> its ratio to
+                            model_reference_c_impacts_per_s (measured in the same run)
+  model_compile_cpu_seconds (--model-only) first call of the compiled loop in a fresh process with an empty
+                            numba cache (compiling); model_cache_load_cpu_seconds: the same with the cache
+                            (loading, paid once by every job); numba_import_cpu_seconds: numba's import
   stage_cpu_seconds_<stage>  (--stages) CPU time of each stage of one 40-impact session in one
                             process, and of the library's imports (paid again by every job)
   catalogue_cpu_seconds_<k>  (--catalogue) CPU time of the catalogue's work (write_catalogue) over k copies of
@@ -50,6 +56,10 @@ Keys:
   sessions_job_cpu_seconds_per_session  CPU of the per-session jobs (all but snakemake and catalogue) of the
                             largest run, per session; sessions_<k>x40_snakemake/catalogue_cpu_seconds: the rest
   sessions_100x40_peak_memory_mb  that memory extrapolated to 100 sessions by the same line
+  sessions_add_one_to_<k>_seconds / _cpu_seconds / _job_cpu  after the run of k sessions, one more session
+                            (year<k>) is added and `snakemake --cores 2` run again: its wall and CPU time (the
+                            new session's jobs, the catalogue of k + 1 sessions, Snakemake's main process);
+                            sessions_add_one_to_100_<seconds|cpu_seconds>: the line through the measured k at 100
 In --quick mode the workflow runs once, on 50 impacts; workflow_seconds_200 and _1000 are
 that time plus the extra impacts' processing time (process_seconds_per_impact, shared by
 2 cores), peak memory is the 50-impact run's; the model runs on 4 000 instead of 20 000
@@ -94,6 +104,58 @@ def bench_model(n: int, repeats: int = 3) -> float:
 
 
 MODEL_CALL_SIZES = (9, 36, 7200)  # impacts per simulate_impact call: a fit's LM batches (9-36), a bootstrap's
+MODEL_BATCH_SIZES = (40, 400, 20000)  # a session's impacts, ten sessions', the bootstrap's scale
+
+
+def bench_model_batches(sizes=MODEL_BATCH_SIZES) -> dict:
+    """Throughput [impacts/s] of simulate_impact called on n impacts at once (``model_impacts_per_s_<n>``).
+
+    Calls of fewer than model.COMPILED_LOOP_MAX_IMPACTS impacts run the compiled loop, larger
+    ones the numpy loop (``model_loop_<n>`` says which). Same ball and speeds as bench_model;
+    CPU time of this process, the best of 5 rounds of about 0.3 s.
+    """
+    from ballimpact.balls import BALLS
+    from ballimpact.model import COMPILED_LOOP_MAX_IMPACTS, simulate_impact
+
+    p = BALLS["pressurised"].params
+    out = {}
+    for n in sizes:
+        vin = np.random.default_rng(0).uniform(14, 30, n)
+        t0 = time.process_time()
+        simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+        reps = max(1, int(0.3 / max(time.process_time() - t0, 1e-4)))
+        best = np.inf
+        for _ in range(5):
+            t0 = time.process_time()
+            for _ in range(reps):
+                simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
+            best = min(best, (time.process_time() - t0) / reps)
+        out[f"model_impacts_per_s_{n}"] = n / best
+        out[f"model_loop_{n}"] = "compiled" if n < COMPILED_LOOP_MAX_IMPACTS else "numpy"
+    return out
+
+
+def bench_model_compile() -> dict:
+    """CPU seconds of the compiled model loop's first call in a fresh process.
+
+    ``model_compile_cpu_seconds``: with an empty numba cache (NUMBA_CACHE_DIR a new folder),
+    so numba compiles and writes its cache; ``model_cache_load_cpu_seconds``: a second
+    fresh process with that cache, so numba loads it (what every job pays once);
+    ``numba_import_cpu_seconds``: importing numba alone, part of the latter.
+    """
+    code = ("import time; t0 = time.process_time(); import numba; t1 = time.process_time(); "
+            "from ballimpact.model import simulate_impact; t2 = time.process_time(); "
+            "simulate_impact(20.0, 0.057, 1e4, 4e7, 1.5, 1e3); t3 = time.process_time(); "
+            "print(t1 - t0, t3 - t2 + t1 - t0)")
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="ballimpact-numba-cache-") as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        for key in ("model_compile_cpu_seconds", "model_cache_load_cpu_seconds"):
+            proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+            numba_s, first_s = (float(v) for v in proc.stdout.split())
+            out[key] = first_s
+            out["numba_import_cpu_seconds"] = numba_s
+    return out
 
 
 def bench_model_calls(sizes=MODEL_CALL_SIZES, seconds: float = 0.5) -> dict:
@@ -162,7 +224,8 @@ def bench_model_reference_c(n: int, repeats: int = 3, n_check: int = 8) -> dict:
     diff = max(np.max(np.abs(sim.contact_time_s / ref[:, 0] - 1)), np.max(np.abs(sim.cor / ref[:, 1] - 1)))
     return {"model_reference_c_impacts_per_s": rate,
             "model_reference_c_max_rel_diff_tc_cor": float(diff),
-            "model_reference_c_note": f"bench/reference_model.c, {cc} -O2 -ffp-contract=off, one core, {n} impacts, best of {repeats}"}
+            "model_reference_c_note": (f"bench/reference_model.c, {cc} -O2 -ffp-contract=off, one core, CPU time "
+                                       f"of its process, {n} impacts, best of {repeats}")}
 
 
 def bench_fit(session_dir: Path, n_bootstrap: int = 200) -> dict:
@@ -306,27 +369,50 @@ def extrapolate_linear(ns, ys, n_target):
     return float(intercept + slope * n_target), float(slope), float(intercept), residual
 
 
-def _run_sessions(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
-    """Wall time [s], peak RSS [MB] and CPU time [s] of `snakemake --cores 2` on n fresh 40-impact sessions."""
+def _write_year_session(raw: Path, k: int) -> None:
+    """Synthetic 40-impact session year<k> (seed 1000 + k) into raw/, without its truth files."""
     from ballimpact.synth import SynthConfig, write_session
 
-    raw = workdir / f"raw_s{n_sessions}"
-    for k in range(n_sessions):
-        sid = f"year{k:03d}"
-        write_session(raw / sid, SynthConfig(session_id=sid, seed=1000 + k, total_impacts=IMPACTS_PER_SESSION,
-                                             faults_per_kind=1, date=f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"))
+    sid = f"year{k:03d}"
+    write_session(raw / sid, SynthConfig(session_id=sid, seed=1000 + k, total_impacts=IMPACTS_PER_SESSION,
+                                         faults_per_kind=1, date=f"2026-{1 + k % 12:02d}-{1 + k // 12:02d}"))
     for truth in raw.glob("*.truth.*"):
         truth.unlink()
+
+
+def _cpu_env(cpu_log: Path) -> dict:
+    """The environment of a benchmarked run: bench/cpu_hook on PYTHONPATH, logging to cpu_log."""
+    return dict(os.environ, BALLIMPACT_BENCH_CPU_LOG=str(cpu_log),
+                PYTHONPATH=os.pathsep.join(filter(None, [str(Path(__file__).parent / "cpu_hook"),
+                                                         os.environ.get("PYTHONPATH")])))
+
+
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _run_sessions(n_sessions: int, workdir: Path) -> tuple:
+    """`snakemake --cores 2` on n fresh 40-impact sessions, then again after one more session is added.
+
+    Returns wall time [s], peak RSS [MB], CPU time [s] and CPU by rule of the first run, and
+    wall time [s], CPU time [s] and CPU by rule of the second (the new session's jobs and
+    the catalogue of n + 1 sessions).
+    """
+    raw = workdir / f"raw_s{n_sessions}"
+    for k in range(n_sessions):
+        _write_year_session(raw, k)
     results = workdir / f"results_s{n_sessions}"
     cpu_log = workdir / f"cpu_s{n_sessions}.log"
-    env = dict(os.environ, BALLIMPACT_BENCH_CPU_LOG=str(cpu_log),
-               PYTHONPATH=os.pathsep.join(filter(None, [str(Path(__file__).parent / "cpu_hook"),
-                                                        os.environ.get("PYTHONPATH")])))
-    wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions", env=env)
+    wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions", env=_cpu_env(cpu_log))
     if not (results / "catalogue" / "catalogue.csv").is_file():
         raise RuntimeError(f"no catalogue after the run of {n_sessions} sessions")
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, usage.ru_maxrss / 1024.0, usage.ru_utime + usage.ru_stime, job_cpu(cpu_log)
+    cpu = _children_cpu_s()
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+    _write_year_session(raw, n_sessions)
+    add_log = workdir / f"cpu_s{n_sessions}_add.log"
+    add_wall = _snakemake_wall_s(raw, results, f"{n_sessions} sessions + 1", env=_cpu_env(add_log))
+    return wall, peak, cpu, job_cpu(cpu_log), add_wall, _children_cpu_s() - cpu, job_cpu(add_log)
 
 
 def job_cpu(cpu_log: Path) -> dict:
@@ -346,7 +432,7 @@ def job_cpu(cpu_log: Path) -> dict:
     return out
 
 
-def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float, float]:
+def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple:
     code = (
         "import sys, json; sys.path.insert(0, %r); import run; "
         "print(json.dumps(run._run_sessions(%d, run.Path(%r))))"
@@ -355,8 +441,7 @@ def _run_sessions_isolated(n_sessions: int, workdir: Path) -> tuple[float, float
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
     if out.returncode != 0:
         raise RuntimeError(out.stderr[-3000:])
-    wall, mem, cpu, jobs = json.loads(out.stdout.strip().splitlines()[-1])
-    return wall, mem, cpu, jobs
+    return tuple(json.loads(out.stdout.strip().splitlines()[-1]))
 
 
 def bench_sessions(counts) -> dict:
@@ -365,11 +450,21 @@ def bench_sessions(counts) -> dict:
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="ballimpact-bench-sessions-") as tmp:
         measured = {k: _run_sessions_isolated(k, Path(tmp)) for k in counts}
-    for k, (wall, mem, cpu, jobs) in measured.items():
+    for k, (wall, mem, cpu, jobs, add_wall, add_cpu, add_jobs) in measured.items():
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_seconds"] = wall
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_cpu_seconds"] = cpu
         out[f"sessions_{k}x{IMPACTS_PER_SESSION}_job_cpu"] = jobs
+        out[f"sessions_add_one_to_{k}_seconds"] = add_wall
+        out[f"sessions_add_one_to_{k}_cpu_seconds"] = add_cpu
+        out[f"sessions_add_one_to_{k}_job_cpu"] = add_jobs
     ks = list(measured)
+    # one session added to an archive of k: its own jobs do not grow with k, Snakemake's main
+    # process and the catalogue do; the line through the measured k, at 100
+    for what, i in (("seconds", 4), ("cpu_seconds", 5)):
+        at100, slope, _, resid = extrapolate_linear(ks, [measured[k][i] for k in ks], TARGET_SESSIONS)
+        out[f"sessions_add_one_to_{TARGET_SESSIONS}_{what}"] = at100
+        out[f"sessions_add_one_{what}_per_archived_session"] = slope
+        out[f"sessions_add_one_{what}_fit_max_residual"] = resid
     t100, slope, intercept, resid = extrapolate_linear(ks, [measured[k][0] for k in ks], TARGET_SESSIONS)
     out[f"sessions_{TARGET_SESSIONS}x{IMPACTS_PER_SESSION}_seconds"] = t100
     out["sessions_seconds_per_session"] = slope
@@ -538,7 +633,8 @@ def main(argv=None) -> int:
     ap.add_argument("--fit-only", action="store_true",
                     help="only the fit figures (demo and the demo made with synth --no-kb0)")
     ap.add_argument("--model-only", action="store_true",
-                    help="only the model figures: model_impacts_per_s and model_call_cpu_ms_<n> (no C reference)")
+                    help="only the model figures: throughput by batch size against the C reference, call times, "
+                         "compile and cache-load time")
     ap.add_argument("--stages", action="store_true",
                     help="only the CPU time of each stage of one 40-impact session (stage_cpu_seconds_*)")
     ap.add_argument("--sessions-only", action="store_true",
@@ -553,6 +649,12 @@ def main(argv=None) -> int:
     if args.model_only:
         figures["model_impacts_per_s"] = bench_model(4000 if args.quick else 20000)
         figures.update(bench_model_calls())
+        figures.update(bench_model_batches())
+        figures.update(bench_model_reference_c(4000 if args.quick else 20000))
+        c_rate = figures.get("model_reference_c_impacts_per_s")
+        for n in MODEL_BATCH_SIZES:  # against the scalar C loop of the same run
+            figures[f"model_vs_c_{n}"] = figures[f"model_impacts_per_s_{n}"] / c_rate if c_rate else None
+        figures.update(bench_model_compile())
         print(json.dumps(figures, indent=2) if args.json else "\n".join(f"{k:36s} {v}" for k, v in figures.items()))
         return 0
     if args.stages:

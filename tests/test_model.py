@@ -8,6 +8,7 @@ from reference_model import reference_impact
 
 from ballimpact.balls import BALLS
 from ballimpact.model import (
+    COMPILED_LOOP_MAX_IMPACTS,
     contact_diameter,
     kelvin_voigt_parameters,
     material_damping,
@@ -406,3 +407,50 @@ def test_unended_warning_message():
         simulate_impact(20.0, 0.0577, 10.0, 0.0, 1.0, 0.0, max_contact_time_s=3.949e-3)
     assert str(rec[0].message) == ("1 simulated impact(s) did not end within 3.9 ms; their contact time and COR "
                                    "are NaN (parameters far outside the physical range?)")
+
+
+# The compiled loop (calls of fewer than COMPILED_LOOP_MAX_IMPACTS impacts) against the
+# vectorised numpy loop (larger calls), the implementation it replaced for small calls:
+# the same arithmetic, one impact at a time against all at once, to 1e-12.
+LOOP_RTOL = 1e-12
+LOOP_FIELDS = ("contact_time_s", "rebound_speed_m_s", "cor", "peak_force_N", "time_to_peak_s", "max_displacement_m")
+
+
+def _spread_impacts(n, seed):
+    """n impacts of the four Table 2 balls, speeds 3-40 m/s, AK, a, AC spread by +-30 % / +-15 %."""
+    rng = np.random.default_rng(seed)
+    params = [BALLS[k].params for k in rng.choice(sorted(BALLS), n)]
+    vin = rng.uniform(3.0, 40.0, n)
+    return (vin, np.array([p.mass_kg for p in params]), np.array([p.kb0_N_m for p in params]) * rng.choice([0, 1], n),
+            np.array([p.ak for p in params]) * rng.uniform(0.7, 1.3, n),
+            np.array([p.a for p in params]) * rng.uniform(0.85, 1.15, n),
+            np.array([p.ac for p in params]) * rng.uniform(0.7, 1.3, n))
+
+
+@pytest.mark.parametrize("cloth_k", [0.0, 2000.0])
+def test_compiled_loop_equals_numpy_loop(cloth_k):
+    n = COMPILED_LOOP_MAX_IMPACTS + 100
+    args = _spread_impacts(n, seed=7)
+    whole = simulate_impact(*args, cloth_stiffness_N_m=cloth_k)  # numpy loop
+    parts = [simulate_impact(*(a[i:i + 400] for a in args), cloth_stiffness_N_m=cloth_k) for i in range(0, n, 400)]
+    assert np.isfinite(whole.contact_time_s).all()
+    for field in LOOP_FIELDS:
+        assert_allclose(np.concatenate([getattr(r, field) for r in parts]), getattr(whole, field),
+                        rtol=LOOP_RTOL, atol=0, err_msg=field)
+
+
+def test_compiled_loop_equals_numpy_loop_recorded_and_unended():
+    # time series (record=True), and impacts that do not end within a short max contact time
+    args = _spread_impacts(COMPILED_LOOP_MAX_IMPACTS, seed=8)
+    small = tuple(a[:50] for a in args)
+    with pytest.warns(RuntimeWarning, match="did not end"):
+        whole = simulate_impact(*args, record=True, max_contact_time_s=3e-3)
+    with pytest.warns(RuntimeWarning, match="did not end"):
+        part = simulate_impact(*small, record=True, max_contact_time_s=3e-3)
+    assert 0 < np.isnan(part.contact_time_s).sum() < 50
+    for field in LOOP_FIELDS:
+        assert_allclose(getattr(part, field), getattr(whole, field)[:50], rtol=LOOP_RTOL, atol=0, err_msg=field)
+    for field in ("displacement_m", "velocity_m_s", "force_N", "stiffness_force_N", "damping_force_N",
+                  "momentum_flux_force_N"):
+        assert_allclose(getattr(part, field), getattr(whole, field)[:, :50], rtol=LOOP_RTOL, atol=1e-300,
+                        equal_nan=True, err_msg=field)

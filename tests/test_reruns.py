@@ -96,24 +96,27 @@ def test_editing_one_raw_file_reruns_exactly_its_session(state, what):
     # the jobs of that session, and the catalogue across sessions (no session wildcard)
     assert {s for sessions in jobs.values() for s in sessions} == {"beta", ""}
     assert {rule for rule, sessions in jobs.items() if "" in sessions} == {"catalogue"}
-    # the whole chain of that session, down to its report (a small session is validated,
-    # processed and collected by one session_impacts job, and its fits, archive, figures and
-    # report are one session_outputs job; a large one's are per-stage jobs)
-    assert {"validate_session", "process_chunk", "collect_impacts"} <= set(jobs) or {"session_impacts"} <= set(jobs)
-    assert {"session_outputs"} <= set(jobs) or {"archive", "report"} <= set(jobs)
+    # the whole chain of that session, down to its report (a small session processed as one
+    # chunk is one small_session job; a large one's are per-stage jobs)
+    assert {"small_session"} == set(jobs) - {"catalogue"} or (
+        {"validate_session", "process_chunk", "collect_impacts"} <= set(jobs)
+        and ({"session_outputs"} <= set(jobs) or {"archive", "report"} <= set(jobs)))
 
 
 def test_changed_mains_reruns_processing_of_every_session(state):
     jobs = planned(state, "mains_hz=60")
-    # processing: rule process_chunk, or session_impacts for a small session (these are small)
-    assert jobs["session_impacts"] == set(SESSIONS)
+    # processing: rule process_chunk, or small_session for a small session (these are small)
+    assert jobs["small_session"] == set(SESSIONS)
     assert "validate_session" not in jobs  # the raw files did not change
 
 
 @pytest.mark.parametrize("key", ["bootstrap=12", "seed=3"])
-def test_changed_fit_setting_reruns_fits_not_processing(state, key):
+def test_changed_fit_setting_reruns_each_session_once(state, key):
+    # these small sessions are each one small_session job, whose fits rerun with its
+    # processing (issue 48: one job per small session); a session run per stage would
+    # rerun fit_session, fit_ball or session_outputs without process_chunk
     jobs = planned(state, key)
-    fits = ("fit_session", "fit_ball", "session_outputs")  # session_outputs: the fits of a small session
+    fits = ("fit_session", "fit_ball", "session_outputs", "small_session")
     assert set().union(*(jobs.get(rule, set()) for rule in fits)) == set(SESSIONS)
     assert "process_chunk" not in jobs and "collect_impacts" not in jobs and "validate_session" not in jobs
-    assert "session_impacts" not in jobs  # a small session's processing job
+    assert set(jobs) == {"small_session", "catalogue"}

@@ -110,7 +110,7 @@ def test_dry_run_repo_raw_dir():
         return
     assert set(counts) <= {
         "validate_session", "process_chunk", "collect_impacts", "fit_ball", "fit_session", "archive", "figures",
-        "report", "session_impacts", "session_outputs", "catalogue", "all",
+        "report", "small_session", "session_outputs", "catalogue", "all",
     }
     assert counts["all"] == 1
 
@@ -122,13 +122,12 @@ def test_dry_run_lists_every_rule(synth_raw, tmp_path):
     counts = job_counts(proc.stdout)
     n_chunks = min(n_impacts, max(yaml.safe_load((REPO / "config.yaml").read_text())["min_chunks"],
                                   math.ceil(n_impacts / 200)))
-    # a small session processed as one chunk: validated, processed and collected in one job
-    first = {"session_impacts": 1} if n_chunks == 1 else {
-        "validate_session": 1, "process_chunk": n_chunks, "collect_impacts": 1}
+    # a small session (fit_batch_impacts) processed as one chunk: everything in one job; in
+    # several chunks: its fits, archive, figures and report in one job
+    jobs = {"small_session": 1} if n_chunks == 1 else {
+        "validate_session": 1, "process_chunk": n_chunks, "collect_impacts": 1, "session_outputs": 1}
     assert counts == {
-        **first,
-        # a small session (fit_batch_impacts): fits, archive, figures and report in one job
-        "session_outputs": 1,
+        **jobs,
         "catalogue": 1,
         "all": 1,
     }
@@ -181,8 +180,8 @@ def test_sessions_selects_only_those(synth_raw, tmp_path):
     proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results, "sessions=[beta]"), check=True)
     assert f"{results / 'beta' / 'report.pdf'}" in proc.stdout
     assert f"{results / 'alpha'}" not in proc.stdout
-    # the first job of a session: validate_session, or session_impacts for a small session
-    first_jobs = ("validate_session", "session_impacts")
+    # the first job of a session: validate_session, or small_session for a small session
+    first_jobs = ("validate_session", "small_session")
     assert sum(job_counts(proc.stdout).get(rule, 0) for rule in first_jobs) == 1
 
     proc = run_snakemake("-n", "--cores", "1", *config_args(raw, results), check=True)
@@ -759,7 +758,7 @@ def test_fit_balls_in_one_process_gives_the_per_ball_fits(synth_raw, tmp_path):
 
 @pytest.mark.slow
 def test_session_impacts_writes_what_the_per_stage_rules_write(synth_raw, tmp_path):
-    """Rule session_impacts (a small session validated, processed and collected in one job)
+    """pipeline.session_impacts (rule small_session validates, processes and collects with it)
     writes the files of rules validate_session, process_chunk (one chunk) and collect_impacts."""
     import json
 

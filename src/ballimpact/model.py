@@ -59,6 +59,10 @@ CLOTH_DISPLACEMENT_M = 2.0e-3
 TIME_STEP_S = 0.01e-3
 #: Longest contact simulated before giving up [s].
 MAX_CONTACT_TIME_S = 20.0e-3
+#: Calls of fewer impacts than this run the compiled loop (:mod:`ballimpact.model_loop`), larger
+#: ones the vectorised numpy loop below, whose SIMD power function is the faster there
+#: (``python bench/run.py --model-only`` measures both by batch size) [-].
+COMPILED_LOOP_MAX_IMPACTS = 1500
 
 # Eq. (5) coefficients, highest power first, SI units (x [m] -> dCONT [m]).
 _DCONT_COEFFS = (-2.776e5, 1.746e4, -453.0, 7.66, 0.0)
@@ -220,7 +224,10 @@ def simulate_impact(
     while x < 2 mm in compression (section 3.2.4).
 
     All array arguments broadcast against each other: one call simulates many
-    impacts (speeds and/or parameter sets) at once. The steps: :func:`_step_force`
+    impacts (speeds and/or parameter sets) at once. A call of fewer than
+    :data:`COMPILED_LOOP_MAX_IMPACTS` impacts runs the same steps compiled
+    (:func:`ballimpact.model_loop.run_impacts`); a larger one runs them in numpy, on
+    all impacts at once: :func:`_step_force`
     (the force, Eqs. (4), (5), (7), (13), (14)), :func:`_apply_cloth`,
     :meth:`_Active.retire` (end of contact, interpolated) and :meth:`_Active.advance`
     (Eq. (16)).
@@ -267,6 +274,13 @@ def simulate_impact(
         raise ValueError(f"max_contact_time_s must be positive, got {max_contact_time_s!r}")
     shape, (vin, mass, kb0, ak_, a_, ac_) = _broadcast_parameters(vin_m_s, mass_kg, kb0_N_m, ak, a, ac)
     n_steps = int(np.ceil(max_contact_time_s / dt_s)) + 2
+    if vin.size < COMPILED_LOOP_MAX_IMPACTS:
+        from .model_loop import simulate_flat
+
+        constants = (k_const_N_m, rho_area_kg_m2, cloth_displacement_m, cloth_stiffness_N_m)
+        out, rec, last = simulate_flat((vin, mass, kb0, ak_, a_, ac_), n_steps, dt_s,
+                                       int(round(buckling_time_s / dt_s)), constants, record)
+        return _loop_result(out, rec, vin, shape, max_contact_time_s, last, dt_s)
     c = _StepConstants(dt_s, int(round(buckling_time_s / dt_s)), k_const_N_m, rho_area_kg_m2 * np.pi / 4.0,
                        cloth_displacement_m, cloth_stiffness_N_m)
     out = _Outcome(vin.size)
@@ -522,6 +536,38 @@ def _finish(s: _Active, out: _Outcome, vin, shape, max_contact_time_s, rec, last
         result.displacement_m, result.velocity_m_s, result.force_N = series["x"], series["v"], series["f"]
         result.stiffness_force_N = series["fs"]
         result.damping_force_N, result.momentum_flux_force_N = series["fd"], series["fm"]
+    return result
+
+
+_SERIES = ("displacement_m", "velocity_m_s", "force_N", "stiffness_force_N", "damping_force_N",
+           "momentum_flux_force_N")
+
+
+def _loop_result(out, rec, vin, shape, max_contact_time_s, last, dt_s) -> ImpactSimulation:
+    """The ImpactSimulation of the compiled loop's (5, n) results and (6, n_steps, n) series
+    (or None), as :func:`_finish` makes it of the numpy loop's."""
+    t_end, v_end, peak, t_peak, x_max = out
+    unended = int(np.count_nonzero(np.isnan(t_end)))
+    if unended:
+        warnings.warn(
+            f"{unended} simulated impact(s) did not end within {max_contact_time_s * 1e3:.1f} ms; "
+            "their contact time and COR are NaN (parameters far outside the physical range?)",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    rebound = -v_end
+    result = ImpactSimulation(
+        contact_time_s=t_end.reshape(shape),
+        rebound_speed_m_s=rebound.reshape(shape),
+        cor=(rebound / vin).reshape(shape),
+        peak_force_N=peak.reshape(shape),
+        time_to_peak_s=t_peak.reshape(shape),
+        max_displacement_m=x_max.reshape(shape),
+    )
+    if rec is not None:
+        result.time_s = np.arange(last) * dt_s
+        for name, series in zip(_SERIES, rec):
+            setattr(result, name, series[:last].reshape((last,) + shape))
     return result
 
 

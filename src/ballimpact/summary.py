@@ -366,14 +366,14 @@ def _read_csv_rows(path: Path) -> list[dict]:
 
 def _session_fault(folder: Path) -> str:
     """The session-level error logged by the failed validate_session (or, for a small session,
-    session_impacts) job, if any."""
+    small_session) job, if any."""
     marker = "session-level fault: "
-    logs = [folder / "logs" / f"{rule}.log" for rule in ("validate_session", "session_impacts")]
+    logs = [folder / "logs" / f"{rule}.log" for rule in ("validate_session", "small_session")]
     logs = [log for log in logs if log.is_file()]
     if not logs:
         return ""
     # the job that ran last: a session once faulty (validate_session), then fixed and small
-    # (session_impacts), keeps its old validate_session log
+    # (small_session), keeps its old validate_session log
     text = max(logs, key=lambda log: log.stat().st_mtime_ns).read_text(encoding="utf-8", errors="replace")
     if marker not in text:
         return ""

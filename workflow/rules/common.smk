@@ -161,19 +161,22 @@ if not SESSIONS:
 
 
 # Small sessions (at most config fit_batch_impacts impacts) get their fits, archive,
-# figures and report from one job (rule session_outputs, workflow/rules/session.smk);
-# the others from the per-stage rules fit_ball, archive, figures and report.
+# figures and report from one job (rule session_outputs, workflow/rules/session.smk), or
+# everything from one job (rule small_session) when processed as one chunk; the others
+# from the per-stage rules fit_ball, archive, figures and report.
 SMALL_SESSIONS = [
     s for s in SESSIONS
     if "fault" not in SESSION_INFO[s] and SESSION_INFO[s]["n_impacts"] <= int(config.get("fit_batch_impacts", 0))
 ]
 # the session wildcard of session_outputs matches exactly these names ("(?!)" matches none)
 SMALL_SESSION_PATTERN = "|".join(re.escape(s) for s in SMALL_SESSIONS) or "(?!)"
-# Small sessions processed as one chunk (config chunk_size, min_chunks) are also validated,
-# processed and collected by one job (rule session_impacts) instead of validate_session,
-# process_chunk and collect_impacts.
+# Small sessions processed as one chunk (config chunk_size, min_chunks) are validated,
+# processed, collected, fitted, archived, drawn and reported by one job (rule small_session)
+# instead of validate_session, process_chunk, collect_impacts and session_outputs.
 ONE_JOB_SESSIONS = [s for s in SMALL_SESSIONS if SESSION_INFO[s]["n_chunks"] == 1]
 ONE_JOB_SESSION_PATTERN = "|".join(re.escape(s) for s in ONE_JOB_SESSIONS) or "(?!)"
+# the session wildcard of session_outputs: the small sessions processed in several chunks
+SPLIT_SMALL_SESSION_PATTERN = "|".join(re.escape(s) for s in SMALL_SESSIONS if s not in ONE_JOB_SESSIONS) or "(?!)"
 
 
 # ------------------------------------------------------------------------ paths
