@@ -406,8 +406,9 @@ def write_session(rig: Rig, raw_dir) -> list[ImpactTruth]:
     rng = np.random.default_rng([rig.seed, rig.index, 47])
     faults = dict(rig.faults)
     rows, truths = [], []
+    order = rng.permutation([k % len(rig.balls) for k in range(rig.n_impacts)])  # the ball types take turns
     for k in range(rig.n_impacts):
-        ball = rig.balls[k % len(rig.balls)] if k < len(rig.balls) else rig.balls[int(rng.integers(len(rig.balls)))]
+        ball = rig.balls[int(order[k])]
         vin = float(rng.uniform(*SPEED_RANGE_M_S))
         kind = faults.get(k, "")
         impact_id = f"{ball.key}-{k + 1:03d}"
