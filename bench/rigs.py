@@ -143,13 +143,18 @@ def score_impacts(results: pd.DataFrame, truth: pd.DataFrame) -> dict:
     right = {q: np.abs(err[q]) <= tol[q] for q in TOL}
     wrong = [(results["impact_id"][i], q, float(err[q][i])) for q in TOL
              for i in np.flatnonzero(clean & quantity_ok(results, q) & ~right[q])]
-    lost = [str(r) for r in results["reason"].fillna("").astype(str)[clean & ~used]]
-    lost_notes = [str(r) for r in results.get("fit_note", pd.Series([""] * len(results))).fillna("").astype(str)
-                  [clean & ~used & (results["status"].astype(str).to_numpy() == "ok")]]
+    status_ok = results["status"].astype(str).to_numpy() == "ok"
+    notes = results["fit_note"] if "fit_note" in results.columns else pd.Series([""] * len(results))
+    lost = [f"left out of the fit: {notes[i]}" if status_ok[i] else str(results["reason"][i])
+            for i in np.flatnonzero(clean & ~used)]
     faulty_used = [(results["impact_id"][i], truth["fault"][i]) for i in np.flatnonzero(~clean & used)]
+    vin = pd.to_numeric(results["vin_m_s"], errors="coerce").to_numpy(dtype=float)
+    balls = results["ball"].astype(str).to_numpy()
+    speeds = {b: (float(vin[used & (balls == b)].min()), float(vin[used & (balls == b)].max()))
+              for b in set(balls[used])}
     return {"n": len(truth), "clean": int(clean.sum()), "used": int((clean & used).sum()),
             "used_right": int((clean & used & right["tc"] & right["cor"]).sum()), "wrong": wrong,
-            "faulty": int((~clean).sum()), "faulty_used": faulty_used, "lost_reasons": lost + lost_notes}
+            "faulty": int((~clean).sum()), "faulty_used": faulty_used, "lost_reasons": lost, "speeds": speeds}
 
 
 def score_curves(parameters: pd.DataFrame, rig: rig_zoo.Rig) -> list[dict]:
@@ -206,11 +211,14 @@ def run_rig(job) -> dict:
 # ------------------------------------------------------------------ tables
 
 
-def _curve_text(c: dict) -> str:
+def _curve_text(c: dict, speeds: dict) -> str:
+    """A ball type's curves: its impacts used (and their speeds [m/s]), TC and COR errors; * when off target."""
+    lo_hi = speeds.get(c["ball"])
+    used = f"n {c['n_used']}" + (f", {lo_hi[0]:.0f}-{lo_hi[1]:.0f} m/s" if lo_hi and c["n_used"] else "")
     if not math.isfinite(c["tc_pct"]):
-        return f"{c['ball']} (n {c['n_used']}): no fit"
+        return f"{c['ball']} ({used}): no fit"
     flag = "" if c["tc_pct"] <= CURVE_TOL["tc_pct"] and c["cor"] <= CURVE_TOL["cor"] else " *"
-    return f"{c['ball']} (n {c['n_used']}): TC {c['tc_pct']:.2f} %, COR {c['cor']:.4f}{flag}"
+    return f"{c['ball']} ({used}): TC {c['tc_pct']:.2f} %, COR {c['cor']:.4f}{flag}"
 
 
 def rig_block(r: dict) -> list[str]:
@@ -228,7 +236,7 @@ def rig_block(r: dict) -> list[str]:
         lines.append(f"    ... and {len(r['wrong']) - SHOW} more ok but wrong: "
                      + ", ".join(f"{q} {n}" for q, n in Counter(q for _, q, _ in r["wrong"][SHOW:]).items()))
     lines += [f"    faulty used {i}: {f}" for i, f in r["faulty_used"]]
-    lines.append("  curves 15-30 m/s: " + "; ".join(_curve_text(c) for c in r["curves"]))
+    lines.append("  curves 15-30 m/s: " + "; ".join(_curve_text(c, r["speeds"]) for c in r["curves"]))
     if r["used"] < r["clean"]:
         heads = Counter(_reason_head(x) for x in r["lost_reasons"])
         lines.append("  clean not used: " + ", ".join(f"{h} {n}" for h, n in heads.most_common(4)))

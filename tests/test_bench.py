@@ -284,7 +284,8 @@ def test_rigs_score_reads_the_v12_verdicts_and_falls_back_to_status():
     truth = pd.DataFrame({"impact_id": ["a", "b", "c"], "fault": ["", "", "clipped"],
                           "contact_time_ms": [4.0, 4.0, 4.0], "kcal_N_per_V": [200.0] * 3,
                           "peak_force_N": [1000.0] * 3, "peak_is_spike": [False, True, False], "cor": [0.6] * 3})
-    old = pd.DataFrame({"impact_id": ["c", "b", "a"], "status": ["ok", "ok", "ok"], "reason": ["", "", ""],
+    old = pd.DataFrame({"impact_id": ["c", "b", "a"], "ball": "x", "vin_m_s": ["20", "21", "22"],
+                        "status": ["ok", "ok", "ok"], "reason": ["", "", ""],
                         "used_in_fit": ["true", "true", "false"], "contact_time_ms": ["4.0", "4.1", "4.0"],
                         "kcal_N_per_V": ["200", "200", "200"], "peak_force_N": ["1000", "1045", ""],
                         "cor": ["0.6", "0.6", "0.6025"]})
@@ -292,6 +293,8 @@ def test_rigs_score_reads_the_v12_verdicts_and_falls_back_to_status():
     # b's TC is 2.5 % off (its peak 4.5 % is within the spike's 5 %); a's empty peak is withheld; its COR is off
     assert sorted((i, q) for i, q, _ in s["wrong"]) == [("a", "cor"), ("b", "tc")]
     assert (s["clean"], s["used"], s["used_right"], s["faulty_used"]) == (2, 1, 0, [("c", "clipped")])
+    assert [rigs._reason_head(x) for x in s["lost_reasons"]] == ["left out of the fit"]  # a: ok, not used
+    assert s["speeds"] == {"x": (20.0, 21.0)}  # of the impacts used in the fit, c (faulty) among them
     new = old.assign(contact_time_status=["ok", "withheld", "ok"], kcal_status="ok",
                      peak_status=["ok", "ok", "withheld"], cor_status=["ok", "ok", "withheld"])
     s = rigs.score_impacts(new, truth)
