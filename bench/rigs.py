@@ -270,6 +270,38 @@ def summary(records: list[dict]) -> list[str]:
     return lines
 
 
+def _factor_rows(rig) -> list[str]:
+    """The rows of :func:`by_factor` a rig counts in."""
+    fn = rig.plate_hz
+    plate = ("plate ideal" if fn is None else "plate 1-2 kHz" if fn < 2e3 else "plate 2-5 kHz" if fn < 5e3
+             else "plate 5-15 kHz" if fn < 15e3 else "plate 15-30 kHz")
+    rows = [plate, "anti-aliasing filter" if rig.antialias_hz is not None else "no anti-aliasing filter",
+            "fs >= 60 kHz" if rig.sample_rate_hz >= 60e3 else "fs < 60 kHz"]
+    if fn is not None:
+        rows.append(f"resonance {'stated' if 'resonance' in rig.stated else 'not stated'}")
+    return rows
+
+
+FACTOR_ORDER = ["plate ideal", "plate 1-2 kHz", "plate 2-5 kHz", "plate 5-15 kHz", "plate 15-30 kHz",
+                "anti-aliasing filter", "no anti-aliasing filter", "fs < 60 kHz", "fs >= 60 kHz",
+                "resonance stated", "resonance not stated"]
+
+
+def by_factor(records: list[dict]) -> list[str]:
+    """Clean impacts used, used and right, and ok-but-wrong quantities per factor of the rig (markdown)."""
+    lines = ["| rigs with | rigs | clean impacts | used | used and right | ok but wrong |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for row in FACTOR_ORDER:
+        rs = [r for r in records if not r["error"] and row in _factor_rows(r["rig"])]
+        if not rs:
+            continue
+        clean = sum(r["clean"] for r in rs)
+        used, right = sum(r["used"] for r in rs), sum(r["used_right"] for r in rs)
+        lines.append(f"| {row} | {len(rs)} | {clean} | {used} ({100 * used / max(clean, 1):.0f} %) "
+                     f"| {right} ({100 * right / max(clean, 1):.0f} %) | {sum(len(r['wrong']) for r in rs)} |")
+    return lines
+
+
 def lost_by_class(records: list[dict], k: int = 6) -> list[str]:
     """The commonest reasons clean impacts were not used, per class."""
     out = []
@@ -308,6 +340,9 @@ def main(argv=None) -> int:
         print("\n".join(rig_block(r)))
     print()
     print("\n".join(summary(records)))
+    print()
+    print("\n".join(by_factor(records)))
+    print()
     print("\n".join(lost_by_class(records)))
     return 0
 
