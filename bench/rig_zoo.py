@@ -276,14 +276,14 @@ def _amplifier_samples(rig: Rig, t0: float, n: int, knots: list, end_s: float) -
     m = max(1, int(math.ceil(FINE_RATE_HZ / fs)))
     h = 1.0 / (m * fs)
     ring = 0.0 if rig.plate_hz is None else RING_DECAY / (rig.plate_zeta * 2 * math.pi * rig.plate_hz)
-    i_a = max(0, int(math.floor((-1.0e-3 - t0) * fs)))
+    i_a = int(math.floor((-1.0e-3 - t0) * fs))  # sample index 1 ms before the force (< 0: before the trace)
     i_b = int(math.ceil((end_s + ring + AA_PAD_S - t0) * fs))
     i_b = min(i_b, n + int(math.ceil(AA_PAD_S * fs)))
-    t_fine = t0 + (i_a * m + np.arange((i_b - i_a) * m)) * h
-    sensed = _sensed(rig, t_fine, knots, h)
+    t_fine = t0 + (i_a * m + np.arange((i_b - i_a) * m)) * h  # from 1 ms before the force, also when the trace
+    sensed = _sensed(rig, t_fine, knots, h)  # starts later (a truncated start: the plate's state is the force's)
     amp = zoo._highpass(sensed, rig.tau_s, h)
     out = np.zeros(n)
-    take = np.arange(i_a, min(i_b, n))
+    take = np.arange(max(i_a, 0), min(i_b, n))
     out[take] = amp[(take - i_a) * m]
     if i_b < n:  # after the window: the high-pass's state w (output -w) decays
         w_end = float(sensed[-1] - amp[-1])
