@@ -9,7 +9,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 CORES ?= 2
 
-.PHONY: run test bench mutation clean-results setup check-python
+.PHONY: run test docs bench mutation clean-results setup check-python
 
 setup: $(VENV)/.installed
 
@@ -25,13 +25,23 @@ $(VENV)/.installed: pyproject.toml | check-python
 run: setup
 	$(BIN)/snakemake --cores $(CORES)
 
-# the suite in TEST_WORKERS processes (pytest-xdist): on 027a4de, on a 2-core machine, `pytest -q` took 9 min 26 s
-# and `pytest -q -n 2` 5 min 43 s. The fixtures that run a whole workflow (the demo run, mixed_run, the reruns' run)
-# are built once per test run, not once per worker (tests/shared_fixture.py).
+# the suite in TEST_WORKERS processes (pytest-xdist; its time: docs/development.md). The fixtures that run a whole
+# workflow (the demo run, mixed_run, the reruns' run) are built once per test run, not once per worker
+# (tests/shared_fixture.py).
 TEST_WORKERS ?= 2
 
 test: setup
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
+
+# The documentation site into site/ (not committed), strict: a warning (broken link, missing
+# page, unresolved API reference) fails the build. The figures are made from the demo
+# session by docs/gen_figures.py, called by docs/hooks.py when they are missing or stale.
+$(VENV)/.docs-installed: $(VENV)/.installed
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
+	touch $@
+
+docs: $(VENV)/.docs-installed
+	NO_MKDOCS_2_WARNING=1 $(BIN)/python -m mkdocs build --strict --site-dir site
 
 bench: setup
 	$(BIN)/python bench/run.py
@@ -41,7 +51,7 @@ bench: setup
 # their own fast tests (mutmut 3, config in pyproject.toml [tool.mutmut]); not part of
 # `make test` or CI. By default a seeded random sample of MUTATION_SAMPLE mutants per module
 # (score with a 95 % interval); MUTATION_SAMPLE=all runs the whole selection (hours on 2
-# cores). Budget and measured time: README "Mutation testing".
+# cores). Budget and measured time: docs/mutation-testing.md.
 MUTATION_SAMPLE ?= 150
 MUTATION_SEED ?= 0
 mutation: setup

@@ -3,7 +3,7 @@
     python bench/antialias_map.py --n 400 --seed 1     # fs 20-100 kHz, a sigma-delta ADC's filter at 0.40-0.45 fs
 
 The zoo's DAQ has no anti-aliasing filter, so it can state a bandwidth only for a resonant plate, and most of the
-traces whose peak alone is in doubt are ideal plates (README, "Robustness"). A sigma-delta ADC, the usual DAQ of a
+traces whose peak alone is in doubt are ideal plates (docs/robustness.md). A sigma-delta ADC, the usual DAQ of a
 force platform today, filters before it decimates: linear phase, flat to about 0.45 fs, 100 dB down from 0.55 fs.
 Its rigs are what ``daq.bandwidth_hz`` is for. Apart from the zoo's seeds: each rig is tests/zoo.py's benign rig
 (``zoo.map_shot``: a Table 2 ball, the four in turn, at 10-35 m/s, noise 0.1-0.5 % of the peak, an ideal plate)

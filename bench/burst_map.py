@@ -11,7 +11,7 @@ half of them on a plate of 3 kHz to 0.45 fs (damping 0.01-0.3), with 1-3 bursts 
 anywhere from a contact's length before the contact to one after it. The truth is the zoo's (the bursts are not the
 ball's force, and the trace stays measurable): an ok must be right. Rendered and judged as the zoo's traces are
 (``zoo.run_trace``). Prints the categories by where the largest burst falls, and the ok-but-wrong traces with their
-bursts. Not yet handled: the README, "Robustness", What remains.
+bursts. Not yet handled: docs/robustness.md, "What remains".
 """
 
 from __future__ import annotations

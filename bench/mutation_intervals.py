@@ -6,8 +6,7 @@
 A pytest plugin (loaded before the tests are collected, so their ``from ballimpact.fitting
 import fit_ball_model`` gets the wrapped one): each ``<name>_lo``/``<name>_hi`` of the
 returned BallFit becomes estimate -/+ WIDEN x its distance from the estimate. The fast suite
-must fail for intervals twice as wide and for intervals half as wide (README "Tests that
-fail when the physics is wrong").
+must fail for intervals twice as wide and for intervals half as wide (docs/physics-tests.md).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ Each commit is checked out in a temporary git worktree (removed at the end; "." 
 (``OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1``), once per commit per round, the commits in turn, so that a machine
 whose speed drifts over the minutes (other work, heat) weighs on each alike. Prints each commit's
 ``process_seconds_per_impact`` run by run, its range and median [ms], and the median's ratio to the first commit's.
-One run takes about 6 s on the 2-core machine of the README; the machine's noise moves a single run by up to 15 %,
+One run takes about 6 s on a 2-core machine (docs/performance.md); the machine's noise moves a single run by up to 15 %,
 hence the medians over several rounds.
 """
 

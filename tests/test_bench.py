@@ -32,68 +32,61 @@ def test_extrapolation_needs_two_sizes(ns):
         _bench().extrapolate_linear(ns, [10.0] * len(ns), 100)
 
 
-def _excluded(reason, tc, kcal, peak, spike=False, category="excluded_measurable"):
-    return {"category": category, "reason": reason, "tc_err_pct": tc, "kcal_err_pct": kcal, "peak_err_pct": peak,
-            "peak_is_spike": spike}
+def _rec(labels, tc, kcal="ok_right", peak="ok_right", category="ok_right", measurable=True, codes=""):
+    status = "ok" if category in ("ok_right", "ok_wrong", "faulty_ok") else "excluded"
+    return {"labels": labels, "category": category, "measurable": measurable, "status": status, "codes": codes,
+            "tc_outcome": tc, "kcal_outcome": kcal, "peak_outcome": peak}
 
 
 @pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")  # the script's BLAS setting, numpy already loaded
-def test_exclusion_table_counts_the_traces_that_were_right_all_the_same():
+def test_factor_table_counts_each_quantity_s_outcomes_on_non_faulty_traces():
     robustness = bench_module("robustness")
-    nan = float("nan")
     records = [
-        _excluded("peak force between samples: the force rises by 12 % ...", 0.3, -0.2, 4.0, spike=True),  # right
-        _excluded("peak force between samples: the force rises by 14 % ...", 0.3, -0.2, 4.0),  # peak off (3 %)
-        _excluded("peak force between samples: ...; contact end not determined ...", 1.2, 0.0, 0.0),  # TC off
-        _excluded("charge-amplifier undershoot not measurable (0.05 +/- 1.2 mV): ...", -0.9, 0.99, -2.9),  # right
-        _excluded("contact end not determined to 1 %: ...", nan, 0.0, 0.0),  # no TC: not right
-        _excluded("peak force between samples: ...", 0.0, 0.0, 0.0, category="excluded_marginal"),  # not counted
+        _rec("all|mode one factor|plate ideal", "ok_right"),
+        _rec("all|mode one factor|plate ideal", "withheld_right", category="excluded_measurable", codes="x"),
+        _rec("all|mode random|plate 3-10 kHz", "ok_wrong", kcal="withheld_right", category="ok_wrong"),
+        _rec("all|mode random|clipped", "withheld_wrong", category="faulty_ok", measurable=False),
     ]
-    assert [robustness._right_if_passed(r) for r in records[:5]] == [True, False, False, True, False]
-    table = robustness.exclusions(records, 10).splitlines()
-    assert "| peak force between samples | 3 | 1 |" in table
-    assert "| charge-amplifier undershoot not measurable | 1 | 1 |" in table
-    assert "| contact end not determined to # % | 1 | 0 |" in table
-    assert table.index("| peak force between samples | 3 | 1 |") < table.index(
-        "| contact end not determined to # % | 1 | 0 |")
-    assert robustness.exclusions(records[5:], 10) == ""
+    order, rows = robustness.table(records)
+    assert order[0] == "all"
+    assert rows["all"]["n"] == 4 and rows["all"]["measurable"] == 3 and rows["all"]["faulty_used"] == 1
+    assert (rows["all"]["tc_ok_right"], rows["all"]["tc_ok_wrong"], rows["all"]["tc_withheld_right"]) == (1, 1, 1)
+    assert rows["all"]["kcal_withheld_right"] == 1 and rows["all"]["used"] == 2
+    text = robustness.markdown(records, "t").splitlines()
+    assert text[2].startswith("| factor class | n | faulty used | non-faulty | used in fit | tc ok right |")
+    assert "| all | 4 | 1 | 3 | 2 | 1 | 1 | 1 | 2 | 0 | 1 | 3 | 0 | 0 |" in text
 
 
 @pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
-def test_peak_alone_counts_the_exclusions_a_verdict_per_quantity_would_undo():
+def test_targets_split_one_factor_from_random_rigs_by_plate():
     robustness = bench_module("robustness")
     records = [
-        {**_excluded("", 0.2, -0.3, 9.0), "kinds": "peak_on_ringing"},  # TC and kCAL right: kept
-        {**_excluded("", 0.2, -2.2, 9.0), "kinds": "peak_on_ringing peak_between_samples"},  # kCAL off: ok but wrong
-        {**_excluded("", 0.2, 0.3, 9.0), "kinds": "peak_on_ringing plate_ringing"},  # another problem: not alone
-        {**_excluded("", 0.2, 0.3, 9.0), "kinds": ""},  # no problem kinds recorded: not counted
-        {**_excluded("", 0.2, 0.3, 9.0, category="excluded_marginal"), "kinds": "peak_between_samples"},
+        _rec("all|mode one factor|plate ideal", "ok_right"),
+        _rec("all|mode one factor|plate < 3 kHz", "withheld_right"),
+        _rec("all|mode random|plate ideal", "ok_right"),
+        _rec("all|mode random|plate 3-10 kHz", "withheld_wrong"),
+        _rec("all|mode random|plate < 3 kHz", "withheld_right"),
     ]
-    assert robustness.peak_alone(records) == (2, 1, 1)
+    text = robustness.targets(records)
+    assert "| one factor | 2 | 1 (50.0 %) | >= 98 % |" in text
+    assert "| random, ideal plate or >= 3 kHz | 2 | 1 (50.0 %) | >= 85 % |" in text
+    assert "| random, plate < 3 kHz | 1 | 0 (0.0 %) | - |" in text
+    assert "ok but wrong: tc 0, kcal 0, peak 0; faulty used in a fit: 0" in text
 
 
 @pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
-def test_mode_and_plate_table_counts_measurable_traces_only():
+def test_withheld_by_code_counts_right_tcs_lost_under_each_code():
     robustness = bench_module("robustness")
-
-    def rec(category, labels, measurable=True, tc=0.0):
-        return {**_excluded("", tc, 0.0, 0.0, category=category), "labels": labels, "measurable": measurable}
-
     records = [
-        rec("ok_right", "all|mode one factor|plate ideal"),
-        rec("excluded_measurable", "all|mode one factor|plate ideal"),  # right all the same
-        rec("excluded_measurable", "all|mode random|plate 3-10 kHz", tc=2.0),  # would have been wrong
-        rec("ok_right", "all|mode random|plate 10-30 kHz"),
-        rec("ok_right", "all|mode random|plate 10-30 kHz"),
-        rec("excluded_marginal", "all|mode random|plate ideal", measurable=False),  # not measurable: not counted
+        _rec("all", "withheld_right", codes="plate_ringing;peak_on_ringing"),
+        _rec("all", "withheld_right", codes="plate_ringing"),
+        _rec("all", "withheld_wrong", codes="plate_ringing"),  # wrong: withholding it was right
+        _rec("all", "withheld_right", codes=""),  # its budget alone
     ]
-    table = robustness.by_mode_and_plate(records).splitlines()
-    assert "| one factor | ideal plate | 2 | 1 (50.0 %) | 1 |" in table
-    assert "| random | resonant plate | 3 | 1 (33.3 %) | 0 |" in table
-    assert not any(line.startswith("| random | ideal plate") for line in table)
-    assert table.index("| one factor | ideal plate | 2 | 1 (50.0 %) | 1 |") < table.index(
-        "| random | resonant plate | 3 | 1 (33.3 %) | 0 |")
-    assert robustness.by_mode_and_plate(records[5:]) == ""
+    lines = robustness.withheld_by_code(records, 10).splitlines()
+    assert lines.index("| plate_ringing | 2 |") < lines.index("| peak_on_ringing | 1 |")
+    assert "| budget | 1 |" in lines
+    assert robustness.withheld_by_code(records[2:3], 10) == ""
 
 
 def _tau(category, source, true, tau, se):

@@ -220,7 +220,7 @@ def test_integrate_motion_bad_input():
         integrate_motion(np.arange(3.0), np.ones(4), MASS_KG, 20.0)
 
 
-# Cases found by mutation testing (`make mutation`, README "Mutation testing"): exact
+# Cases found by mutation testing (`make mutation`, docs/mutation-testing.md): exact
 # messages (anchored, so a changed name in the message fails) and edges.
 
 

@@ -18,7 +18,7 @@ def test_simulate_json_keys_and_sanity_figures(capsys):
     assert main(["simulate", *BALL1, "--vin", "20", "--vin", "28", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [set(r) for r in rows] == [{"vin_m_s", "contact_time_ms", "cor", "peak_force_N", "max_displacement_mm"}] * 2
-    # README / docs/model.md check values for ball 1 at 20 m/s, to the rounding of the printed
+    # docs/accuracy.md / docs/model.md check values for ball 1 at 20 m/s, to the rounding of the printed
     # figures (half a unit of the last digit)
     for key, value, atol in [("contact_time_ms", 3.72, 0.005), ("cor", 0.631, 0.0005), ("peak_force_N", 844, 0.5),
                              ("max_displacement_mm", 18.6, 0.05)]:

@@ -262,7 +262,7 @@ def test_detect_contact_on_noisy_bumps(n, centre, width, amp, noise, seed):
 
 # ------------------------------------------------- found by mutation testing (issue 15)
 # Each case is a contract of the docstrings (the rails, the not-found result, the contact's
-# samples) at an edge the tests above did not reach; see README "Mutation testing".
+# samples) at an edge the tests above did not reach; see docs/mutation-testing.md.
 
 
 def test_clipping_rail_band_is_inclusive_at_both_rails():

@@ -85,7 +85,7 @@ def test_check_gate_times():
     assert problems[1].message.startswith("rebound gate interval not positive")
 
 
-# Cases found by mutation testing (`make mutation`, README "Mutation testing").
+# Cases found by mutation testing (`make mutation`, docs/mutation-testing.md).
 
 
 def test_gate_speeds_zero_inbound_interval_is_nan():

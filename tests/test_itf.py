@@ -70,7 +70,7 @@ def test_prediction_chains_fall_model_and_rise(key):
 
 # The model's over-prediction of the drop test, per Table 2 ball: model COR at the ITF
 # impact speed minus the COR of Table 1's rebound (both with drag on fall and rise),
-# and the model's rebound minus Table 1's. Measured by this test; quoted in the README.
+# and the model's rebound minus Table 1's. Measured by this test; quoted in docs/speeds-itf.md.
 OVER_PREDICTION = {  # key: (COR difference, rebound difference [cm])
     "pressurised": (0.083, 30.6),
     "pressureless": (0.068, 25.1),

@@ -39,7 +39,7 @@ def test_material_damping_is_area_law():
 
 
 def test_readme_check_values_ball1_20ms():
-    # README / docs/model.md print TC 3.72 ms, COR 0.631, peak 844 N, largest displacement
+    # docs/accuracy.md / docs/model.md print TC 3.72 ms, COR 0.631, peak 844 N, largest displacement
     # 18.6 mm for ball 1 at 20 m/s: each must hold to the rounding of the printed figure
     # (half a unit of its last digit).
     r = _sim("pressurised", 20.0)
@@ -267,7 +267,7 @@ def test_unended_impact_warns_and_gives_nan():
     assert np.isnan(r.contact_time_s)
 
 
-# Cases found by mutation testing (`make mutation`, README "Mutation testing").
+# Cases found by mutation testing (`make mutation`, docs/mutation-testing.md).
 
 
 def test_momentum_flux_damping_eq_13():

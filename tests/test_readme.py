@@ -1,16 +1,23 @@
-"""README.md: every code block runs, parses or names things that exist (issue 14).
+"""README.md and the documentation site's pages: every code block runs, parses or names things
+that exist; the README stays a short page for users.
 
 * ```python blocks are executed, in the working folder of the demo run (they read
-  results/demo-2004/...);
-* ```yaml blocks are session.yaml examples: read with the session reader, no warning;
-* ```sh blocks: every `ballimpact ...` line parses with the real argument parser, every
+  results/demo-2004/... and raw/demo-2004);
+* ```yaml blocks that are a session.yaml (they hold `session_id:`) are read with the
+  session reader, without a warning;
+* ```sh blocks: every `ballimpact ...` command parses with the real argument parser, every
   `make X` names a Makefile target, every `python X.py` an existing script.
+
+The pages are README.md and docs/*.md, less the history pages (docs/changelog.md,
+docs/robustness-history.md), whose commands are those of their day. Blocks indented under
+an admonition count too.
 """
 
 from __future__ import annotations
 
 import re
 import shlex
+import textwrap
 import warnings
 
 import matplotlib
@@ -21,36 +28,54 @@ from ballimpact.session import read_session
 from workflow_helpers import REPO
 
 README = REPO / "README.md"
-BLOCK = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)
+HISTORY_PAGES = {"changelog.md", "robustness-history.md"}
+PAGES = [README] + sorted(p for p in (REPO / "docs").glob("*.md") if p.name not in HISTORY_PAGES)
+#: a fenced block, at the start of a line or indented (under an admonition), with its info string
+BLOCK = re.compile(r"^( *)```(\w*)[^\n]*\n(.*?)^\1```", re.S | re.M)
+README_MAX_LINES = 300
 
 
-def _blocks(language: str) -> list[str]:
-    return [body for lang, body in BLOCK.findall(README.read_text(encoding="utf-8")) if lang == language]
+def _page_blocks(page, language: str) -> list[str]:
+    return [textwrap.dedent(body) for indent, lang, body in BLOCK.findall(page.read_text(encoding="utf-8"))
+            if lang == language]
+
+
+def _blocks(language: str) -> list[tuple[str, str]]:
+    """(page name, block text) of every block in that language on every page."""
+    return [(page.name, body) for page in PAGES for body in _page_blocks(page, language)]
 
 
 def test_readme_has_the_blocks_it_promises():
-    assert len(_blocks("python")) >= 1
-    assert len(_blocks("yaml")) >= 1
-    assert len(_blocks("sh")) >= 1
+    assert len(_page_blocks(README, "python")) >= 1
+    assert len(_page_blocks(README, "yaml")) >= 1
+    assert len(_page_blocks(README, "sh")) >= 1
+
+
+PYTHON = _blocks("python")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("index", range(len(_blocks("python"))))
+@pytest.mark.parametrize("index", range(len(PYTHON)), ids=[f"{name}-{k}" for k, (name, _) in enumerate(PYTHON)])
 def test_python_block_runs_on_the_demo_results(demo_run_output, index, monkeypatch):
     matplotlib.use("Agg")
-    monkeypatch.chdir(demo_run_output["workdir"])  # holds results/demo-2004/
-    code = _blocks("python")[index]
-    exec(compile(code, f"README.md python block {index + 1}", "exec"), {"__name__": "readme"})  # noqa: S102
+    workdir = demo_run_output["workdir"]  # holds results/demo-2004/
+    try:
+        (workdir / "raw").symlink_to(REPO / "raw", target_is_directory=True)  # and raw/demo-2004
+    except FileExistsError:
+        pass
+    monkeypatch.chdir(workdir)
+    name, code = PYTHON[index]
+    exec(compile(code, f"{name} python block {index + 1}", "exec"), {"__name__": "readme"})  # noqa: S102
 
 
-EXAMPLES = _blocks("yaml") + ([(REPO / "docs" / "example-session.yaml").read_text(encoding="utf-8")]
-                              if (REPO / "docs" / "example-session.yaml").is_file() else [])
+EXAMPLES = [(name, body) for name, body in _blocks("yaml") if re.search(r"^session_id:", body, re.M)]
+EXAMPLES.append(("example-session.yaml", (REPO / "docs" / "example-session.yaml").read_text(encoding="utf-8")))
 
 
-@pytest.mark.parametrize("index", range(len(EXAMPLES)))
+@pytest.mark.parametrize("index", range(len(EXAMPLES)), ids=[f"{name}-{k}" for k, (name, _) in enumerate(EXAMPLES)])
 def test_yaml_block_is_a_valid_session_yaml(tmp_path, index):
-    """The README's session.yaml example (and docs/example-session.yaml, which it links)."""
-    text = EXAMPLES[index]
+    """The session.yaml examples of the pages (and docs/example-session.yaml)."""
+    text = EXAMPLES[index][1]
     session_id = re.search(r"^session_id: *(\S+)", text, re.M).group(1).strip('"')
     folder = tmp_path / session_id
     (folder / "traces").mkdir(parents=True)
@@ -70,35 +95,36 @@ def test_yaml_block_is_a_valid_session_yaml(tmp_path, index):
     assert session.meta.balls[balls[0]].mass_kg == pytest.approx(mass_g / 1000.0, rel=1e-12)
 
 
-def _sh_commands() -> list[str]:
+def _sh_commands() -> list[tuple[str, str]]:
     commands = []
-    for body in _blocks("sh"):
+    for name, body in _blocks("sh"):
         joined = re.sub(r"\\\n\s*", " ", body)
         for line in joined.splitlines():
-            line = line.split("#", 1)[0].strip()
-            if line:
-                commands.append(line)
+            for command in line.split("#", 1)[0].split("&&"):
+                if command.strip():
+                    commands.append((name, command.strip()))
     return commands
 
 
-@pytest.mark.parametrize("command", _sh_commands())
-def test_sh_block_commands_exist(command):
+@pytest.mark.parametrize("name, command", _sh_commands())
+def test_sh_block_commands_exist(name, command):
     words = shlex.split(re.sub(r"\[([^\]]*)\]", r"\1", command))  # "[--json]": an optional argument
-    if words[0] == "ballimpact":
+    program = words[0].removeprefix(".venv/bin/")
+    if program == "ballimpact":
         build_parser().parse_args(words[1:])  # SystemExit on an unknown option or sub-command
-    elif words[0] == "make":
+    elif program == "make":
         targets = re.findall(r"^([\w-]+):", (REPO / "Makefile").read_text(encoding="utf-8"), re.M)
-        assert set(words[1:]) <= set(targets), (command, targets)
-    elif words[0] == "python":
-        assert (REPO / words[1]).is_file(), command
-    elif words[0] == ".venv/bin/python":
-        assert words[1:3] == ["-m", "pytest"], command
-    elif words[0] in ("snakemake", ".venv/bin/snakemake"):
+        assert set(words[1:]) <= set(targets), (name, command, targets)
+    elif program == "python" and words[1:3] != ["-m", "pytest"]:
+        assert (REPO / words[1]).is_file(), (name, command)
+    elif program == "python":
+        assert words[0] == ".venv/bin/python", (name, command)  # the project's interpreter runs the suite
+    elif program == "snakemake":
         for word in words:
             if word.startswith("profiles/"):
-                assert (REPO / word).is_dir(), command
+                assert (REPO / word).is_dir(), (name, command)
     else:
-        pytest.fail(f"README command not checked by this test: {command!r}")
+        pytest.fail(f"{name}: command not checked by this test: {command!r}")
 
 
 def test_no_developer_wording():
@@ -110,11 +136,28 @@ def test_no_developer_wording():
     assert "0.948-0.951 for AK, a, AC and kB(20 mm)" in text
 
 
+def test_readme_is_short_and_has_no_history():
+    """At most 300 lines, no commit hash, no issue number: the history is docs/changelog.md's."""
+    text = README.read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= README_MAX_LINES
+    hashes = re.findall(r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b", text)
+    assert hashes == [], hashes
+    issues = re.findall(r"(?i)\bissues?\s*#?\d+|(?<![\w&])#\d+\b|\bPR\s*#?\d+", text)
+    assert issues == [], issues
+
+
+def test_readme_links_lead_to_files_of_the_repository():
+    for target in re.findall(r"\]\(([^)#]+)\)", README.read_text(encoding="utf-8")):
+        if not target.startswith("http"):
+            assert (REPO / target).exists(), target
+
+
 @pytest.mark.slow
-def test_run_summary_in_readme_is_the_demo_run_s(demo_run_output):
-    """The summary shown under "What a run prints" is what the demo run prints."""
-    text = README.read_text(encoding="utf-8").split("## What a run prints", 1)[1]
-    shown = BLOCK.search(text).group(2).strip().splitlines()
+def test_run_summary_in_the_docs_is_the_demo_run_s(demo_run_output):
+    """The summary shown under "What a run prints" (docs/getting-started.md) is what the demo run prints."""
+    page = REPO / "docs" / "getting-started.md"
+    text = page.read_text(encoding="utf-8").split("## What a run prints", 1)[1]
+    shown = BLOCK.search(text).group(3).strip().splitlines()
     out = demo_run_output["stdout"]
     printed = out[out.rindex("ballimpact run summary"):].split("=" * 78)[0].strip().splitlines()
     assert shown[2:-1] == printed[1:]  # session lines; the header names the results folder

@@ -40,6 +40,15 @@ def test_page_count(ds, pdf):
     assert report.report_page_count(ds) == 1 + N_FIGURES + 1 + n_excluded
 
 
+
+def test_report_pages_are_the_pdf_pages(ds, pdf):
+    """report_pages gives the PDF's pages one by one: as many, each A4, the first the summary."""
+    pages = list(report.report_pages(ds))
+    assert len(pages) == _page_count(pdf.read_bytes()) == report.report_page_count(ds)
+    for page in pages:
+        assert tuple(page.get_size_inches()) == pytest.approx(report.A4_PORTRAIT_IN, abs=1e-6)
+    assert any("fixture-session-01" in text.get_text() for text in pages[0].texts)
+
 def test_pdf_metadata_and_a4(pdf):
     data = pdf.read_bytes()
     assert data.startswith(b"%PDF")

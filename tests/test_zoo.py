@@ -252,16 +252,18 @@ def test_session_folder_reads_back(tmp_path, fmt):
     assert ("time_constant_s" in session.meta.raw["plate"]) == (tr.rig.tau_known and math.isfinite(tr.rig.tau_s))
 
 
-def _result(status="ok", tc_ms=4.0, kcal=200.0, peak=1000.0, reason="", peak_note=""):
-    r = ImpactResult(impact_id="x", ball="b", status=status, reason=reason, peak_note=peak_note)
+def _result(status="ok", tc_ms=4.0, kcal=200.0, peak=1000.0, reason="", withheld=()):
+    r = ImpactResult(impact_id="x", ball="b", status=status, reason=reason)
     r.contact_time_ms, r.kcal_N_per_V, r.peak_force_N = tc_ms, kcal, peak
+    for q in withheld:
+        setattr(r, f"{q}_status", "withheld")
     return r
 
 
 def _truth(fault="", marginal="", spike=False):
     return zoo.ZooTruth(tc_s=4e-3, start_s=0.01, end_s=0.014, kcal_N_per_V=200.0, peak_N=1000.0, peak_is_spike=spike,
                         time_to_peak_s=1e-3, vin_m_s=20.0, vout_m_s=12.0, mass_kg=0.057,
-                        measurable=not fault and not marginal, fault=fault, marginal=marginal, second_fraction=0.0,
+                        measurable=not fault, fault=fault, marginal=marginal, second_fraction=0.0,
                         model_tc_s=4.1e-3, model_vout_m_s=12.0)
 
 
@@ -274,22 +276,29 @@ def _truth(fault="", marginal="", spike=False):
     (_result(peak=1000 * 1.04), _truth(spike=True), "ok_right", []),
     (_result(peak=1000 * 0.94), _truth(spike=True), "ok_wrong", ["peak"]),
     (_result(tc_ms=math.nan), _truth(), "ok_wrong", ["tc"]),
-    (_result(peak=math.nan), _truth(), "ok_wrong", ["peak"]),  # a missing peak without its reason
-    (_result(peak=math.nan, peak_note="peak force between samples: ..."), _truth(), "ok_right", []),  # withheld
-    (_result(tc_ms=4.0 * 1.011, peak=math.nan, peak_note="peak force between samples: ..."), _truth(), "ok_wrong",
-     ["tc"]),
-    (_result(peak=1000 * 1.04, peak_note="peak force between samples: ..."), _truth(), "ok_wrong", ["peak"]),
+    (_result(peak=math.nan), _truth(), "ok_wrong", ["peak"]),  # a missing peak reported ok
+    (_result(peak=1000 * 1.04, withheld=("peak",)), _truth(), "ok_right", []),  # withheld: not reported
+    (_result(tc_ms=4.0 * 1.011, withheld=("peak",)), _truth(), "ok_wrong", ["tc"]),
+    (_result(kcal=200 * 1.02, withheld=("kcal", "peak")), _truth(), "ok_right", []),
     (_result(), _truth(fault="second contact"), "faulty_ok", []),
     (_result(tc_ms=5.0), _truth(marginal="plate resonance 900 Hz below 3000 Hz"), "ok_wrong", ["tc"]),
-    (_result("excluded", reason="no contact found"), _truth(), "excluded_measurable", []),
+    (_result("excluded", reason="no contact found", withheld=("contact_time",)), _truth(), "excluded_measurable", []),
     (_result("excluded", reason="clipping at the ADC rails"), _truth(fault="clipped"), "excluded_faulty", []),
-    (_result("excluded", reason="x"), _truth(marginal="plate"), "excluded_marginal", []),
+    (_result("excluded", reason="x", withheld=("contact_time",)), _truth(marginal="plate"), "excluded_measurable",
+     []),
+    (_result("excluded", reason="x", tc_ms=5.0, withheld=("contact_time",), kcal=250.0), _truth(), "ok_wrong",
+     ["kcal"]),  # excluded, but its kCAL reported and wrong
 ])
 def test_judge(result, truth, category, wrong):
     j = zoo.judge(result, truth)
     assert j.category == category
     assert j.wrong == wrong
     assert j.reason == result.reason
+
+
+def test_judge_gives_each_quantity_its_outcome():
+    j = zoo.judge(_result(tc_ms=4.0 * 1.02, kcal=200.0, withheld=("contact_time", "kcal")), _truth())
+    assert j.outcomes == {"tc": "withheld_wrong", "kcal": "withheld_right", "peak": "ok_right"}
 
 
 def test_band_counts_labels_each_band_and_counts_its_categories():

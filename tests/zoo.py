@@ -45,18 +45,18 @@ Truth and judgement calls
   without spikes crosses an ADC rail), "second contact" (a second contact whose
   visible part peaks at >= 5 % of the main peak). A smaller second contact is no
   fault: the trace is measurable and its truth is the main contact's.
-* ``marginal`` (exclusion is acceptable, but an ``ok`` must still be right):
+* ``marginal`` (a label, not a class: it names what makes a right number hard to get, and the judgement does
+  not use it; every non-faulty trace counts):
   - a plate resonance below 3 kHz: the contact's own spectrum (a 3-6 ms pulse,
     falling as 1/f^2) is still above 1 % of its DC content there, and its
-    ringing lasts through the contact, so the force on the ball cannot be
-    separated from the plate's motion without a model of the plate;
+    ringing lasts through the contact;
   - a pre-buckling-spike peak with a plate resonance below 10 kHz (the 0.1 ms
     spike is narrower than the plate's response);
   - a peak that falls between samples: the true force at the DAQ instants
     misses the peak by more than its tolerance (the spike at 20-50 kHz);
   - less than 1 ms of trace after the main contact.
-* ``measurable`` = no fault and not marginal: these must come out ``ok`` and
-  right (the 2 % exclusion budget of issue 9 counts them).
+* ``measurable`` = no fault. For each quantity the truth says whether keeping
+  it (within tolerance) or withholding it (outside) was right (:func:`judge`).
 
 Everything is drawn from ``numpy.random.default_rng``: :func:`make_trace` with
 the same generator state gives the same trace. :func:`trace_for` gives the
@@ -109,7 +109,7 @@ FACTORS = (
 #: Faults: a trace with one of them must be excluded.
 FAULTS = ("truncated", "clipped", "second contact")
 #: Categories of :func:`judge`.
-CATEGORIES = ("ok_right", "ok_wrong", "faulty_ok", "excluded_measurable", "excluded_faulty", "excluded_marginal")
+CATEGORIES = ("ok_right", "ok_wrong", "faulty_ok", "excluded_measurable", "excluded_faulty")
 #: Tolerances of issue 9: TC and kCAL 1 %, peak 3 % (5 % for the pre-buckling spike).
 TOL_TC, TOL_KCAL, TOL_PEAK, TOL_PEAK_SPIKE = 0.01, 0.01, 0.03, 0.05
 #: A second contact from this fraction of the main peak on is a fault.
@@ -715,7 +715,7 @@ def render(rig: Rig, rng: np.random.Generator, label: str = "") -> ZooTrace:
     truth = ZooTruth(
         tc_s=tc, start_s=t_start, end_s=t_end, kcal_N_per_V=kcal, peak_N=peak, peak_is_spike=spike,
         time_to_peak_s=float(sim.time_to_peak_s) - t_first, vin_m_s=vin, vout_m_s=vout, mass_kg=mass,
-        measurable=not faults and not marginal, fault="; ".join(faults), marginal="; ".join(marginal),
+        measurable=not faults, fault="; ".join(faults), marginal="; ".join(marginal),
         second_fraction=second_fraction, model_tc_s=float(sim.contact_time_s),
         model_vout_m_s=float(sim.rebound_speed_m_s),
     )
@@ -969,23 +969,31 @@ class Judgement:
     Attributes
     ----------
     category : str
-        One of :data:`CATEGORIES`.
+        One of :data:`CATEGORIES`, for the impact as a whole.
     reason : str
         The processing's exclusion reason ("" when ok).
     errors : dict
         Relative errors (result / truth - 1) of TC, kCAL and peak [-] (NaN when not reported).
     wrong : list of str
-        The quantities outside their tolerance (for ok results).
+        The quantities reported (status ok) outside their tolerance.
+    outcomes : dict
+        Per quantity of :data:`QUANTITY_KEYS`: ``ok_right``, ``ok_wrong``, ``withheld_right`` (withheld, though
+        its estimate was within tolerance: a number lost) or ``withheld_wrong``.
     """
 
     category: str
     reason: str
     errors: dict = field(default_factory=dict)
     wrong: list = field(default_factory=list)
+    outcomes: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """Plain dict, for tables."""
         return asdict(self)
+
+
+#: The zoo's keys of the quantities judged, and the ImpactResult status attribute of each.
+QUANTITY_KEYS = {"tc": "contact_time_status", "kcal": "kcal_status", "peak": "peak_status"}
 
 
 def _rel(value, truth):
@@ -994,24 +1002,23 @@ def _rel(value, truth):
 
 
 def judge(result, truth: ZooTruth) -> Judgement:
-    """The invariant of issue 9 for one impact: ok and right, or excluded; never ok and wrong.
+    """Both rules for one impact, per quantity: never ok and wrong; never withheld and right.
 
     Parameters
     ----------
     result : ballimpact.processing.ImpactResult
-        What ``process_impact`` returned (status, reason, contact_time_ms [ms],
-        kcal_N_per_V [N/V], peak_force_N [N]).
+        What ``process_impact`` returned (status, reason, contact_time_ms [ms], kcal_N_per_V [N/V],
+        peak_force_N [N], and each quantity's status).
     truth : ZooTruth
         The trace's truth.
 
     Returns
     -------
     Judgement
-        ``faulty_ok`` for a faulty trace passed as ok; ``ok_wrong`` for an ok
-        result with TC or kCAL off by more than 1 % or the peak by more than 3 %
-        (5 % for the pre-buckling spike), unless the peak is withheld with its
-        reason (``peak_note``); ``ok_right``; ``excluded_measurable``,
-        ``excluded_faulty`` or ``excluded_marginal`` for an exclusion.
+        Per quantity: ok and right, ok but wrong (outside 1 % for TC and kCAL, 3 % for the peak, 5 % for the
+        pre-buckling spike), withheld but right, withheld and wrong. For the impact: ``faulty_ok`` for a faulty
+        trace used in the fit, ``excluded_faulty``; for the others ``ok_wrong`` when any quantity reported is
+        wrong, else ``ok_right`` when the impact is used in the fit, else ``excluded_measurable``.
     """
     errors = {
         "tc": _rel(result.contact_time_ms * 1e-3, truth.tc_s),
@@ -1019,12 +1026,14 @@ def judge(result, truth: ZooTruth) -> Judgement:
         "peak": _rel(result.peak_force_N, truth.peak_N),
     }
     tol = {"tc": TOL_TC, "kcal": TOL_KCAL, "peak": TOL_PEAK_SPIKE if truth.peak_is_spike else TOL_PEAK}
-    # NaN counts as wrong, except a peak withheld with its reason (peak_note): no number, so not a wrong one
-    withheld = {"peak"} if getattr(result, "peak_note", "") and not math.isfinite(result.peak_force_N) else set()
-    wrong = [k for k in errors if k not in withheld and not abs(errors[k]) <= tol[k]]
-    if result.status != "ok":
-        cat = "excluded_faulty" if truth.fault else "excluded_marginal" if truth.marginal else "excluded_measurable"
-        return Judgement(cat, result.reason, errors, [])
+    outcomes = {}
+    for q, attr in QUANTITY_KEYS.items():
+        reported = getattr(result, attr, result.status) == "ok"
+        right = abs(errors[q]) <= tol[q]  # NaN: not right
+        outcomes[q] = ("ok_" if reported else "withheld_") + ("right" if right else "wrong")
+    wrong = [q for q, o in outcomes.items() if o == "ok_wrong"]
     if truth.fault:
-        return Judgement("faulty_ok", result.reason, errors, wrong)
-    return Judgement("ok_wrong" if wrong else "ok_right", result.reason, errors, wrong)
+        return Judgement("faulty_ok" if result.status == "ok" else "excluded_faulty", result.reason, errors, wrong,
+                         outcomes)
+    cat = "ok_wrong" if wrong else "ok_right" if result.status == "ok" else "excluded_measurable"
+    return Judgement(cat, result.reason, errors, wrong, outcomes)

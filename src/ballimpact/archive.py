@@ -96,7 +96,8 @@ _AK_COMMENT = (
 )
 #: ACDD coverage_content_type of a data variable, by name: the first matching prefix wins.
 _CONTENT_TYPES = (
-    (("status", "reason", "peak_note", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
+    (("status", "reason", "peak_note", "withheld_note", "reason_code", "finding_", "contact_time_status", "kcal_status",
+      "peak_status", "cor_status", "contact_time_u", "kcal_u", "peak_force_u", "cor_u", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
       "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
@@ -130,6 +131,11 @@ _PER_IMPACT_SCALARS = [
     ("amplifier_time_constant_se_s", "tau_se_s"),
     ("plate_resonance_hz", "plate_resonance_hz"),
     ("plate_damping_ratio", "plate_damping_ratio"),
+    # v1.2: each quantity's standard uncertainty, from its error budget (ballimpact.verdicts)
+    ("contact_time_u_ms", "contact_time_u_ms"),
+    ("kcal_u_N_per_V", "kcal_u_N_per_V"),
+    ("peak_force_u_N", "peak_force_u_N"),
+    ("cor_u", "cor_u"),
 ]
 _SERIES = ["time_s", "voltage_V", "force_N", "velocity_m_s", "displacement_m"]
 
@@ -169,6 +175,22 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "peak_note": ("1", "why peak_force_N and time_to_peak_ms are withheld (NaN) on an ok impact: a problem of the "
                        "peak alone, with an alias and a rounded front ruled out (daq.bandwidth_hz, or sampled at "
                        "60 kHz or faster); else empty"),
+    "contact_time_u_ms": ("ms", "standard uncertainty of TC, from its error budget"),
+    "kcal_u_N_per_V": ("N V-1", "standard uncertainty of kCAL, from its error budget"),
+    "peak_force_u_N": ("N", "standard uncertainty of the peak force, from its error budget"),
+    "cor_u": ("1", "standard uncertainty of COR, from the gate timer's resolution"),
+    "contact_time_status": ("1", "ok, or withheld when TC's budget exceeds 1 % or a finding cannot bound it"),
+    "kcal_status": ("1", "ok, or withheld when kCAL's budget exceeds 1 % or a finding cannot bound it"),
+    "peak_status": ("1", "ok, or withheld when the peak's budget exceeds 3 % (5 % spike) or kCAL is withheld"),
+    "cor_status": ("1", "ok, or withheld when COR's budget exceeds 0.002"),
+    "reason_code": ("1", "codes of the findings that withheld or excluded something (docs/checks.md), ;-separated"),
+    "withheld_note": ("1", "on an ok impact, why each withheld quantity is withheld; else empty"),
+    "check": ("1", "code of a check of the registry (docs/checks.md)"),
+    "finding_count": ("1", "how many findings of this check this impact has (0: none)"),
+    "finding_message": ("1", "the first finding's message (empty: none)"),
+    "finding_effect_contact_time": ("1", "largest relative effect on TC the check estimated (NaN: none or unknown)"),
+    "finding_effect_kcal": ("1", "largest relative effect on kCAL the check estimated (NaN: none or unknown)"),
+    "finding_effect_peak": ("1", "largest relative effect on the peak the check estimated (NaN: none or unknown)"),
     "amplifier_time_constant_s": (
         "s", "charge-amplifier time constant whose decay was undone (NaN when none was: see its source)"),
     "amplifier_time_constant_se_s": (
@@ -270,6 +292,13 @@ _CONDITIONING_TEXT = [
     ("mains_source", "mains_source"),
     ("amplifier_time_constant_source", "tau_source"),
     ("peak_note", "peak_note"),
+    # v1.2 per-quantity verdicts
+    ("contact_time_status", "contact_time_status"),
+    ("kcal_status", "kcal_status"),
+    ("peak_status", "peak_status"),
+    ("cor_status", "cor_status"),
+    ("reason_code", "reason_code"),
+    ("withheld_note", "withheld_note"),
 ]
 
 
@@ -404,6 +433,7 @@ class _ImpactColumns:
 
     def __init__(self):
         self.ids = []
+        self.findings = []  # per impact: {check code: (count, message, effects)}
         self.text = {k: [] for k in _TEXT_PER_IMPACT + [name for name, _ in _CONDITIONING_TEXT]}
         self.scalars = {name: [] for name, _ in _PER_IMPACT_SCALARS}
         self.series = {k: [] for k in _SERIES}
@@ -436,6 +466,12 @@ class _ImpactColumns:
             self.scalars[name].append(value)
         self._add_series(r, impact_id)
         self._add_raw(r, impact_id, max_raw_samples)
+        found = {}
+        for p in getattr(r, "problems", []) or []:
+            count, message, effects = found.get(p.kind.value, (0, p.message, {}))
+            merged = {q: max(effects.get(q, -math.inf), float(v)) for q, v in p.effects.items()}
+            found[p.kind.value] = (count + 1, message, {**effects, **merged})
+        self.findings.append(found)
 
     def _add_series(self, r, impact_id) -> None:
         n = _as_1d(getattr(r, "time_s", None)).size
@@ -480,9 +516,34 @@ class _ImpactColumns:
         data_vars["model_force_N"] = (dims, np.full((n_impact, n_sample), np.nan))
         data_vars["model_agreement_fraction"] = ("impact", np.full(n_impact, np.nan))
         data_vars["model_rms_N"] = ("impact", np.full(n_impact, np.nan))
+        data_vars.update(_findings_variables(self.findings))
         data_vars["raw_time_s"] = (raw_dims, _pad(self.raw_t, n_raw, np.float32))
         data_vars["raw_voltage_V"] = (raw_dims, _pad(self.raw_v, n_raw, np.float32))
         return xr.Dataset(data_vars, coords={"impact_id": ("impact", _text_array(self.ids))})
+
+
+def _findings_variables(findings: list) -> dict:
+    """The (impact, check) variables of every finding: how many, the first message, and each estimated effect."""
+    from .checks import CHECKS
+
+    codes = list(CHECKS)
+    n = len(findings)
+    count = np.zeros((n, len(codes)), dtype=np.int16)
+    message = np.full((n, len(codes)), "", dtype=object)
+    effects = {q: np.full((n, len(codes)), np.nan) for q in ("contact_time", "kcal", "peak")}
+    for i, found in enumerate(findings):
+        for code, (k, text, eff) in found.items():
+            j = codes.index(code)
+            count[i, j], message[i, j] = k, text
+            for q, v in eff.items():
+                if q in effects and math.isfinite(v):
+                    effects[q][i, j] = v
+    dims = ("impact", "check")
+    out = {"finding_count": (dims, count), "finding_message": (dims, _text_array(message.ravel()).reshape(n, -1)
+                                                                if n else np.empty((0, len(codes)), dtype=object))}
+    out.update({f"finding_effect_{q}": (dims, v) for q, v in effects.items()})
+    out["check"] = ("check", _text_array(codes))
+    return out
 
 
 def paper_parameters_dataset(balls: Iterable[str]) -> xr.Dataset:

@@ -189,7 +189,7 @@ def fitted_parameters(ds, ball: str) -> tuple[float, float, float, float, float]
     return values
 
 
-def impacts(ds, ball: str | None = None, status: str | None = None) -> np.ndarray:
+def impacts(ds, ball: str | None = None, status: str | None = None, *, quantity_ok: str | None = None) -> np.ndarray:
     """Positions (raw order) of the impacts of a ball type and/or status.
 
     Parameters
@@ -200,6 +200,9 @@ def impacts(ds, ball: str | None = None, status: str | None = None) -> np.ndarra
         Ball type key; None for every ball.
     status : str, optional
         ``ok`` or ``excluded``; None for both.
+    quantity_ok : str, optional
+        Only the impacts whose ``<quantity_ok>_status`` is ``ok`` (v1.2: ``contact_time``, ``kcal``, ``peak``,
+        ``cor``); an archive without that variable keeps every impact.
 
     Returns
     -------
@@ -212,6 +215,8 @@ def impacts(ds, ball: str | None = None, status: str | None = None) -> np.ndarra
         keep &= text_values(ds["impact_ball"].values) == ball
     if status is not None:
         keep &= text_values(ds["status"].values) == status
+    if quantity_ok is not None and f"{quantity_ok}_status" in ds:
+        keep &= text_values(ds[f"{quantity_ok}_status"].values) == "ok"
     return np.flatnonzero(keep)
 
 

@@ -1035,7 +1035,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(staircase)
         undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
-            problems.append(Problem(ProblemKind.PLATE_RINGING, undone))
+            problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:
             y, contact, plate, cutoff = undone
             peak_problems = (_undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
@@ -2253,7 +2253,8 @@ def _end_problems(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, e_u, sc
             out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                f"contact {where} not determined: the corrected signal in the "
                                f"{1e3 * FOOT_CHECK_S:.2g} ms {side} it stands {sigma:.3g} standard errors out of the "
-                               f"noise ({seen}, or a baseline wrong there): the force may {may}"))
+                               f"noise ({seen}, or a baseline wrong there): the force may {may}",
+                               data={"beyond": where}))
     # against the straight line's end (the bent hinge's sits earlier on an end whose slope eases; the threshold
     # was set on the line's)
     late = contact.curve_end_s - (contact.line_end_s if math.isfinite(contact.line_end_s) else contact.end_s)
@@ -2339,7 +2340,8 @@ def _ringing_problems(x, fs, noise, peak, s_u, e_u, start_u, end_u, front=False,
         out.append(Problem(ProblemKind.PLATE_RINGING,
                            f"plate ringing at {f_line / 1e3:.3g} kHz during the contact (a spectral line "
                            f"{prominence:.3g} times its neighbourhood, {100 * amp_line / peak:.2g} % of the peak): "
-                           "force and plate ringing not separable"))
+                           "force and plate ringing not separable",
+                           data={"line_hz": f_line, "amplitude_fraction": amp_line / peak, "prominence": prominence}))
     return out
 
 
@@ -3120,8 +3122,8 @@ def _front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
 
     A low-pass whose delay is under a sample or two (at 20-40 kHz, near half
-    the rate) leaves little trace in the samples and is not always seen (README,
-    "What remains" under "Robustness (issue 9)"). Not in the paper.
+    the rate) leaves little trace in the samples and is not always seen (docs/robustness.md,
+    "What remains"). Not in the paper.
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))

@@ -1379,7 +1379,7 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
     of :func:`detect_contact`) then meets zero late or early, by an amount that
     depends on how many samples stand out of the noise. Here the force is
     fitted, by least squares, with ``a s + b s^2`` (s = end - t, zero after
-    the end, a >= 0) over the last CURVE_FITS[0][1] of TC and the quiet
+    the end, a >= 0) over the last ``CURVE_FITS[0][1]`` of TC and the quiet
     samples after it, the end profiled on a grid of CURVE_STEP samples within
     CURVE_SEARCH samples of ``end_s`` (above CURVE_RATE_HZ, within the time of
     CURVE_SEARCH samples at CURVE_RATE_HZ: a faster rig's end is not known to
@@ -1392,7 +1392,7 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
     narrow while the end is not known; the wider interval sees the other end
     (zoo trace 1:707 at 50 kHz, 20 noise draws: one end 0.92 % of TC early
     passed with a one-sigma uncertainty of 0.19 %). The same
-    fit with a cubic over CURVE_FITS[1][1] of TC tells how much the end
+    fit with a cubic over ``CURVE_FITS[1][1]`` of TC tells how much the end
     depends on the curve's model; that difference is added in quadrature.
 
     Parameters

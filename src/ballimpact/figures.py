@@ -644,7 +644,7 @@ def fig_force_curves(ds) -> Figure:
 
 
 def _nearest_good(ds, ball, speed, tol):
-    good = [i for i in ar.impacts(ds, ball, "ok") if ar.contact_series(ds, i)[0].size >= 2]
+    good = [i for i in ar.impacts(ds, ball, "ok", quantity_ok="kcal") if ar.contact_series(ds, i)[0].size >= 2]
     if not good:
         return None
     d = np.array([abs(ar.impact_value(ds, "vin_m_s", i) - speed) for i in good])
@@ -757,7 +757,7 @@ def draw_kelvin_voigt(fig, ds):
     for ax, ball in zip(axes, balls):
         ax.set_xlabel("Time since first contact [ms]")
         ax.set_ylabel("Force [N]")
-        good = [i for i in ar.impacts(ds, ball, "ok") if ar.contact_series(ds, i)[0].size >= 2]
+        good = [i for i in ar.impacts(ds, ball, "ok", quantity_ok="kcal") if ar.contact_series(ds, i)[0].size >= 2]
         vins = [ar.impact_value(ds, "vin_m_s", i) for i in good]
         if not good or not np.isfinite(vins).any():
             ax.set_title(ar.ball_label(ds, ball), loc="left")
@@ -822,7 +822,7 @@ def kcal_band(ds) -> tuple[float, float]:
     The half width is :data:`KCAL_BAND_ROBUST_SD` robust standard deviations
     (1.4826 x median absolute deviation). NaN when there is no good impact.
     """
-    good = ar.impacts(ds, status="ok")
+    good = ar.impacts(ds, status="ok", quantity_ok="kcal")
     k = np.asarray(ds["kcal_N_per_V"].values[good], dtype=float) if good.size else np.empty(0)
     k = k[np.isfinite(k)]
     if not k.size:
@@ -850,14 +850,14 @@ def draw_kcal(fig, ds):
             ax.axhspan(med - half, med + half, color="0.5", alpha=0.15, lw=0,
                        label=f"median \u00b1 {KCAL_BAND_ROBUST_SD:g} robust SD (\u00b1{half:.1f} N/V)")
     for ball in ar.balls(ds):
-        ok = ar.impacts(ds, ball, "ok")
+        ok = ar.impacts(ds, ball, "ok", quantity_ok="kcal")
         if ok.size:
             ax.plot(x[ok], kcal[ok], "o", color=colors[ball], ms=5, label=ar.ball_label(ds, ball))
-        ex = ar.impacts(ds, ball, "excluded")
+        ex = np.setdiff1d(ar.impacts(ds, ball), ok)  # excluded, or its kCAL withheld
         ex_f = ex[np.isfinite(kcal[ex])]
         if ex_f.size:
             ax.plot(x[ex_f], kcal[ex_f], "o", color=colors[ball], ms=7, mfc="none", mew=1.2)
-    ex = ar.impacts(ds, status="excluded")
+    ex = np.setdiff1d(ar.impacts(ds), ar.impacts(ds, status="ok", quantity_ok="kcal"))
     ex_f = ex[np.isfinite(kcal[ex])]
     if ex_f.size:
         ax.plot(x[ex_f], kcal[ex_f], "x", color="k", ms=6, mew=1.3, label="excluded (kCAL known)")

@@ -5,7 +5,7 @@ towards the surface [m], positive in compression, t = 0 at first contact. The
 force on the ball is F = kB x + (cB + cM) x' (Eq. (14)).
 
 Readings of the paper (its text lost every minus sign and subscript; see
-``docs/model.md`` and the README):
+``docs/model.md`` and ``docs/physics.md``):
 
 * Eq. (5) is read with alternating signs, SI units:
   dCONT = -2.776e5 x^4 + 1.746e4 x^3 - 453 x^2 + 7.66 x. It gives 46.0 mm at

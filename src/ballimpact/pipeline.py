@@ -341,23 +341,24 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
             f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
         )
     ds = ds.isel(impact=[position[i] for i in order])
-    # session time-constant QC: one amplifier serves the session; an estimate unlike the others excludes the impact
-    before = [str(v) for v in ds["status"].values]
+    # the session's checks (ballimpact.session_checks): one amplifier and one plate serve the session; an impact
+    # unlike the others withholds what the finding can bias (its kCAL, or with the time constant its TC too)
+    columns = {c: [str(v) for v in ds[c].values] if c in ds else None for c in processing.VERDICT_COLUMNS}
+    columns = {c: v for c, v in columns.items() if v is not None}
+    before = list(columns["status"])
     tau_names = ["amplifier_time_constant_s", "amplifier_time_constant_se_s", "amplifier_time_constant_source"]
     if all(name in ds for name in tau_names):
-        status, reason, tau_median = processing.exclude_time_constant_outliers(
-            before, ds["reason"].values, *(ds[name].values for name in tau_names), ds["contact_time_ms"].values)
+        columns, tau_median = processing.time_constant_outlier_columns(
+            columns, *(ds[name].values for name in tau_names), ds["contact_time_ms"].values)
     else:  # chunk files written before the time constant was archived: re-run the chunks for the check
         logger.warning("chunk files without %s: the session time-constant check is skipped", ", ".join(tau_names))
-        status, reason, tau_median = before, [str(r) for r in ds["reason"].values], float("nan")
-    _log_exclusions(order, before, status, reason, "time-constant")
-    # session kCAL QC: a kCAL far from the session's typical value excludes the impact
-    before = status
-    status, reason, median, spread = processing.exclude_calibration_outliers(before, reason,
-                                                                             ds["kcal_N_per_V"].values)
-    _log_exclusions(order, before, status, reason, "kCAL")
-    ds["status"] = ("impact", np.array(status, dtype=object), ds["status"].attrs)
-    ds["reason"] = ("impact", np.array(reason, dtype=object), ds["reason"].attrs)
+        tau_median = float("nan")
+    _log_exclusions(order, before, columns["status"], columns["reason"], "time-constant")
+    before = list(columns["status"])
+    columns, median, spread = processing.calibration_outlier_columns(columns, ds["kcal_N_per_V"].values)
+    _log_exclusions(order, before, columns["status"], columns["reason"], "kCAL")
+    for c, values in columns.items():
+        ds[c] = ("impact", np.array(values, dtype=object), ds[c].attrs if c in ds else {})
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds.attrs["time_constant_median_s"] = tau_median

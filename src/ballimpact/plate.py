@@ -10,7 +10,7 @@ second-order mechanical response,
 
 with its resonance fn = wn / 2 pi from below 1 kHz to 30 kHz and damping ratio
 zeta of a few per cent (raw-format v1.1). The paper does not treat it; this
-module is our addition (see the README, "Plate resonance").
+module is our addition (see docs/signal-processing.md, "Plate resonance").
 
 Sampled at fs, the plate's free response obeys exactly a two-term recursion
 (its poles z = exp(s / fs)), and its response to a force that is linear between
@@ -238,7 +238,7 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     contact alone can still show it. The fit (least squares, bounded) starts
     from the best of a grid: FREE_RING_START_FACTORS of the peak of the
     stretch's spectrum (no taper: the ringing decays from the stretch's start)
-    by FREE_RING_START_DAMPING. Not in the paper; see the README, "Plate
+    by FREE_RING_START_DAMPING. Not in the paper; see docs/signal-processing.md, "Plate
     resonance".
 
     Parameters
@@ -354,7 +354,7 @@ def refine_plate_resonance(force, sample_rate_hz: float, plate: PlateResonance, 
     force's own spectrum in that band is seen too: a damped plate, whose
     ringing is small against it, gets its zeta only roughly (and fn to about
     a per cent at 10 samples per period; tests/test_plate.py). Not in the
-    paper; see the README, "Plate resonance".
+    paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
     ----------
@@ -579,7 +579,7 @@ def undone_end(force, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     earliest candidate to W + ``inside_samples`` inside the latest; the ts
     of the least residual wins. An end is a start of the force ``L - a H(t -
     ts) + b (t - ts)+`` with L the line ``a + b (ts - t)``, so both sides use the
-    same responses. Not in the paper; see the README, "Plate resonance".
+    same responses. Not in the paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
     ----------
@@ -785,7 +785,7 @@ def lowpass_zero_phase(force, sample_rate_hz: float, cutoff_hz: float) -> np.nda
     the noise, as a Gaussian's is). Its response falls to half at about
     ``cutoff_hz`` and to zero at twice it: it cuts the noise that undoing a
     plate resonance amplifies by ``(f / fn)^2`` above the resonance. Not in
-    the paper; see the README, "Plate resonance".
+    the paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
     ----------
@@ -1021,7 +1021,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     nonlinear least squares from a grid) or, with ``resonance=False``,
     through an ideal plate. Comparing the two says whether the samples need
     the plate's ringing, and the fit says how far the ringing lifts a sample
-    above the force. Not in the paper; see the README, "Plate resonance", and
+    above the force. Not in the paper; see docs/signal-processing.md, "Plate resonance", and
     docs/robustness-history.md.
 
     Parameters

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import enum
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Iterable
 
 __all__ = [
@@ -92,10 +92,17 @@ PEAK_KINDS = frozenset({ProblemKind.PEAK_ON_RINGING, ProblemKind.PEAK_BETWEEN_SA
 
 @dataclass(frozen=True)
 class Problem:
-    """One fault of one impact: ``kind`` for decisions, ``message`` (one line) for people."""
+    """One finding of one impact: ``kind`` for decisions, ``message`` (one line) for people.
+
+    ``data`` holds what the check measured, for the estimate of its effect (:mod:`ballimpact.verdicts`), e.g.
+    ``line_hz`` [Hz] and ``amplitude_V`` [V] of a spectral line; ``effects``, where the check estimated them, the
+    bounds of its relative effect on each quantity of :data:`ballimpact.checks.QUANTITIES` [-].
+    """
 
     kind: ProblemKind
     message: str
+    data: dict = field(default_factory=dict, compare=False, hash=False)
+    effects: dict = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self):
         if not isinstance(self.kind, ProblemKind):

@@ -19,16 +19,19 @@ from typing import Iterable, Iterator
 
 import numpy as np
 
+from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
 from .conditioning import condition_voltage
 from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_samples, detect_clipping,
                       detect_saturation)
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
-from .model import kelvin_voigt_parameters
+from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
+from .effects import end_slopes, finding_effects
+from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
     "IMPACT_COLUMNS",
@@ -37,10 +40,12 @@ __all__ = [
     "process_impact",
     "iter_process",
     "flag_calibration_outliers",
-    "exclude_calibration_outliers",
+    "calibration_outlier_columns",
     "apply_calibration_check",
     "apply_time_constant_check",
-    "exclude_time_constant_outliers",
+    "time_constant_outlier_columns",
+    "apply_session_flags",
+    "VERDICT_COLUMNS",
     "flag_time_constant_outliers",
     "alias_free",
     "aliasing_ruled_out",
@@ -55,6 +60,9 @@ IMPACT_COLUMNS = [
     "kv_stiffness_kN_m", "kv_damping_N_s_m",
     "vin_gate_m_s", "vout_gate_m_s",  # v1.1: speeds at the gates (= vin/vout without gates.distance_to_plate_m)
     "peak_note",  # v1.1: why peak_force_N and time_to_peak_ms are withheld on an ok impact, else empty
+    # v1.2: per-quantity verdicts
+    "contact_time_u_ms", "kcal_u_N_per_V", "peak_force_u_N", "cor_u",
+    "contact_time_status", "kcal_status", "peak_status", "cor_status", "reason_code", "withheld_note",
 ]
 
 #: Plausible ranges for a tennis ball fired at a force plate; outside = excluded.
@@ -63,18 +71,8 @@ PHYSICAL_BOUNDS = {
     "cor": (0.05, 1.0),  # coefficient of restitution [-]
     "contact_time_ms": (1.0, 12.0),  # contact time [ms]
 }
-#: Session-level kCAL check: excluded when both the robust z-score and the relative
-#: deviation from the session median exceed these.
 #: Mains hum components removed: the fundamental and its harmonics up to the 5th.
 HUM_HARMONICS = 5
-KCAL_MAX_ROBUST_Z = 5.0
-KCAL_MAX_RELATIVE = 0.10
-#: Session time-constant check: an impact whose amplifier time constant was estimated from its trace is excluded
-#: when its kappa = 1 / tau differs from the session's median kappa by more than this many joint standard
-#: errors ... [-]
-TAU_MAX_Z = 5.0
-#: ... and by enough to move its impulse, and kCAL, by more than this fraction (kappa TC / 2) [-]
-TAU_MAX_IMPULSE = 0.003
 
 
 @dataclass
@@ -118,8 +116,20 @@ class ImpactResult:
     mains_source: str = ""  # "given" (daq.mains_hz), "detected" or "none"
     plate_resonance_hz: float = math.nan  # the plate resonance undone (ballimpact.plate); NaN when none was
     plate_damping_ratio: float = math.nan
-    peak_note: str = ""  # why the peak force is withheld on an ok impact (the messages of ``peak_problems``)
-    peak_problems: list = field(default_factory=list)  # problems of the peak alone (PEAK_KINDS), withheld
+    peak_note: str = ""  # v1.1: why the peak force is withheld on an ok impact
+    # v1.2 per-quantity verdicts (ballimpact.verdicts): standard uncertainty and ok / withheld of each quantity
+    contact_time_u_ms: float = math.nan
+    kcal_u_N_per_V: float = math.nan
+    peak_force_u_N: float = math.nan
+    cor_u: float = math.nan
+    contact_time_status: str = "ok"
+    kcal_status: str = "ok"
+    peak_status: str = "ok"
+    cor_status: str = "ok"
+    reason_code: str = ""  # codes of the findings that withheld or excluded something, ";"-separated
+    withheld_note: str = ""  # on an ok impact: why each withheld quantity is withheld ("kcal: ...; peak: ...")
+    peak_is_spike: bool = False  # the peak is the pre-buckling spike (tolerance 5 %)
+    u_random: dict = field(default_factory=dict, repr=False)  # relative random uncertainties, until settled
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
     force_N: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -128,35 +138,52 @@ class ImpactResult:
     raw_time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     raw_voltage_V: np.ndarray = field(default_factory=lambda: np.empty(0))
 
-    def exclude(self, problem: Problem) -> "ImpactResult":
-        """Mark excluded for ``problem``, adding its message to any reason already given."""
+    def find(self, problem: Problem) -> "ImpactResult":
+        """Record a finding of a check (a :class:`Problem`) and judge the quantities again.
+
+        A fault excludes the impact; any other finding withholds the quantities its check can bias unless it
+        estimated its effect on them (``problem.effects``), which then enters their budgets
+        (:func:`ballimpact.verdicts.judge_quantities`). The impact is excluded when TC or COR is withheld.
+        """
         if not isinstance(problem, Problem):
             raise TypeError(f"problem must be a ballimpact.problems.Problem, got {problem!r}")
-        self.status = "excluded"
         self.problems.append(problem)
-        self.reason = f"{self.reason}; {problem.message}" if self.reason else problem.message
-        return self
+        return self.judge()
 
-    def withhold_peak(self, problem: Problem) -> "ImpactResult":
-        """Keep ``problem``, one of the peak force alone (PEAK_KINDS), for :meth:`settle_peak`."""
-        if not isinstance(problem, Problem) or problem.kind not in PEAK_KINDS:
-            raise TypeError(f"problem must be a ballimpact.problems.Problem of {sorted(k.value for k in PEAK_KINDS)}, "
-                            f"got {problem!r}")
-        self.peak_problems.append(problem)
-        return self
+    #: The name of :meth:`find` before per-quantity verdicts: a finding excludes only where it must.
+    exclude = find
 
-    def settle_peak(self) -> "ImpactResult":
-        """The withheld peak problems: on an ok impact the peak force and its time are withheld (NaN) and
-        ``peak_note`` says why; on an excluded one they join its reason, like every other problem."""
-        problems, self.peak_problems = self.peak_problems, []
-        if not problems:
-            return self
-        if self.status == "ok":
-            self.peak_force_N = self.time_to_peak_ms = math.nan
-            self.peak_note = "; ".join(p.message for p in problems)
+    def judge(self) -> "ImpactResult":
+        """Statuses, uncertainties, reason and codes from the findings so far and the random uncertainties."""
+        u_random = {q: self.u_random.get(q, 0.0) for q in QUANTITIES}
+        v = judge_quantities(self.problems, u_random, peak_is_spike=self.peak_is_spike)
+        self.status = "excluded" if v.excluded else "ok"
+        self.contact_time_status, self.kcal_status, self.peak_status, self.cor_status = (
+            v.status[q] for q in QUANTITIES)
+        self.reason_code = ";".join(v.codes)
+        withheld = [q for q in QUANTITIES if v.status[q] != "ok"]
+        if v.excluded:  # the faults; without one, every finding and what withheld TC or COR by its budget alone
+            messages = [p.message for p in self.problems if check_of(p.kind).fault]
+            messages = messages or [p.message for p in self.problems]
+            messages += [m for q in ("contact_time", "cor") if q in withheld for m in v.why[q].split("; ") if m]
+            self.reason, self.withheld_note, self.peak_note = "; ".join(dict.fromkeys(messages)), "", ""
         else:
-            for p in problems:
-                self.exclude(p)
+            self.reason = ""
+            self.withheld_note = "; ".join(f"{q}: {v.why[q]}" for q in withheld)
+            self.peak_note = v.why["peak"] if "peak" in withheld else ""
+        self._verdict = v
+        return self
+
+    def settle(self, u_random: dict) -> "ImpactResult":
+        """The final verdict with the impact's random uncertainties (relative, COR absolute) [-], and the
+        standard uncertainties in each quantity's unit."""
+        self.u_random = dict(u_random)
+        self.judge()
+        u = self._verdict.u
+        self.contact_time_u_ms = u["contact_time"] * self.contact_time_ms
+        self.kcal_u_N_per_V = u["kcal"] * self.kcal_N_per_V
+        self.peak_force_u_N = u["peak"] * self.peak_force_N
+        self.cor_u = u["cor"]
         return self
 
     def row(self) -> dict:
@@ -230,17 +257,17 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     meta = session.meta
     res = ImpactResult(impact_id=row.impact_id, ball=row.ball, mass_kg=row.mass_kg, trace_file=row.trace)
     for problem in row.problems:
-        res.exclude(problem)
+        res.find(problem)
     _gate_speeds(res, row, session)
     read = _conditioned_trace(res, row, session)
     if read is None:
-        return res
+        return res.settle(_random_uncertainties(res, row, meta))
     t, raw, cond = read
     _aliasing_problem(res, meta)
     contact = _contact(res, t, raw, cond, meta)
-    if contact is None:
-        return res.settle_peak()
-    return _calibrated(res, row, t, cond, contact, meta).settle_peak()
+    if contact is not None:
+        _calibrated(res, row, t, cond, contact, meta)
+    return res.settle(_random_uncertainties(res, row, meta, cond))
 
 
 #: A problem of the peak alone withholds the peak only where the stated band limit rounds the contact's jump over
@@ -347,9 +374,14 @@ def _aliasing_problem(res: ImpactResult, meta) -> None:
     tells it.
     """
     fs, bw = res.sample_rate_hz, meta.bandwidth_hz
+    if bw is None and math.isfinite(fs) and not aliasing_ruled_out(bw, fs):
+        res.find(Problem(ProblemKind.ALIASING, (
+            f"kCAL and peak withheld: sampled at {fs / 1e3:.4g} kHz without daq.bandwidth_hz, a plate resonance "
+            f"above {fs / 2e3:.4g} kHz would alias unseen (state daq.bandwidth_hz)")))
+        return
     if bw is None or not math.isfinite(fs) or alias_free(bw, fs):
         return
-    res.exclude(Problem(ProblemKind.ALIASING, (
+    res.find(Problem(ProblemKind.ALIASING, (
         f"signal bandwidth {bw / 1e3:.4g} kHz (daq.bandwidth_hz) above half the sample rate ({fs / 2e3:.4g} kHz): "
         f"the plate's ringing is sampled through its alias, which no check can tell from the force and which can "
         f"move TC, kCAL and the peak unseen (sample at {2 * bw / 1e3:.4g} kHz or faster, or low-pass below "
@@ -365,7 +397,7 @@ def _gate_speeds(res: ImpactResult, row: ImpactRow, session: Session) -> None:
     # order); these messages are for rows it did not check, and would only repeat it.
     if not has_kind(row.problems, GATE_TIME_KINDS):
         for p in gate_problems:
-            res.exclude(p)
+            res.find(p)
     if not gate_problems:
         vin, vout = gate_speeds(row.gate_in_1_s, row.gate_in_2_s, row.gate_out_2_s, row.gate_out_1_s,
                                 meta.gate_spacing_m)
@@ -375,10 +407,10 @@ def _gate_speeds(res: ImpactResult, row: ImpactRow, session: Session) -> None:
         res.vin_m_s, res.vout_m_s = float(vin), float(vout)
         res.cor = float(coefficient_of_restitution(vin, vout))
         if _out_of_bounds("vin_m_s", res.vin_m_s):
-            res.exclude(Problem(ProblemKind.SPEED_OUT_OF_BOUNDS, f"inbound speed {res.vin_m_s:.2f} m/s outside "
+            res.find(Problem(ProblemKind.SPEED_OUT_OF_BOUNDS, f"inbound speed {res.vin_m_s:.2f} m/s outside "
                                 f"physical bounds {PHYSICAL_BOUNDS['vin_m_s']}"))
         if _out_of_bounds("cor", res.cor):
-            res.exclude(Problem(ProblemKind.COR_OUT_OF_BOUNDS,
+            res.find(Problem(ProblemKind.COR_OUT_OF_BOUNDS,
                                 f"COR {res.cor:.3f} outside physical bounds {PHYSICAL_BOUNDS['cor']}"))
 
 
@@ -393,12 +425,12 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
         is_file = False
     if not is_file:
         if not has_kind(res.problems, TRACE_FILE_KINDS):
-            res.exclude(Problem(ProblemKind.TRACE_NOT_FOUND, f"trace file not found: {row.trace}"))
+            res.find(Problem(ProblemKind.TRACE_NOT_FOUND, f"trace file not found: {row.trace}"))
         return None
     try:
         trace = read_trace(path, meta.sample_rate_hz)
     except TraceError as exc:
-        res.exclude(Problem(ProblemKind.TRACE_UNREADABLE, f"unreadable trace: {exc}"))
+        res.find(Problem(ProblemKind.TRACE_UNREADABLE, f"unreadable trace: {exc}"))
         return None
     fs = trace.sample_rate_hz
     res.sample_rate_hz = fs
@@ -408,7 +440,7 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
     res.raw_voltage_V = meta.polarity * raw
 
     if detect_clipping(raw, meta.adc_range_v):
-        res.exclude(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
+        res.find(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         try:
@@ -416,12 +448,12 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
         except ValueError as exc:
-            res.exclude(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
+            res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None
     # any sample at a rail that is not a replaced single-sample spike
     not_spikes = np.delete(raw, np.asarray(cond.spike_indices, dtype=int))
     if not has_kind(res.problems, ProblemKind.CLIPPING) and detect_clipping(not_spikes, meta.adc_range_v, min_run=1):
-        res.exclude(Problem(ProblemKind.CLIPPING,
+        res.find(Problem(ProblemKind.CLIPPING,
                             "clipping at the ADC rails (a sample at a rail that is not a single-sample spike)"))
     return t, raw, cond
 
@@ -446,7 +478,7 @@ def _saturation_problem(res: ImpactResult, raw, cond, polarity: int) -> None:
     for what, y in (("as recorded", x), ("with the hum removed", x - cond.baseline_V[a:b])):
         sat = detect_saturation(y[i0 - a:i1 + 1 - a], sigma)
         if sat.saturated:
-            res.exclude(Problem(ProblemKind.CLIPPING, (
+            res.find(Problem(ProblemKind.CLIPPING, (
                 f"clipping below the ADC rails: the recorded signal ({what}, polarity applied) is flat at the "
                 f"contact's top, {sat.n_top} samples within {SATURATION_TOP_SIGMA:g} noise deviations of its top "
                 f"against {sat.n_below} in the {SATURATION_NEXT_SIGMA - SATURATION_TOP_SIGMA:g} deviations below "
@@ -508,10 +540,10 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     contact = cond.contact
     wrong_sign = _opposite_pulse_reason(raw, meta.polarity)
     if wrong_sign is not None:
-        res.exclude(wrong_sign)
+        res.find(wrong_sign)
         return None
     if not contact.found:
-        res.exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
+        res.find(Problem(ProblemKind.NO_CONTACT, "no contact found"))
         return None
     res.raw_time_s = t - contact.start_s
     if not has_kind(res.problems, ProblemKind.CLIPPING):  # a pulse of the right sign, found: is its top flat?
@@ -519,24 +551,70 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     if contact.n_impacts > 1:
         seen = ", ".join(f"{'second' if k == 0 else 'another'} contact at {dt * 1e3:+.1f} ms, "
                          f"{100 * frac:.0f} % of the peak" for k, (dt, frac) in enumerate(contact.other_impacts))
-        res.exclude(Problem(ProblemKind.MULTIPLE_IMPACTS,
+        res.find(Problem(ProblemKind.MULTIPLE_IMPACTS,
                             f"more than one impact in the trace ({contact.n_impacts} found: {seen})"))
     if "contact_at_trace_start" in contact.flags or "contact_at_trace_end" in contact.flags:
-        res.exclude(Problem(ProblemKind.CONTACT_TRUNCATED, "contact not entirely inside the trace (truncated trace?)"))
+        res.find(Problem(ProblemKind.CONTACT_TRUNCATED, "contact not entirely inside the trace (truncated trace?)"))
     # no alias, and no unseen rounding of the front, behind a peak problem
     peak_alone = peak_can_be_withheld(meta.bandwidth_hz, res.sample_rate_hz, contact.contact_time_s,
                                       None if cond.plate is None else cond.plate.frequency_hz)
     for problem in cond.problems:
-        if peak_alone and problem.kind in PEAK_KINDS:
-            res.withhold_peak(problem)
-        else:
-            res.exclude(problem)
+        if problem.kind in PEAK_KINDS and not peak_alone:  # a rounded front or an alias may hide behind it
+            problem = Problem(problem.kind, problem.message, data={**problem.data,
+                                                                   "also_biases": ("contact_time", "kcal")})
+        res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
-        res.exclude(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
+        res.find(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
                             f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}"))
     return contact
+
+
+def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:
+    """A conditioning finding with its effects estimated where its check can (ballimpact.effects)."""
+    c = cond.contact
+    if not (c.found and math.isfinite(fs)):
+        return problem
+    return finding_effects(problem, cond.problems, cond.voltage_V, fs, (c.start_s - t0_s) * fs,
+                           (c.end_s - t0_s) * fs, cond.noise_rms_V)
+
+
+def _end_standard_uncertainties(cond, fs: float, t0_s: float) -> tuple[float, float]:
+    """Standard uncertainties of the contact's start and end [s]: from each end's fit (the force's curve where the
+    end came from it), a uniform half sample where the force jumps, else the noise over the force's slope there."""
+    c = cond.contact
+    half = 1.0 / (fs * math.sqrt(12.0))
+    fitted = {"start": half if "start_jump" in c.flags else c.start_se_s,
+              "end": c.curve_end_se_s if "end_curve" in c.flags else half if "end_jump" in c.flags else c.end_se_s}
+    slopes = dict(zip(("start", "end"), end_slopes(cond.voltage_V, fs, (c.start_s - t0_s) * fs,
+                                                   (c.end_s - t0_s) * fs)))
+    out = []
+    for end in ("start", "end"):
+        se = fitted[end]
+        if not math.isfinite(se):
+            se = max(cond.noise_rms_V / slopes[end], half) if slopes[end] > 0 else math.nan
+        out.append(float(se))
+    return out[0], out[1]
+
+
+def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None) -> dict:
+    """The impact's random uncertainties for :func:`ballimpact.verdicts.random_uncertainties` [-]."""
+    u_vin, u_vout = gate_uncertainties(row.gate_in_2_s - row.gate_in_1_s, row.gate_out_1_s - row.gate_out_2_s,
+                                       meta.gate_resolution_s)
+    nan = {q: math.nan for q in QUANTITIES}
+    nan["cor"] = res.cor * math.hypot(u_vin, u_vout) if math.isfinite(res.cor) else math.nan
+    if cond is None or not cond.contact.found or res.voltage_V.size < 2:
+        return nan
+    fs, c = res.sample_rate_hz, cond.contact
+    t0_s = float(res.raw_time_s[0] + c.start_s) if res.raw_time_s.size else 0.0
+    start_se, end_se = _end_standard_uncertainties(cond, fs, t0_s)
+    kappa_se = cond.baseline_coefficients.get("kappa_se_per_s", 0.0) if cond.tau_source == "estimated" else 0.0
+    return random_uncertainties(
+        u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
+        end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
+        integral_V_s=float(np.trapezoid(res.voltage_V, res.time_s)), peak_V=float(np.max(res.voltage_V)), fs=fs,
+        kappa_se_per_s=kappa_se)
 
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:
@@ -553,18 +631,18 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
         kcal = calibration_factor(t, cond.voltage_V, contact.start_s, contact.end_s, row.mass_kg,
                                   res.vin_m_s, res.vout_m_s, start_jump=jump)
     except ValueError as exc:
-        return res.exclude(Problem(ProblemKind.NO_CALIBRATION, f"no calibration: {exc}"))
+        return res.find(Problem(ProblemKind.NO_CALIBRATION, f"no calibration: {exc}"))
     # A positive but vanishing (or overflowing) voltage integral gives kCAL = inf (or 0),
     # which force_from_voltage rejects with a ValueError: exclude instead of raising.
     if not (math.isfinite(kcal) and kcal > 0):
-        return res.exclude(Problem(ProblemKind.NO_CALIBRATION,
+        return res.find(Problem(ProblemKind.NO_CALIBRATION,
                                    f"no calibration: calibration factor is {kcal!r} N/V (voltage integral over the "
                                    "contact too small or too large to calibrate)"))
     res.kcal_N_per_V = kcal
     if meta.kcal_range_N_per_V is not None:
         lo, hi = meta.kcal_range_N_per_V
         if not lo <= kcal <= hi:
-            res.exclude(Problem(ProblemKind.KCAL_OUT_OF_RANGE,
+            res.find(Problem(ProblemKind.KCAL_OUT_OF_RANGE,
                                 f"calibration factor {kcal:.4g} N/V outside the plate's range [{lo:g}, {hi:g}] "
                                 "N/V (plate.kcal_range_N_per_V)"))
     force = force_from_voltage(v_contact, kcal)
@@ -577,6 +655,7 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
     res.impulse_N_s = row.mass_kg * (res.vin_m_s + res.vout_m_s)
     res.peak_force_N = summary.peak_force_N
     res.time_to_peak_ms = summary.time_to_peak_s * 1e3
+    res.peak_is_spike = bool(summary.time_to_peak_s < BUCKLING_TIME_S)
     res.max_displacement_mm = summary.max_displacement_m * 1e3
     kb, cb = kelvin_voigt_parameters(row.mass_kg, contact.contact_time_s, res.cor)
     res.kv_stiffness_kN_m = float(kb) / 1e3
@@ -605,207 +684,7 @@ def iter_process(session: Session, impact_ids: Iterable[str] | None = None) -> I
             yield process_impact(row, session)
 
 
-def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_Z, max_relative=KCAL_MAX_RELATIVE):
-    """Impacts whose kCAL is far from the session's typical value for the plate.
-
-    kCAL varies a little between impacts (section 2 of Goodwill & Haake 2004),
-    so a value far from the rest points at a bad gate time or trace. Typical =
-    median over the ``ok`` impacts; spread = 1.4826 x median absolute deviation.
-    An impact is flagged when its robust z-score exceeds ``max_robust_z`` AND it
-    lies more than ``max_relative`` from the median.
-
-    Parameters
-    ----------
-    kcal_N_per_V : array_like
-        kCAL of every impact [N/V] (NaN where none).
-    ok : array_like of bool
-        Impacts to take the typical value from.
-    max_robust_z : float
-        Largest robust z-score accepted [-].
-    max_relative : float
-        Largest relative deviation accepted [-].
-
-    Returns
-    -------
-    reasons : list of str
-        Per impact, "" or the exclusion reason.
-    median : float
-        Session median kCAL [N/V] (NaN with fewer than 3 ok impacts).
-    spread : float
-        Robust standard deviation [N/V].
-    """
-    k = np.asarray(kcal_N_per_V, dtype=float)
-    ok = np.asarray(ok, dtype=bool) & np.isfinite(k)
-    reasons = [""] * k.size
-    if ok.sum() < 3:
-        return reasons, math.nan, math.nan
-    med = float(np.median(k[ok]))
-    spread = float(1.4826 * np.median(np.abs(k[ok] - med)))
-    for i in np.flatnonzero(ok):
-        rel = abs(k[i] - med) / med
-        z = abs(k[i] - med) / spread if spread > 0 else math.inf
-        if z > max_robust_z and rel > max_relative:
-            reasons[i] = (
-                f"calibration factor {k[i]:.1f} N/V is {100 * rel:.0f} % from the session median "
-                f"{med:.1f} N/V (robust z = {z:.1f})"
-            )
-    return reasons, med, spread
-
-
-def _exclude_flagged(status: list[str], reason: list[str], flags: list[str]) -> tuple[list[str], list[str]]:
-    """Status and reason columns with every flagged impact excluded, its flag appended to its reason."""
-    for k, flag in enumerate(flags):
-        if flag:
-            status[k] = "excluded"
-            reason[k] = f"{reason[k]}; {flag}" if reason[k] else flag
-    return status, reason
-
-
-def _exclude_flagged_results(results: list[ImpactResult], flags: list[str], kind: ProblemKind) -> None:
-    """Exclude, in place, every result whose flag is not empty, for a problem of ``kind`` with the flag's message."""
-    for r, flag in zip(results, flags):
-        if flag:
-            r.exclude(Problem(kind, flag))
-
-
-def exclude_calibration_outliers(status, reason, kcal_N_per_V):
-    """The session kCAL check on table columns: new status and reason per impact.
-
-    Parameters
-    ----------
-    status, reason : sequence of str
-        Per impact: ``ok`` / ``excluded`` and the reasons so far.
-    kcal_N_per_V : array_like
-        Per impact kCAL [N/V].
-
-    Returns
-    -------
-    status, reason : list of str
-        With the outliers of :func:`flag_calibration_outliers` excluded, their
-        reason appended.
-    median, spread : float
-        Session median and robust standard deviation of kCAL [N/V].
-    """
-    status, reason = [str(s) for s in status], [str(r) for r in reason]
-    flags, median, spread = flag_calibration_outliers(kcal_N_per_V, [s == "ok" for s in status])
-    return *_exclude_flagged(status, reason, flags), median, spread
-
-
-def flag_time_constant_outliers(tau_s, tau_se_s, contact_time_ms, ok, *, max_z=TAU_MAX_Z,
-                                 max_impulse=TAU_MAX_IMPULSE):
-    """Impacts whose charge-amplifier time constant, estimated from the trace, is not the session's.
-
-    One charge amplifier serves a session, so every trace decays with the same time
-    constant. Where it is estimated (no ``plate.time_constant_s``), something else in
-    the baseline can take its place: a step of the level within the contact is, to
-    the fit, what the amplifier's undershoot looks like (``bench/step_map.py`` 2:249: a
-    step of -2.7 % of the peak took 5.7 s for 0.082 s and kCAL came out 2.8 % low), and
-    nothing in the one trace tells them apart. The session's other impacts do. In
-    kappa = 1 / tau [1/s]: typical = median over the ``ok`` impacts with an estimate
-    (at least 3), its standard error 1.2533 x robust spread / sqrt(n). An ok impact is
-    flagged when its kappa is more than ``max_z`` joint standard errors from the
-    median AND the difference moves its impulse by more than ``max_impulse``: undoing
-    the decay adds kappa times the running integral of the signal, which over a pulse
-    symmetric in time adds kappa TC / 2 of the impulse (and of 1 / kCAL).
-
-    Parameters
-    ----------
-    tau_s : array_like
-        Time constant of every impact [s]; NaN where none was estimated (given, not
-        corrected, or the impact excluded before).
-    tau_se_s : array_like
-        Its standard error [s] (NaN where none).
-    contact_time_ms : array_like
-        Contact time TC [ms].
-    ok : array_like of bool
-        Impacts to take the typical value from and to judge.
-    max_z : float
-        Largest accepted difference in joint standard errors [-].
-    max_impulse : float
-        Largest accepted effect on the impulse [-].
-
-    Returns
-    -------
-    reasons : list of str
-        Per impact, "" or the exclusion reason.
-    median_s : float
-        Session's typical time constant, 1 / median kappa [s] (NaN with fewer than
-        3 estimates).
-    """
-    if not (max_z > 0 and max_impulse > 0):
-        raise ValueError(f"max_z and max_impulse must be positive, got {max_z!r} and {max_impulse!r}")
-    tau = np.asarray(tau_s, dtype=float).ravel()
-    se = np.asarray(tau_se_s, dtype=float).ravel()
-    tc = np.asarray(contact_time_ms, dtype=float).ravel() * 1e-3
-    ok = np.asarray(ok, dtype=bool).ravel()
-    if not (se.size == tc.size == ok.size == tau.size):
-        raise ValueError(f"tau_s, tau_se_s, contact_time_ms and ok must have one value per impact, got "
-                         f"{tau.size}, {se.size}, {tc.size} and {ok.size}")
-    use = ok & np.isfinite(tau) & (tau > 0) & np.isfinite(se) & (se > 0)
-    reasons = [""] * tau.size
-    if use.sum() < 3:
-        return reasons, math.nan
-    kappa = np.where(use, 1.0 / np.where(use, tau, 1.0), np.nan)
-    kappa_se = np.where(use, se / np.where(use, tau, 1.0) ** 2, np.nan)  # d(1/tau) = dtau / tau^2
-    med = float(np.median(kappa[use]))
-    med_se = 1.2533 * float(1.4826 * np.median(np.abs(kappa[use] - med))) / math.sqrt(use.sum())
-    for i in np.flatnonzero(use):
-        diff = abs(kappa[i] - med)
-        z = diff / math.hypot(kappa_se[i], med_se)
-        impulse = diff * tc[i] / 2.0 if np.isfinite(tc[i]) else math.inf
-        if z > max_z and impulse > max_impulse:
-            typical = 1.0 / med if med > 0 else math.inf
-            reasons[i] = (
-                f"charge-amplifier time constant {tau[i]:.3g} s estimated, unlike the session's {typical:.3g} s "
-                f"({int(use.sum())} impacts; {z:.0f} standard errors): the impulse and kCAL may be off by "
-                f"{100 * impulse:.2g} %; a step in the baseline within the contact taken for the decay? (give "
-                "plate.time_constant_s)"
-            )
-    return reasons, (1.0 / med if med > 0 else math.inf)
-
-
-def exclude_time_constant_outliers(status, reason, tau_s, tau_se_s, tau_source, contact_time_ms):
-    """The session time-constant check on table columns: new status and reason per impact.
-
-    Parameters
-    ----------
-    status, reason : sequence of str
-        Per impact: ``ok`` / ``excluded`` and the reasons so far.
-    tau_s, tau_se_s : array_like
-        Per impact, the amplifier time constant and its standard error [s].
-    tau_source : sequence of str
-        Per impact, ``estimated``, ``given``, ``none`` or empty: only estimates are judged.
-    contact_time_ms : array_like
-        Per impact TC [ms].
-
-    Returns
-    -------
-    status, reason : list of str
-        With the outliers of :func:`flag_time_constant_outliers` excluded, their reason appended.
-    median_s : float
-        Session's typical time constant [s] (NaN with fewer than 3 estimates).
-    """
-    status, reason = [str(s) for s in status], [str(r) for r in reason]
-    estimated = [str(s) == "estimated" for s in tau_source]
-    tau = np.where(estimated, np.asarray(tau_s, dtype=float), np.nan)
-    flags, median = flag_time_constant_outliers(tau, tau_se_s, contact_time_ms,
-                                                [s == "ok" for s in status])
-    return *_exclude_flagged(status, reason, flags), median
-
-
-def apply_time_constant_check(results: list[ImpactResult]) -> float:
-    """Exclude, in place, ok impacts whose estimated time constant is not the session's; returns it [s]."""
-    tau = [r.tau_s if r.tau_source == "estimated" else math.nan for r in results]
-    flags, median = flag_time_constant_outliers(tau, [r.tau_se_s for r in results],
-                                                [r.contact_time_ms for r in results],
-                                                [r.status == "ok" for r in results])
-    _exclude_flagged_results(results, flags, ProblemKind.TIME_CONSTANT_OUTLIER)
-    return median
-
-
-def apply_calibration_check(results: list[ImpactResult]) -> tuple[float, float]:
-    """Exclude, in place, impacts whose kCAL is an outlier of the session; returns (median, spread) [N/V]."""
-    flags, median, spread = flag_calibration_outliers([r.kcal_N_per_V for r in results],
-                                                      [r.status == "ok" for r in results])
-    _exclude_flagged_results(results, flags, ProblemKind.KCAL_OUTLIER)
-    return median, spread
+from .session_checks import (  # noqa: E402  (the session's checks, re-exported where they were)
+    KCAL_MAX_RELATIVE, KCAL_MAX_ROBUST_Z, TAU_MAX_IMPULSE, TAU_MAX_Z, VERDICT_COLUMNS, apply_calibration_check,
+    apply_session_flags, apply_time_constant_check, calibration_outlier_columns, flag_calibration_outliers,
+    flag_time_constant_outliers, time_constant_outlier_columns)

@@ -6,6 +6,7 @@ import datetime
 import math
 import re
 import textwrap
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "conditioning_summary", "impact_conditioning", "itf_comparison",
-           "session_warnings", "write_report", "report_page_count"]
+           "session_warnings", "write_report", "report_pages", "report_page_count"]
 
 #: A4 portrait page size [in].
 A4_PORTRAIT_IN = (8.27, 11.69)
@@ -354,7 +355,7 @@ def impact_conditioning(ds, i: int) -> str:
     Noise [mV], hum [mV] at the mains frequency [Hz] and its source, the
     charge-amplifier time constant [s] and its source, and the plate resonance [kHz]
     undone. (No standard error of an estimated time constant: it does not count the
-    choice of hum model on a short record; README, Accuracy.)
+    choice of hum model on a short record; docs/accuracy.md.)
     """
     def num(name):
         return float(np.asarray(ds[name].values, dtype=float)[i])
@@ -442,10 +443,12 @@ def _counts_block(fig, cur, ds) -> None:
     ok = ar.impacts(ds, status="ok") if n_total else np.empty(0, dtype=int)
     n_ok = ok.size
     cur.text(x0, "Impacts", size=12, weight="bold", dy=0.28)
-    notes = ar.text_values(ds["peak_note"].values) if "peak_note" in ds else []
-    withheld = sum(bool(_text(notes[i])) for i in ok) if len(notes) else 0
-    peaks = (f" The peak force of {withheld} good impact{'s' if withheld != 1 else ''} is withheld (a problem of "
-             "the peak alone, with an alias and a rounded front ruled out: impacts.csv peak_note)." if withheld else "")
+    peaks = ""
+    for q, what in (("kcal", "kCAL (and the force in newtons)"), ("peak", "peak force")):
+        status = ar.text_values(ds[f"{q}_status"].values) if f"{q}_status" in ds else np.array([])
+        n = int(sum(status[i] == "withheld" for i in ok)) if status.size else 0
+        peaks += (f" The {what} of {n} good impact{'s' if n != 1 else ''} is withheld (impacts.csv withheld_note, "
+                  "reason_code)." if n else "")
     n_warned = len(ar.validate_warnings(ds))
     warned = (f" Reading the session gave {n_warned} warning{'s' if n_warned != 1 else ''}: see the start of that "
               "list." if n_warned else "")
@@ -892,12 +895,38 @@ def write_report(ds, out_pdf, figures_dir=None, images=None) -> Path:
     }
     with atomic_path(out_pdf) as tmp:
         with PdfPages(tmp, metadata=metadata) as pdf:
-            pdf.savefig(_summary_page(ds, info))
-            for number, name in enumerate(FIGURE_CAPTIONS, 1):
-                pdf.savefig(_figure_page(ds, info, name, number, figures_dir, images))
-            for page in _excluded_pages(ds, info):
+            for page in report_pages(ds, figures_dir, images):
                 pdf.savefig(page)
-            excluded = ar.excluded_impacts(ds)
-            for k, (impact_id, _, _) in enumerate(excluded, 1):
-                pdf.savefig(_qc_page(ds, info, impact_id, k, len(excluded), figures_dir, images))
     return out_pdf
+
+
+def report_pages(ds, figures_dir=None, images=None) -> Iterator[Figure]:
+    """The pages of the session report, one A4 matplotlib figure each, in order.
+
+    The pages :func:`write_report` writes to the PDF (the documentation site shows
+    them as images): the summary page, one page per figure, the list of excluded
+    impacts and one QC page per excluded impact. Each page is made when the
+    iteration reaches it.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive.
+    figures_dir : str or Path, optional
+        Folder of the figure files, as for :func:`write_report`.
+    images : dict, optional
+        The pixels of those files, as for :func:`write_report`.
+
+    Yields
+    ------
+    matplotlib.figure.Figure
+        One page of 8.27 x 11.69 in (A4 portrait).
+    """
+    info = _session_info(ds)
+    yield _summary_page(ds, info)
+    for number, name in enumerate(FIGURE_CAPTIONS, 1):
+        yield _figure_page(ds, info, name, number, figures_dir, images)
+    yield from _excluded_pages(ds, info)
+    excluded = ar.excluded_impacts(ds)
+    for k, (impact_id, _, _) in enumerate(excluded, 1):
+        yield _qc_page(ds, info, impact_id, k, len(excluded), figures_dir, images)

@@ -229,6 +229,40 @@ def _reason_kind(reason: str) -> str:
     return re.sub(r"\s*\([^)]*#[^)]*\)", "", first).strip()  # "(2 found)" and the like
 
 
+def _verdict_counts(rows: list[dict]) -> tuple[Counter, Counter]:
+    """Excluded impacts by their first fault's code (else their first code), labelled with their reason's head; and
+    the quantities withheld on ok impacts, by quantity and code (impacts.csv v1.2 ``reason_code``, the statuses).
+    Rows without codes (impacts.csv before v1.2) are grouped by their reason's head."""
+    from .checks import CHECKS
+
+    heads: dict[str, list[str]] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            continue
+        codes = [c for c in (r.get("reason_code") or "").split(";") if c in CHECKS]
+        faults = [c for c in codes if CHECKS[c].fault]
+        key = (faults or codes or [_reason_kind(r["reason"])])[0]
+        heads.setdefault(key, []).append(_reason_kind(r["reason"]))
+    excluded: Counter = Counter()
+    for key, texts in heads.items():  # one line per code: its reasons' head where they share it, else its title
+        label = texts[0] if len(set(texts)) == 1 or key not in CHECKS else CHECKS[key].title
+        excluded[label] += len(texts)
+    withheld: Counter = Counter()
+    for r in rows:
+        if r["status"] != "ok":
+            continue
+        if "peak_status" not in r:  # impacts.csv v1.1: the peak withheld, its note
+            if (r.get("peak_note") or "").strip():
+                withheld["peak", _reason_kind(r["peak_note"])] += 1
+            continue
+        codes = [c for c in (r.get("reason_code") or "").split(";") if c in CHECKS]
+        for q, column in (("kCAL", "kcal_status"), ("peak", "peak_status")):
+            if r.get(column) == "withheld":
+                why = [CHECKS[c].title for c in codes if q.lower() in CHECKS[c].biases] or ["its uncertainty"]
+                withheld[q, why[0]] += 1
+    return excluded, withheld
+
+
 def _read_csv_rows(path: Path) -> list[dict]:
     import csv
 
@@ -293,14 +327,10 @@ def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
         return [f"  {name}: incomplete: impacts.csv was not written (see the logs in {folder / 'logs'})"]
     rows = _read_csv_rows(impacts_csv)
     n_ok = sum(r["status"] == "ok" for r in rows)
-    kinds = Counter(_reason_kind(r["reason"]) for r in rows if r["status"] != "ok")
     lines = [f"  {name}: {len(rows)} impacts, {n_ok} ok, {len(rows) - n_ok} excluded"]
-    for kind, count in kinds.most_common():
-        lines.append(f"    excluded {count:3d} x {kind}")
-    notes = [r.get("peak_note") or "" for r in rows if r["status"] == "ok"]
-    withheld = Counter(_reason_kind(note) for note in notes if note.strip())
-    for kind, count in withheld.most_common():
-        lines.append(f"    ok, peak withheld {count:3d} x {kind}")
+    excluded, withheld = _verdict_counts(rows)
+    lines += [f"    excluded {count:3d} x {label}" for label, count in excluded.most_common()]
+    lines += [f"    ok, {q} withheld {count:3d} x {label}" for (q, label), count in withheld.most_common()]
     params = folder / "parameters.csv"
     if params.is_file():
         for row in _read_csv_rows(params):

@@ -76,7 +76,7 @@ class SensorChain:
     amplifier_time_constant_s : float
         Time constant of the charge amplifier's high-pass decay [s].
     offset_V : float
-        Largest DC offset, drawn uniformly in [-offset_V, offset_V] [V].
+        Largest DC offset, drawn uniformly in ``[-offset_V, offset_V]`` [V].
     hum_V : float
         Amplitude of the mains hum fundamental [V]; harmonics are smaller.
     mains_hz : float

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-__all__ = ["IMPACT_COLUMNS", "PARAMETER_COLUMNS", "impacts_table", "parameters_table"]
+__all__ = ["IMPACT_COLUMNS", "PARAMETER_COLUMNS", "WITHHELD_CELLS", "impacts_table", "parameters_table"]
 
 #: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
@@ -30,7 +30,27 @@ IMPACT_COLUMNS = [
     "vin_gate_m_s",
     "vout_gate_m_s",
     "peak_note",
+    # v1.2: per-quantity verdicts
+    "contact_time_u_ms",
+    "kcal_u_N_per_V",
+    "peak_force_u_N",
+    "cor_u",
+    "contact_time_status",
+    "kcal_status",
+    "peak_status",
+    "cor_status",
+    "reason_code",
+    "withheld_note",
 ]
+
+#: The cells each quantity's status empties when it is withheld (the archive keeps the estimates).
+WITHHELD_CELLS = {
+    "contact_time_status": ("contact_time_ms", "kv_stiffness_kN_m", "kv_damping_N_s_m"),
+    "kcal_status": ("kcal_N_per_V", "max_displacement_mm"),
+    "peak_status": ("peak_force_N", "time_to_peak_ms"),
+    "cor_status": ("cor", "kv_damping_N_s_m"),
+}
+_TEXT_COLUMNS = ("fit_note", "peak_note", "reason_code", "withheld_note")
 
 #: Columns of results/<session>/parameters.csv, in order: identification (ball,
 #: n_impacts, mass_kg), the parameters in Table 2 units (kb0_kN_m, kb0_source,
@@ -103,12 +123,16 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
             if "used_in_fit" in ds.variables:
                 ok &= np.asarray(ds["used_in_fit"].values).astype(float) > 0
             data[col] = np.where(ok, "true", "false")
-        elif col in ("fit_note", "peak_note"):
+        elif col in _TEXT_COLUMNS:
             data[col] = _column(ds, col, n, text=True)
+        elif col.endswith("_status"):
+            data[col] = [v or "ok" for v in _column(ds, col, n, text=True)] if col in ds.variables else ["ok"] * n
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)
     table = pd.DataFrame(data, columns=IMPACT_COLUMNS)
     table.loc[table["status"] == "ok", "reason"] = ""
+    for status, cells in WITHHELD_CELLS.items():
+        table.loc[table[status] == "withheld", list(cells)] = np.nan
     return table
 
 

@@ -15,7 +15,7 @@ def one_blas_thread() -> None:
 
     The per-impact processing solves many small least-squares problems (the baseline fit's normal equations: a
     few thousand quiet samples by about a dozen columns), which OpenBLAS's threads slow down: under load,
-    ``process_impact`` took 116-132 ms per zoo trace with two threads and 61-64 ms with one (README,
+    ``process_impact`` took 116-132 ms per zoo trace with two threads and 61-64 ms with one (docs/performance.md,
     "One BLAS thread per process"). Snakemake already sets these variables to each job's ``threads`` (1 for
     every rule of this workflow); call this before numpy is first imported in a script or test run that
     processes traces in a loop. A value already in the environment wins.

@@ -1,0 +1,316 @@
+"""The registry of checks: what each looks at, the quantities it can bias, its thresholds, and whether it is a fault.
+
+Every problem the processing can find in an impact (a :class:`ballimpact.problems.ProblemKind`) is the finding of
+one named :class:`Check`. A check is either a **fault**, which excludes the whole impact (a second contact, a
+truncated contact, clipping, missing or impossible gate times, an unreadable trace), or a check of the signal that
+can bias some of the impact's quantities (:data:`QUANTITIES`). A signal check's finding carries, where the check can
+estimate it, the effect of what it saw on each quantity it can bias, in that quantity's relative unit; the effect
+enters the quantity's error budget (:mod:`ballimpact.verdicts`). Where it cannot estimate the effect, the finding
+withholds the quantities it can bias, never the impact.
+
+``CHECKS`` lists them in the order they are judged and reported; :func:`get_check` looks one up by its code (the
+ProblemKind's value, also impacts.csv ``reason_code``). ``docs/checks.md`` is generated from it
+(``python docs/gen_checks.py``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+from .problems import ProblemKind
+
+__all__ = [
+    "QUANTITIES",
+    "TOLERANCES",
+    "Threshold",
+    "Check",
+    "CHECKS",
+    "get_check",
+    "check_of",
+    "checks_markdown",
+]
+
+#: The quantities judged one by one: contact time TC, the calibration factor kCAL (and the force, velocity and
+#: displacement that depend on it), the peak force and the coefficient of restitution.
+QUANTITIES = ("contact_time", "kcal", "peak", "cor")
+
+#: Tolerance of each quantity: relative for TC, kCAL and the peak [-] (``peak_spike``: the pre-buckling spike's),
+#: absolute for COR [-]. A quantity whose expanded (k = 2) uncertainty exceeds its tolerance is withheld.
+TOLERANCES = {"contact_time": 0.01, "kcal": 0.01, "peak": 0.03, "peak_spike": 0.05, "cor": 0.002}
+
+_TC, _K, _P, _C = QUANTITIES
+_ALL_SIGNAL = (_TC, _K, _P)
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """One threshold of a check: the module constant it is, its unit and what it bounds.
+
+    The value is read from the module when asked (:attr:`value`), so that the registry never holds a copy that
+    could drift from the code that uses it.
+    """
+
+    module: str
+    name: str
+    unit: str
+    meaning: str
+
+    @property
+    def value(self):
+        """The constant's current value (its unit in :attr:`unit`)."""
+        return getattr(importlib.import_module(f"ballimpact.{self.module}"), self.name)
+
+
+@dataclass(frozen=True)
+class Check:
+    """A named check of one impact.
+
+    Attributes
+    ----------
+    kind : ProblemKind
+        The problem it reports; ``kind.value`` is its code.
+    title : str
+        Short name for tables.
+    looks_at : str
+        What it looks at, in one sentence.
+    biases : tuple of str
+        The quantities (of :data:`QUANTITIES`) what it finds can bias; a fault's are all of them.
+    fault : bool
+        True when a finding excludes the impact (the right answer for a faulty trace).
+    thresholds : tuple of Threshold
+        Its thresholds, with units.
+    test : str
+        The test that shows what it catches (``tests/file.py::name`` or ``-k`` expression).
+    effect : str
+        How the effect of a finding on each quantity is estimated; empty when it is not (the finding then
+        withholds every quantity in ``biases``).
+    """
+
+    kind: ProblemKind
+    title: str
+    looks_at: str
+    biases: tuple
+    fault: bool = False
+    thresholds: tuple = ()
+    test: str = ""
+    effect: str = ""
+
+    def __post_init__(self):
+        unknown = set(self.biases) - set(QUANTITIES)
+        if unknown:
+            raise ValueError(f"check {self.kind.value}: unknown quantities {sorted(unknown)}; "
+                             f"known: {', '.join(QUANTITIES)}")
+
+    @property
+    def code(self) -> str:
+        """Stable machine-readable code (impacts.csv ``reason_code``)."""
+        return self.kind.value
+
+
+def _t(module, name, unit, meaning):
+    return Threshold(module, name, unit, meaning)
+
+
+_RING = "ballimpact.effects.ringing_effects"
+#: Every check, in the order they are judged and reported.
+CHECKS: dict[str, Check] = {c.code: c for c in (
+    # --- faults of the row and the file: nothing to measure
+    Check(ProblemKind.GATE_TIME_MISSING, "gate time missing", "the four gate-time cells of the impact's row",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_session.py -k missing"),
+    Check(ProblemKind.GATE_TIME_INVALID, "gate time invalid", "each gate time: numeric, finite, not negative",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_gates.py"),
+    Check(ProblemKind.GATE_ORDER, "gate times out of order", "in 1 < in 2 <= out 2 < out 1",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_gates.py"),
+    Check(ProblemKind.GATE_INTERVAL, "gate interval", "the inbound and rebound intervals are positive",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_gates.py"),
+    Check(ProblemKind.MASS_INVALID, "mass invalid", "the row's mass_g: numeric, positive, plausible",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_session.py -k mass"),
+    Check(ProblemKind.TRACE_PATH_MISSING, "trace path missing", "the row names a trace file", (_TC, _K, _P, _C),
+          fault=True, test="tests/test_bad_input.py"),
+    Check(ProblemKind.TRACE_PATH_ESCAPES, "trace path escapes", "the trace path stays inside the session folder",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_bad_input.py"),
+    Check(ProblemKind.TRACE_PATH_UNRESOLVABLE, "trace path unresolvable", "the trace path can be resolved",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_bad_input.py"),
+    Check(ProblemKind.TRACE_NOT_FOUND, "trace not found", "the trace file exists", (_TC, _K, _P, _C), fault=True,
+          test="tests/test_bad_input.py"),
+    Check(ProblemKind.TRACE_NOT_A_FILE, "trace not a file", "the trace path is a file", (_TC, _K, _P, _C),
+          fault=True, test="tests/test_bad_input.py"),
+    Check(ProblemKind.TRACE_UNREADABLE, "unreadable trace", "the trace file parses as CSV, TDMS or LVM",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_traces.py"),
+    Check(ProblemKind.TRACE_UNUSABLE, "unusable trace", "the trace holds enough finite samples to condition",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_bad_input.py"),
+    # --- gates: COR and the impulse
+    Check(ProblemKind.SPEED_OUT_OF_BOUNDS, "inbound speed impossible", "the inbound speed from the gates",
+          (_TC, _K, _P, _C), fault=True,
+          thresholds=(_t("processing", "PHYSICAL_BOUNDS", "m/s (vin_m_s)", "plausible speeds, COR and TC"),),
+          test="tests/test_processing.py -k bounds"),
+    Check(ProblemKind.COR_OUT_OF_BOUNDS, "COR impossible", "the COR from the gates", (_TC, _K, _P, _C),
+          fault=True, thresholds=(_t("processing", "PHYSICAL_BOUNDS", "- (cor)", "plausible COR"),),
+          test="tests/test_processing.py -k bounds"),
+    # --- faults of the trace
+    Check(ProblemKind.CLIPPING, "clipping", "samples at an ADC rail, or a flat top of the contact below them",
+          (_TC, _K, _P, _C), fault=True,
+          thresholds=(_t("contact", "SATURATION_TOP_SIGMA", "noise sd", "a flat top's samples lie this close"),
+                      _t("contact", "SATURATION_NEXT_SIGMA", "noise sd", "the band below a top")),
+          test="tests/test_processing.py -k clipping"),
+    Check(ProblemKind.POLARITY, "wrong polarity", "the sign of the pulse against plate.polarity", (_TC, _K, _P, _C),
+          fault=True, thresholds=(_t("processing", "OPPOSITE_PULSE_RATIO", "-", "other sign's excursion ratio"),),
+          test="tests/test_processing.py -k polarity"),
+    Check(ProblemKind.NO_CONTACT, "no contact", "a run of the corrected signal above the contact threshold",
+          (_TC, _K, _P, _C), fault=True,
+          thresholds=(_t("contact", "THRESHOLD_SIGMA", "noise sd", "contact threshold"),
+                      _t("contact", "THRESHOLD_FRACTION", "of the peak", "contact threshold")),
+          test="tests/test_contact.py"),
+    Check(ProblemKind.MULTIPLE_IMPACTS, "second contact", "other runs of force in the record", (_TC, _K, _P, _C),
+          fault=True,
+          thresholds=(_t("contact", "SECOND_IMPACT_FRACTION", "of the peak", "a second contact from this on"),
+                      _t("contact", "SECOND_IMPACT_MIN_S", "s", "... lasting longer than this")),
+          test="tests/test_contact.py -k impacts"),
+    Check(ProblemKind.CONTACT_TRUNCATED, "truncated contact", "the contact lies inside the record",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_contact.py -k trace_start"),
+    # --- the signal: each withholds what it can bias
+    Check(ProblemKind.ALIASING, "aliasing", "daq.bandwidth_hz against half the sample rate", (_K, _P),
+          thresholds=(_t("session", "PLATE_RESONANCE_MAX_HZ", "Hz", "highest plate resonance of the format"),),
+          test="tests/test_verdicts.py -k alias"),
+    Check(ProblemKind.CONTACT_UNSTABLE, "contact window unstable",
+          "the contact window and the baseline fitted around it converge", _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "UNSTABLE_SAMPLES", "samples", "still moving after the iterations"),),
+          test="tests/test_conditioning.py -k unstable"),
+    Check(ProblemKind.DECAY_NOT_CORRECTED, "decay not corrected",
+          "the amplifier's decay could bias the impulse", (_K, _P),
+          thresholds=(_t("conditioning", "BIAS_EXCLUDE_FRACTION", "of the impulse", "largest uncorrected bias"),),
+          test="tests/test_conditioning.py -k decay"),
+    Check(ProblemKind.UNDERSHOOT_NOT_MEASURABLE, "undershoot not measurable",
+          "the amplifier's undershoot after the contact gives its time constant", (_K, _P),
+          thresholds=(_t("conditioning", "UNDERSHOOT_SIGNIFICANCE", "standard errors", "significance of kappa"),),
+          test="tests/test_conditioning.py -k undershoot"),
+    Check(ProblemKind.BASELINE_OFF_ZERO, "baseline off zero", "the corrected signal's level away from the contact",
+          _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "FLAT_FRACTION", "of the peak", "a level above this"),
+                      _t("conditioning", "FLAT_SIGMA", "standard errors", "... and this significant")),
+          test="tests/test_conditioning.py -k off_zero"),
+    Check(ProblemKind.BASELINE_RESIDUAL, "baseline residual", "the quiet samples' residual from the baseline model",
+          _ALL_SIGNAL, test="tests/test_conditioning.py -k residual"),
+    Check(ProblemKind.BASELINE_STEP, "baseline step", "a step in the level of the quiet baseline", _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "BASELINE_STEP_SIGMA", "standard errors", "a step's significance"),
+                      _t("conditioning", "BASELINE_STEP_FRACTION", "of the peak", "a step's size")),
+          test="tests/test_conditioning.py -k step"),
+    Check(ProblemKind.MAINS_UNRESOLVED, "mains unresolved", "50 and 60 Hz hum fits that differ under the contact",
+          _ALL_SIGNAL, thresholds=(_t("conditioning", "MAINS_AMBIGUOUS_FRACTION", "of the peak", "difference"),),
+          test="tests/test_conditioning_mains.py"),
+    Check(ProblemKind.TOO_FEW_SAMPLES, "too few samples", "samples across the contact", _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "MIN_CONTACT_SAMPLES", "samples", "fewest across the contact"),),
+          test="tests/test_conditioning.py -k few"),
+    Check(ProblemKind.CONTACT_END_UNDETERMINED, "contact end undetermined",
+          "each end's fit: its spread, its standard uncertainty, the force's curve and what stands after it",
+          (_TC, _K),
+          thresholds=(_t("conditioning", "END_SE_MAX_FRACTION", "of TC", "expanded uncertainty of the ends"),
+                      _t("conditioning", "SPREAD_MAX_FRACTION", "of TC", "an end's spread"),
+                      _t("conditioning", "END_CHECK_SIGMA", "standard errors", "force standing after an end")),
+          test="tests/test_conditioning.py -k end"),
+    Check(ProblemKind.CONTACT_JUMP_UNRESOLVED, "contact jump unresolved",
+          "half a sample at an end where the force jumps, against TC", (_TC,),
+          thresholds=(_t("conditioning", "JUMP_MAX_FRACTION", "of TC", "half a sample at most this"),),
+          test="tests/test_conditioning.py -k jump"),
+    Check(ProblemKind.PLATE_RINGING, "plate ringing",
+          "ringing after the contact, a spectral line in it, two humps, and the plate's identification",
+          _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "RING_MAX_FRACTION", "of the peak", "rms ringing after the contact"),
+                      _t("conditioning", "RING_LINE_PROMINENCE", "-", "a line over its neighbourhood"),
+                      _t("conditioning", "RING_LINE_NOISE_FACTOR", "-", "a line over the noise in a bin")),
+          test="tests/test_verdicts.py -k faint",
+          effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f "
+                 "after the contact, over the force's slope at each end, bounds each end's shift (TC); A over the "
+                 "peak bounds the peak; A / (pi f) over the contact's integral bounds kCAL. A plate identified "
+                 "but not undone carries the line's effects when the line is all the evidence."),
+    Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,
+          thresholds=(_t("conditioning", "NEGATIVE_FRACTION", "of the peak", "depth"),
+                      _t("conditioning", "NEGATIVE_SIGMA", "standard errors", "significance")),
+          test="tests/test_conditioning.py -k negative"),
+    Check(ProblemKind.IMPULSE_UNRESOLVED, "impulse unresolved",
+          "single samples that may be electrical spikes at the contact's ends or top", (_K, _P),
+          thresholds=(_t("conditioning", "SPIKE_END_IMPULSE", "of the impulse", "a kept sample's share"),),
+          test="tests/test_spike_ends.py"),
+    Check(ProblemKind.PEAK_ON_RINGING, "peak on ringing", "the peak against one period of ringing about it", (_P,),
+          thresholds=(_t("conditioning", "PEAK_ON_RINGING_FRACTION", "of the peak", "drop over a period"),),
+          test="tests/test_processing.py -k withheld"),
+    Check(ProblemKind.PEAK_BETWEEN_SAMPLES, "peak between samples",
+          "how far the force may rise above its largest sample", (_P,),
+          thresholds=(_t("conditioning", "PEAK_SAMPLING_FRACTION", "of the peak", "rise above the largest sample"),),
+          test="tests/test_processing.py -k withheld"),
+    # --- the physical bounds and the calibration
+    Check(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS, "TC out of bounds", "TC against plausible contact times", (_TC,),
+          thresholds=(_t("processing", "PHYSICAL_BOUNDS", "ms (contact_time_ms)", "plausible TC"),),
+          test="tests/test_processing.py -k bounds"),
+    Check(ProblemKind.NO_CALIBRATION, "no calibration", "a finite positive voltage integral over the contact",
+          (_TC, _K, _P, _C), fault=True, test="tests/test_calibration.py"),
+    Check(ProblemKind.KCAL_OUT_OF_RANGE, "kCAL out of range", "kCAL against plate.kcal_range_N_per_V", (_K, _P),
+          test="tests/test_processing.py -k kcal_range"),
+    Check(ProblemKind.KCAL_OUTLIER, "kCAL outlier", "kCAL against the session's median", (_K, _P),
+          thresholds=(_t("session_checks", "KCAL_MAX_ROBUST_Z", "-", "robust z-score"),
+                      _t("session_checks", "KCAL_MAX_RELATIVE", "-", "relative deviation")),
+          test="tests/test_verdicts.py -k outlier"),
+    Check(ProblemKind.TIME_CONSTANT_OUTLIER, "time constant outlier",
+          "the estimated amplifier time constant against the session's", (_TC, _K, _P),
+          thresholds=(_t("session_checks", "TAU_MAX_Z", "standard errors", "difference in kappa"),
+                      _t("session_checks", "TAU_MAX_IMPULSE", "of the impulse", "its effect on the impulse")),
+          test="tests/test_processing.py -k time_constant"),
+)}
+
+_missing = set(ProblemKind) - {c.kind for c in CHECKS.values()}
+if _missing:  # every kind of problem is judged by one check
+    raise RuntimeError(f"checks registry lacks {sorted(k.value for k in _missing)}")
+
+
+def get_check(code: str) -> Check:
+    """The check of ``code`` (a ProblemKind value, impacts.csv ``reason_code``).
+
+    Raises
+    ------
+    KeyError
+        For an unknown code, listing the valid ones.
+    """
+    try:
+        return CHECKS[str(code)]
+    except KeyError:
+        raise KeyError(f"unknown check {code!r}; valid: {', '.join(CHECKS)}") from None
+
+
+def check_of(kind: ProblemKind) -> Check:
+    """The check that reports problems of ``kind``."""
+    return CHECKS[kind.value]
+
+
+def checks_markdown() -> str:
+    """docs/checks.md: per check, what it looks at, what it can bias, its thresholds and its test (generated)."""
+    lines = [
+        "# The checks",
+        "",
+        "Generated from `ballimpact.checks.CHECKS` by `python docs/gen_checks.py`; do not edit by hand.",
+        "",
+        "A **fault** excludes the impact. Any other check's finding goes into the error budget of each quantity it",
+        "can bias where it estimates its effect, and withholds those quantities where it does not; an impact enters",
+        "its ball type's fit when TC and COR are `ok`. Tolerances (expanded, k = 2): "
+        + ", ".join(f"{q} {v:g}" for q, v in TOLERANCES.items()) + " (relative, COR absolute).",
+        "",
+        "| code | check | looks at | fault | can bias | effect estimated |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for c in CHECKS.values():
+        lines.append(f"| `{c.code}` | {c.title} | {c.looks_at} | {'yes' if c.fault else ''} | "
+                     f"{', '.join(c.biases)} | {'yes' if c.effect else ''} |")
+    lines.append("")
+    for c in CHECKS.values():
+        lines += [f"## `{c.code}`: {c.title}", "", f"Looks at {c.looks_at}.", ""]
+        lines.append("A fault: the impact is excluded." if c.fault else
+                     f"Can bias: {', '.join(c.biases)}.")
+        if c.effect:
+            lines += ["", f"Effect: {c.effect}"]
+        if c.thresholds:
+            lines += ["", "| threshold | value | unit | meaning |", "| --- | --- | --- | --- |"]
+            lines += [f"| `{t.module}.{t.name}` | `{t.value!r}` | {t.unit} | {t.meaning} |" for t in c.thresholds]
+        if c.test:
+            lines += ["", f"Test: `{c.test}`"]
+        lines.append("")
+    return "\n".join(lines)

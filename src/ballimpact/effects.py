@@ -1,0 +1,263 @@
+"""Effects of what a check saw on TC, kCAL and the peak: first-order bounds from the conditioned signal."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "end_slopes", "line_amplitude_after", "ringing_effects",
+           "ringing_after", "finding_effects"]
+
+#: The force's slope at an end is read over this long inside it [s].
+END_SLOPE_S = 0.1e-3
+#: A line's amplitude at the contact's end is fitted over this long after it [s].
+LINE_FIT_S = 1.0e-3
+#: What stands after the contact's end is taken for ringing when a damped sinusoid and a level explain this long of
+#: it [s] ...
+RINGING_AFTER_S = 2.0e-3
+#: ... to within this many times the noise's variance per sample, with the level under this many standard errors
+RINGING_RESIDUAL = 1.5
+RINGING_LEVEL_SIGMA = 3.0
+#: ... and the line's frequency at or above this [Hz]
+RINGING_MIN_HZ = 500.0
+#: damping rates tried for the sinusoid [1/s]
+_DECAY_RATES = (0.0, 250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0)
+
+
+def end_slopes(x, fs: float, start_u: float, end_u: float, *, over_s: float = END_SLOPE_S) -> tuple[float, float]:
+    """The force's slope at the contact's start and end [V/s], read over ``over_s`` inside each end.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage, proportional to the force [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's start and end in samples from ``x[0]`` [samples].
+    over_s : float
+        How far inside each end the slope is read [s].
+
+    Returns
+    -------
+    (float, float)
+        The absolute slope at the start and at the end [V/s]; NaN where the contact is too short or the end lies
+        outside ``x``. The chord over ``over_s`` is never steeper than the force's edge at a jump, so that a
+        bound divided by it is never too small.
+    """
+    x = np.asarray(x, dtype=float)
+    m = max(int(round(over_s * fs)), 1)
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    if not (0 <= i0 and i1 < x.size and i1 - i0 >= 2 * m):
+        return math.nan, math.nan
+    return abs(float(x[i0 + m] - x[i0])) / m * fs, abs(float(x[i1 - m] - x[i1])) / m * fs
+
+
+def line_amplitude_after(x, fs: float, end_u: float, line_hz: float, noise_V: float, *,
+                         over_s: float = LINE_FIT_S) -> float:
+    """Amplitude of a sinusoid at ``line_hz`` fitted to the signal just after the contact, plus two standard errors.
+
+    After the contact the force is zero, so what stands there is the plate's ringing and noise: its amplitude at
+    the line's frequency bounds the ringing at the contact's end.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    end_u : float
+        The contact's end in samples from ``x[0]`` [samples].
+    line_hz : float
+        The line's frequency [Hz].
+    noise_V : float
+        Noise standard deviation [V].
+    over_s : float
+        How long after the end the fit runs [s].
+
+    Returns
+    -------
+    float
+        Fitted amplitude + 2 of its standard errors [V]; NaN when fewer than 8 samples follow the end.
+    """
+    x = np.asarray(x, dtype=float)
+    a = int(math.ceil(end_u)) + 1
+    b = min(a + max(int(round(over_s * fs)), 8), x.size)
+    if b - a < 8 or not (line_hz > 0):
+        return math.nan
+    t = np.arange(a, b) / fs
+    w = 2.0 * math.pi * line_hz
+    basis = np.column_stack([np.sin(w * t), np.cos(w * t), np.ones_like(t)])
+    coef, *_ = np.linalg.lstsq(basis, x[a:b], rcond=None)
+    se = (noise_V if math.isfinite(noise_V) else 0.0) * math.sqrt(2.0 / (b - a))
+    return float(math.hypot(coef[0], coef[1]) + 2.0 * se)
+
+
+def ringing_effects(x, fs: float, start_u: float, end_u: float, noise_V: float, line_hz: float,
+                    line_amplitude_V: float) -> dict:
+    """First-order bounds of what a spectral line of the plate does to TC, kCAL and the peak [-, relative].
+
+    A line of amplitude A added to the force moves an end where the force falls with slope s by at most A / s
+    (s read as a chord over END_SLOPE_S, less the 2 A the line can add to that chord);
+    it moves the largest sample by at most A; its integral over any stretch is at most A / (pi f), against the
+    contact's integral. A is the larger of the line's amplitude in the contact and the sinusoid fitted after the
+    contact (:func:`line_amplitude_after`), so that a line still ringing at the end is counted at its size there.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's ends in samples from ``x[0]`` [samples].
+    noise_V : float
+        Noise standard deviation [V].
+    line_hz, line_amplitude_V : float
+        The line's frequency [Hz] and amplitude in the contact [V].
+
+    Returns
+    -------
+    dict
+        ``contact_time``, ``kcal``, ``peak``: bounds of the relative effects [-]; NaN (not known) where the contact
+        or its slopes cannot be read.
+    """
+    x = np.asarray(x, dtype=float)
+    nan = {"contact_time": math.nan, "kcal": math.nan, "peak": math.nan}
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    if not (0 <= i0 < i1 < x.size and line_hz > 0 and line_amplitude_V >= 0):
+        return nan
+    after = line_amplitude_after(x, fs, end_u, line_hz, noise_V)
+    amp = max(line_amplitude_V, after) if math.isfinite(after) else math.nan
+    # the line on the chord itself moves it by up to 2 A over END_SLOPE_S: the slopes' lower bounds
+    s_start, s_end = (s - 2.0 * amp / END_SLOPE_S for s in end_slopes(x, fs, start_u, end_u))
+    peak = float(np.max(x[i0:i1 + 1]))
+    integral = float(np.sum(x[i0:i1 + 1])) / fs
+    tc = (end_u - start_u) / fs
+    if not (math.isfinite(amp) and peak > 0 and integral > 0 and tc > 0 and s_start > 0 and s_end > 0):
+        return nan
+    return {
+        "contact_time": (line_amplitude_V / s_start + amp / s_end) / tc,
+        "kcal": amp / (math.pi * line_hz) / integral,
+        "peak": amp / peak,
+    }
+
+
+def ringing_after(x, fs: float, end_u: float, noise_V: float, *, over_s: float = RINGING_AFTER_S):
+    """A damped line that explains what stands after the contact's end: (frequency [Hz], amplitude at the end [V]).
+
+    The signal over ``over_s`` after the end is fitted with a level and a sinusoid damped at each of a few rates, at
+    the frequency of its largest spectral amplitude above RINGING_MIN_HZ. It is ringing, not force, when the best fit
+    leaves at most RINGING_RESIDUAL noise variances per sample and its level is under RINGING_LEVEL_SIGMA standard
+    errors: a force's tail is one-signed and has a level, a plate's ringing swings about zero.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    end_u : float
+        The contact's end in samples from ``x[0]`` [samples].
+    noise_V : float
+        Noise standard deviation [V].
+    over_s : float
+        How long after the end is fitted [s].
+
+    Returns
+    -------
+    tuple of float or None
+        None when it is not ringing, or there are too few samples to tell.
+    """
+    x = np.asarray(x, dtype=float)
+    a = int(math.ceil(end_u)) + 1
+    b = min(a + int(round(over_s * fs)), x.size)
+    if b - a < 16 or not (noise_V > 0):
+        return None
+    seg = x[a:b]
+    n = seg.size
+    amp = np.abs(np.fft.rfft((seg - seg.mean()) * np.hanning(n), 8 * n))
+    f = np.fft.rfftfreq(8 * n, 1.0 / fs)
+    band = np.flatnonzero((f >= RINGING_MIN_HZ) & (f <= 0.45 * fs))
+    if band.size == 0:
+        return None
+    line_hz = float(f[band[np.argmax(amp[band])]])
+    t = np.arange(n) / fs + (a - end_u) / fs
+    w = 2.0 * math.pi * line_hz
+    best = None
+    for rate in _DECAY_RATES:
+        env = np.exp(-rate * t)
+        basis = np.column_stack([env * np.sin(w * t), env * np.cos(w * t), np.ones(n)])
+        coef, *_ = np.linalg.lstsq(basis, seg, rcond=None)
+        rss = float(np.sum((seg - basis @ coef) ** 2))
+        if best is None or rss < best[0]:
+            cov = np.linalg.pinv(basis.T @ basis) * noise_V**2
+            best = (rss, coef, math.sqrt(max(cov[2, 2], 0.0)))
+    rss, coef, level_se = best
+    if rss > RINGING_RESIDUAL * (n - 3) * noise_V**2 or abs(coef[2]) > RINGING_LEVEL_SIGMA * level_se:
+        return None
+    return line_hz, float(math.hypot(coef[0], coef[1]))
+
+
+def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end_u: float, noise_V: float):
+    """``problem`` with the effects of what it saw estimated, where its check can estimate them.
+
+    A spectral line of the plate (a PLATE_RINGING finding with ``line_hz`` and ``amplitude_fraction`` in its
+    data) gets :func:`ringing_effects`; so does signal standing after the contact's end (a CONTACT_END_UNDETERMINED
+    finding ``beyond`` the end) where :func:`ringing_after` shows it is a damped line, not force. A plate identified but not undone (``undo_refused``) gets the effects of
+    the line among ``siblings`` when that line is all the evidence of ringing (no ringing after the contact, no
+    force below zero, no peak on ringing): what was not undone is then the line itself. Any other finding is
+    returned as it is.
+
+    Parameters
+    ----------
+    problem : ballimpact.problems.Problem
+        The finding.
+    siblings : sequence of ballimpact.problems.Problem
+        Every finding of the same conditioned signal (``problem`` among them).
+    voltage_V : array_like
+        The conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's ends in samples from ``voltage_V[0]`` [samples].
+    noise_V : float
+        Noise standard deviation [V].
+
+    Returns
+    -------
+    ballimpact.problems.Problem
+    """
+    from dataclasses import replace
+
+    from .problems import ProblemKind
+
+    def line_effects(p):
+        x = np.asarray(voltage_V, dtype=float)
+        i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+        if not (0 <= i0 < i1 < x.size):
+            return {}
+        amp = float(p.data["amplitude_fraction"]) * float(np.max(x[i0:i1 + 1]))
+        return ringing_effects(x, fs, start_u, end_u, noise_V, float(p.data["line_hz"]), amp)
+
+    if problem.effects:
+        return problem
+    if problem.kind is ProblemKind.CONTACT_END_UNDETERMINED and problem.data.get("beyond") == "end":
+        found = ringing_after(voltage_V, fs, end_u, noise_V)
+        if found is None:
+            return problem
+        return replace(problem, effects=ringing_effects(voltage_V, fs, start_u, end_u, noise_V, found[0], 0.0))
+    if problem.kind is not ProblemKind.PLATE_RINGING:
+        return problem
+    if "line_hz" in problem.data:
+        return replace(problem, effects=line_effects(problem))
+    if "undo_refused" in problem.data:
+        ringing = [p for p in siblings if p.kind in (ProblemKind.PLATE_RINGING, ProblemKind.NEGATIVE_FORCE,
+                                                     ProblemKind.PEAK_ON_RINGING) and p is not problem]
+        lines = [p for p in ringing if "line_hz" in p.data]
+        if lines and len(lines) == len(ringing):
+            effects = [line_effects(p) for p in lines]
+            return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in effects]))
+                                             for q in ("contact_time", "kcal", "peak")})
+    return problem
