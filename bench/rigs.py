@@ -145,7 +145,7 @@ def score_impacts(results: pd.DataFrame, truth: pd.DataFrame) -> dict:
              for i in np.flatnonzero(clean & quantity_ok(results, q) & ~right[q])]
     status_ok = results["status"].astype(str).to_numpy() == "ok"
     notes = results["fit_note"] if "fit_note" in results.columns else pd.Series([""] * len(results))
-    lost = [f"left out of the fit: {notes[i]}" if status_ok[i] else str(results["reason"][i])
+    lost = [f"left out of the fit: {notes[i]}" if status_ok[i] else _lost_reason(results.iloc[i])
             for i in np.flatnonzero(clean & ~used)]
     faulty_used = [(results["impact_id"][i], truth["fault"][i]) for i in np.flatnonzero(~clean & used)]
     vin = pd.to_numeric(results["vin_m_s"], errors="coerce").to_numpy(dtype=float)
@@ -155,6 +155,16 @@ def score_impacts(results: pd.DataFrame, truth: pd.DataFrame) -> dict:
     return {"n": len(truth), "clean": int(clean.sum()), "used": int((clean & used).sum()),
             "used_right": int((clean & used & right["tc"] & right["cor"]).sum()), "wrong": wrong,
             "faulty": int((~clean).sum()), "faulty_used": faulty_used, "lost_reasons": lost, "speeds": speeds}
+
+
+def _lost_reason(row) -> str:
+    """Why an impact is not in the fit: v1.2, the fit inputs withheld and the findings' codes (its ``reason``
+    names every finding, not only those that withheld TC or COR); before, its ``reason``."""
+    if "contact_time_status" not in row.index:
+        return str(row["reason"])
+    withheld = [q for q, col in (("TC", "contact_time_status"), ("COR", "cor_status")) if row.get(col) != "ok"]
+    codes = ", ".join(c for c in str(row.get("reason_code", "")).split(";") if c)
+    return f"{' and '.join(withheld) or 'no fit input'} withheld [{codes}]"
 
 
 def score_curves(parameters: pd.DataFrame, rig: rig_zoo.Rig) -> list[dict]:

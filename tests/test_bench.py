@@ -292,6 +292,9 @@ def test_rigs_score_reads_the_v12_verdicts_and_falls_back_to_status():
                      peak_status=["ok", "ok", "withheld"], cor_status=["ok", "ok", "withheld"])
     s = rigs.score_impacts(new, truth)
     assert s["wrong"] == [] and s["used"] == 1  # the withheld quantities are not given as ok
+    s = rigs.score_impacts(new.assign(status=["ok", "excluded", "ok"], used_in_fit=["true", "false", "false"],
+                                      reason_code=["", "contact_end;aliasing", ""]), truth)
+    assert sorted(s["lost_reasons"]) == ["TC withheld [contact_end, aliasing]", "left out of the fit: "]
     s = rigs.score_impacts(new.assign(peak_status="ok"), truth)
     assert [(i, q) for i, q, _ in s["wrong"]] == [("a", "peak")]  # ok, yet no value: not right
 
