@@ -69,7 +69,7 @@ def test_round_trip_identical(ds, written):
     back = open_dataset(written)
     xr.testing.assert_identical(back, ds)
     # strings survive exactly, including empty reasons of good impacts
-    for name in ("impact_id", "impact_ball", "status", "reason", "trace_file", "trace_sha256",
+    for name in ("impact_id", "ball_type", "status", "reason", "trace_file", "trace_sha256",
                  "ball", "ball_label", "kb0_source", "fit_message"):
         assert list(back[name].values) == list(ds[name].values), name
         assert all(isinstance(v, str) for v in back[name].values), name
@@ -405,7 +405,7 @@ def test_fit_dataset_without_fit_and_assembly(tmp_path):
     assert list(table["n_impacts"]) == [7, 1]
     assert np.isnan(table.loc[1, "ak_kN_m"]) and table.loc[1, "mass_kg"] == 0.0567
     assert ds["fit_message"].values[1] == "needs at least 3 good impacts, got 1"
-    oversize = ds["impact_ball"].values == "oversize"
+    oversize = ds["ball_type"].values == "oversize"
     assert np.isnan(ds["model_force_N"].values[oversize]).all()
     write_dataset(ds, tmp_path / "a.nc")
     xr.testing.assert_identical(open_dataset(tmp_path / "a.nc"), ds)
@@ -453,3 +453,62 @@ def test_archive_is_clean_cf_and_acdd(written):
         missing = [n for n in ds.data_vars if "coverage_content_type" not in ds[n].attrs]
         assert missing == []
         assert "units" not in ds["ak_kN_m"].attrs and "kN m-(1+a)" in ds["ak_kN_m"].attrs["comment"]
+
+
+# ------------------------------------------------------------ the archive as xarray shows it (issue 49)
+
+
+def test_impacts_are_indexed_by_their_id(written, ds):
+    """Issue 49: the impact dimension had no index; opened with plain xarray, an impact is found by its id."""
+    ids = [str(i) for i in ds["impact_id"].values]
+    with xr.open_dataset(written) as f:
+        assert "impact" in f.indexes
+        assert [str(i) for i in f["impact"].values] == ids
+        one = f.sel(impact=ids[1])
+        assert str(one["impact_id"].values) == ids[1]
+        assert_allclose(float(one["vin_m_s"]), float(ds["vin_m_s"].values[1]), rtol=1e-12)
+
+
+def test_each_impacts_ball_is_called_ball_type(written):
+    """Issue 49: the per-impact ball was called impact_ball (ball is the parameter dimension)."""
+    with xr.open_dataset(written) as f:
+        assert "impact_ball" not in f.variables
+        assert f["ball_type"].dims == ("impact",)
+        assert set(str(b) for b in f["ball_type"].values) <= set(str(b) for b in f["ball"].values)
+
+
+def test_long_names_are_short_and_the_explanation_is_a_comment(written):
+    """Issue 49: long names were whole sentences, so a plot's axis label overflowed."""
+    with xr.open_dataset(written) as f:
+        for name, var in f.variables.items():
+            assert len(var.attrs.get("long_name", "")) <= 40, (name, var.attrs.get("long_name"))
+        # what the long name leaves out is in the comment
+        assert "gates.distance_to_plate_m" in f["vin_m_s"].attrs["comment"]
+        assert "10 %" in f["model_agreement_fraction"].attrs["comment"]
+        # xarray's own axis label fits a panel of an A4 page
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(3.2, 2.4))
+        ax = fig.add_subplot()
+        f["vin_m_s"].plot.line(ax=ax, x="impact")
+        fig.canvas.draw()
+        label = ax.yaxis.label.get_window_extent()
+        assert label.y0 >= 0 and label.y1 <= fig.bbox.height, ax.yaxis.label.get_text()
+
+
+def test_an_archive_of_version_1_1_still_reads(written, tmp_path):
+    """Archives written before issue 49 (impact_ball, no impact index) read through archive_read and the archive
+    reader as new ones do."""
+    from ballimpact import archive_read
+
+    with xr.open_dataset(written) as f:
+        old = f.load().drop_vars("impact").rename({"ball_type": "impact_ball"})
+    old.to_netcdf(tmp_path / "old.nc")
+    with xr.open_dataset(written) as new:
+        new = new.load()
+    with xr.open_dataset(tmp_path / "old.nc") as f:
+        old = f.load()
+    assert archive_read.balls(old) == archive_read.balls(new)
+    ball = archive_read.balls(new)[0]
+    assert list(archive_read.impacts(old, ball, "ok")) == list(archive_read.impacts(new, ball, "ok"))
+    assert "ball_type" in archive.open_dataset(tmp_path / "old.nc")

@@ -15,7 +15,7 @@ def ds():
     nan = np.nan
     return xr.Dataset(
         {
-            "impact_ball": ("impact", np.array(["b1", "b2", "b1", "b3"], dtype=object)),
+            "ball_type": ("impact", np.array(["b1", "b2", "b1", "b3"], dtype=object)),
             "status": ("impact", np.array(["ok", "ok", "excluded", "excluded"], dtype=object)),
             "reason": ("impact", np.array(["", "", "gate", "trace"], dtype=object)),
             "vin_m_s": ("impact", [20.0, 25.0, nan, 30.0]),

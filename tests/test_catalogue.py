@@ -41,12 +41,12 @@ def _session(session_id, date, params, seed):
         sim = simulate_impact(vin, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac)
         tc = sim.contact_time_s * (1 + NOISE * rng.standard_normal(N_PER_BALL))
         cor = sim.cor * (1 + NOISE * rng.standard_normal(N_PER_BALL))
-        rows.append(pd.DataFrame({"impact_ball": ball, "status": "ok", "vin_m_s": vin,
+        rows.append(pd.DataFrame({"ball_type": ball, "status": "ok", "vin_m_s": vin,
                                   "contact_time_ms": tc * 1e3, "cor": cor, "impact_mass_kg": p.mass_kg}))
         fit = fit_ball_model(vin, tc, cor, np.full(N_PER_BALL, p.mass_kg), kb0_N_m=p.kb0_N_m, n_bootstrap=0)
         fits.append(archive.fit_dataset(ball, fit, label=ball))
     table = pd.concat(rows, ignore_index=True)
-    impacts = xr.Dataset({c: ("impact", table[c].to_numpy(dtype=object if c in ("impact_ball", "status") else float))
+    impacts = xr.Dataset({c: ("impact", table[c].to_numpy(dtype=object if c in ("ball_type", "status") else float))
                           for c in table.columns},
                          coords={"impact_id": ("impact", [f"{session_id}-{i:03d}" for i in range(len(table))])})
     balls = xr.concat(fits, dim="ball", data_vars="minimal", coords="minimal", compat="override")

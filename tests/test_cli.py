@@ -64,8 +64,8 @@ def test_validate_session_fault_is_one_line_no_traceback(tmp_path):
 
 @pytest.mark.parametrize(("option", "bad", "message"), [
     ("--mass-g", "0.0577", "the mass is in g and must be in (1, 1000) g, got '0.0577' (in kg? 0.0577 kg = 57.7 g)"),
-    ("--vin", "200", "the inbound speed must be in 1-80 m/s, got '200'"),
-    ("--vin", "0.5", "the inbound speed must be in 1-80 m/s, got '0.5'"),
+    ("--vin", "200", "the inbound speed must be in 2-80 m/s, got '200'"),
+    ("--vin", "0.5", "the inbound speed must be in 2-80 m/s, got '0.5'"),
     ("--ak", "0", "expected a positive number, got '0'"),
     ("--ac", "-3.5", "expected a positive number, got '-3.5'"),
     ("--kb0", "0", "expected a positive number, got '0'"),

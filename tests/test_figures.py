@@ -210,3 +210,19 @@ def test_every_figure_of_a_synthetic_session_is_marked(synthetic):
     for fig in figs:
         marked = figures.SYNTHETIC_MARK in fig._suptitle.get_text()
         assert marked == synthetic
+
+
+def test_fig7_legend_lies_below_its_panels_not_on_them():
+    """Issue 49: Fig. 7's legends covered part of each panel; one legend now sits below them all."""
+    from matplotlib.legend import Legend
+
+    ds = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"))
+    fig = figures.fig_contact_time_cor(ds)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    panels = [ax.get_window_extent(renderer) for ax in fig.get_axes() if ax.axison]
+    legends = fig.findobj(match=Legend)
+    assert len(legends) == 1
+    box = legends[0].get_window_extent(renderer)
+    assert box.y1 <= min(p.y0 for p in panels), (box, min(p.y0 for p in panels))
+    assert {"measured", "fitted model", "95 % confidence (curve)"} <= {t.get_text() for t in legends[0].texts}

@@ -366,7 +366,7 @@ def test_fit_outliers_flow_into_impacts_table_and_fit_arrays():
     status = ["ok"] * vin.size + ["excluded"]
     ds = xr.Dataset({
         "impact_id": ("impact", [f"p-{i:03d}" for i in range(n)]),
-        "impact_ball": ("impact", ["pressurised"] * n),
+        "ball_type": ("impact", ["pressurised"] * n),
         "status": ("impact", status),
         "reason": ("impact", [""] * vin.size + ["no contact found"]),
         "vin_m_s": ("impact", np.append(vin, np.nan)),

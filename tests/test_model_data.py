@@ -73,7 +73,7 @@ def test_impact_model_curves_of_many_impacts_are_the_curves_of_each(monkeypatch,
 def _one_impact_archive(force):
     t = np.arange(force.size) * 1e-5
     return xr.Dataset(
-        {"impact_ball": ("impact", np.array(["b1"], dtype=object)),
+        {"ball_type": ("impact", np.array(["b1"], dtype=object)),
          "vin_m_s": ("impact", [20.0]), "impact_mass_kg": ("impact", [PARAMS[0]]),
          "time_s": (("impact", "sample"), t[None, :]), "force_N": (("impact", "sample"), force[None, :]),
          "mass_kg": ("ball", [PARAMS[0]]), "kb0_kN_m": ("ball", [PARAMS[1] / 1e3]),

@@ -205,10 +205,13 @@ def test_fit_warnings_and_undetermined_parameters_are_visible(ds, n_balls):
 
     texts = [t.get_text() for t in fig.findobj(match=Text) if t.get_visible() and t.get_text()]
     texts += [cell.get_text().get_text() for table in fig.findobj(match=Table) for cell in table.get_celld().values()]
-    assert any(t.endswith("\nnot determined\n(at bound)") for t in texts), texts
+    # a itself is inside its range (issue 49): its interval is open, the value not "not determined"
+    assert any(t.endswith("\ninterval open") for t in texts), texts
     assert not any("[0.300," in t for t in texts)
+    assert not any("not determined" in t for t in texts)
     label = archive_read.ball_label(bad, ball)
-    assert any(t.startswith(f"Fit warning 1, {label}: a not determined (at bound); only 41 of 200 bootstrap")
+    assert any(" ".join(t.split()).startswith(f"Fit warning 1, {label}: a: 95 % interval reaches the search bound: "
+                                              "the data bound it on one side only; only 41 of 200 bootstrap")
                for t in texts), texts
     assert any(t.endswith("(see fit warning 1)") for t in texts)
     assert _text_inside_page(fig) == []
@@ -392,3 +395,132 @@ def test_summary_page_with_warnings_fit_warnings_conditioning_and_four_balls_fit
     fig = report._summary_page(full, report._session_info(full))
     assert re.search(r"Reading\s+the\s+session\s+gave\s+6\s+warnings", " ".join(_page_texts(fig)))
     assert _text_inside_page(fig) == []
+
+
+# ------------------------------------------------------------ layout: no clipped or overlapping text (issue 49)
+
+
+def _layout_faults(fig) -> list[str]:
+    """What a reader would see as broken on a page: a text beyond the page, a table cell's text beyond its cell,
+    two texts of the page (its own texts and table cells) on top of each other."""
+    from matplotlib.table import Table
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    faults = [f"outside the page: {t!r}" for t in _placed_texts_outside(fig, renderer)]
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in fig.texts if t.get_visible() and t.get_text()]
+    for table in fig.findobj(match=Table):
+        for cell in table.get_celld().values():
+            text = cell.get_text()
+            if not text.get_text():
+                continue
+            tb, cb = text.get_window_extent(renderer), cell.get_window_extent(renderer)
+            if tb.x0 < cb.x0 - 0.5 or tb.x1 > cb.x1 + 0.5 or tb.y0 < cb.y0 - 0.5 or tb.y1 > cb.y1 + 0.5:
+                faults.append(f"beyond its cell: {text.get_text()!r}")
+            boxes.append((text.get_text(), tb))
+    for i, (a, box_a) in enumerate(boxes):
+        for b, box_b in boxes[i + 1:]:
+            overlap_x = min(box_a.x1, box_b.x1) - max(box_a.x0, box_b.x0)
+            overlap_y = min(box_a.y1, box_b.y1) - max(box_a.y0, box_b.y0)
+            if overlap_x > 1 and overlap_y > 1:
+                faults.append(f"overlap: {a[:30]!r} / {b[:30]!r}")
+    return faults
+
+
+def legends_on_panels(fig) -> list[list[str]]:
+    """The legends of a figure that lie on one of its panels (each as its first entries)."""
+    from matplotlib.legend import Legend
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    panels = [ax.get_window_extent(renderer) for ax in fig.get_axes() if ax.axison and ax.get_visible()]
+    found = []
+    for legend in fig.findobj(match=Legend):
+        lb = legend.get_window_extent(renderer)
+        if any(min(lb.x1, p.x1) - max(lb.x0, p.x0) > 1 and min(lb.y1, p.y1) - max(lb.y0, p.y0) > 1 for p in panels):
+            found.append([t.get_text() for t in legend.texts][:3])
+    return found
+
+
+def _placed_texts_outside(fig, renderer) -> list[str]:
+    """The texts the report places (page texts, titles, axis labels, legends, table cells: not the tick labels,
+    which matplotlib keeps for ticks outside the view) that reach beyond the page."""
+    from matplotlib.axis import Tick
+
+    ticks = {id(t) for tick in fig.findobj(match=Tick) for t in (tick.label1, tick.label2)}
+    page = fig.bbox
+    bad = []
+    for t in fig.findobj(match=lambda a: hasattr(a, "get_window_extent") and hasattr(a, "get_text")):
+        if id(t) in ticks or not t.get_visible() or not t.get_text():
+            continue
+        bb = t.get_window_extent(renderer)
+        if bb.x0 < -0.5 or bb.y0 < -0.5 or bb.x1 > page.width + 0.5 or bb.y1 > page.height + 0.5:
+            bad.append(t.get_text()[:40])
+    return bad
+
+
+def _four_balls_with_fit_warnings():
+    """Four ball types with long labels, fit warnings, an undetermined parameter and an interval of four orders of
+    magnitude, and the demo's long description: the session of issue 49."""
+    ds = make_archive(balls=("pressurised", "pressureless", "oversize", "punctured"), speeds_m_s=(18.0, 26.0))
+    ds.attrs["session_description"] = (
+        "SYNTHETIC DATA, not a laboratory measurement. Made by `ballimpact synth` (seed 2004): impacts simulated "
+        "with the Goodwill & Haake (2004) viscoelastic model and passed through a simulated sensor chain (plate "
+        "resonance, per-impact kCAL spread, charge-amplifier high-pass decay, DC offset, mains hum, white noise, "
+        "16-bit ADC with clipping, gate timer rounding). Faulty impacts are planted on purpose; see their note.")
+    labels = np.array(["Ball 1: pressurised (new can, 2026 batch)", "Ball 2: pressureless practice ball",
+                       "Ball 3: oversize (type 3)", "Ball 4: punctured with a 1 mm needle"], dtype=object)
+    ds["ball_label"] = ("ball", labels)
+    for name, value in (("ak_lo", 6602.0), ("ak_hi", 63_974_727.0), ("a_lo", 0.3)):
+        values = ds[name].values.copy()
+        values[0] = value
+        ds[name] = ("ball", values, ds[name].attrs)
+    rough = ("only 3 impacts: the intervals are rough; the ak interval reaches the end of its profile grid: the data "
+             "barely constrain it; the a interval reaches the end of its profile grid: the data barely constrain it; "
+             "the kb_10mm interval reaches the end of its profile grid: the data barely constrain it")
+    message = np.array([f"ok; {rough}"] * ds.sizes["ball"], dtype=object)
+    message[0] = f"ok; only 41 of 200 bootstrap refits converged; bands unreliable; {rough}"
+    message[2] = f"ok; AC sits on its search bound; the data do not constrain it, treat it with care; {rough}"
+    ds["fit_message"] = ("ball", message, ds["fit_message"].attrs)
+    return ds
+
+
+@pytest.mark.parametrize("which", ["demo-like", "four balls with fit warnings"])
+def test_pages_1_to_3_have_no_clipped_or_overlapping_text(ds, which):
+    """Issue 49: headings ran off the page, the parameter table's headers ran together, ball labels were cut, the AK
+    interval overflowed its cell, and Fig. 7's legends covered its panels."""
+    data = ds if which == "demo-like" else _four_balls_with_fit_warnings()
+    info = report._session_info(data)
+    pages = [report._summary_page(data, info)]
+    pages += [report._figure_page(data, info, name, k + 1, None) for k, name in enumerate(report.FIGURE_CAPTIONS)
+              if k < 2]
+    for number, page in enumerate(pages, start=1):
+        assert _layout_faults(page) == [], (which, number)
+    assert legends_on_panels(pages[1]) == [], which  # Fig. 7: one legend, below its panels
+
+
+def test_the_figure_titles_of_every_page_stay_on_it(ds):
+    """Issue 49: "Fig. 7 (fig7_contact_time_cor.png): Contact time and coefficient of restitution against inb"."""
+    info = report._session_info(ds)
+    for k, name in enumerate(report.FIGURE_CAPTIONS):
+        page = report._figure_page(ds, info, name, k + 1, None)
+        page.canvas.draw()
+        assert _placed_texts_outside(page, page.canvas.get_renderer()) == [], name
+
+
+def test_the_description_is_never_cut_mid_word(ds):
+    """Issue 49: the demo's description was cut mid-word ("simulated sensor chai ... e, per-impact")."""
+    data = ds.copy()
+    data.attrs = dict(ds.attrs)
+    demo = _four_balls_with_fit_warnings().attrs["session_description"]
+    words = set(demo.split())
+    for description in (demo, "word " * 400 + "end"):
+        data.attrs["session_description"] = description
+        shown = [t for t in _page_texts(report._summary_page(data, report._session_info(data)))
+                 if t.split()[:2] == description.split()[:2]]
+        assert len(shown) == 1, shown
+        text = " ".join(shown[0].split())
+        if len(description) < 600:
+            assert text == " ".join(description.split())  # all of it
+        else:
+            assert text.endswith(" ...") and set(text[:-4].split()) <= set(description.split()) | words | {"..."}

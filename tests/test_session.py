@@ -5,6 +5,7 @@ import hashlib
 import math
 import os
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -184,13 +185,30 @@ def test_slow_daq_without_its_bandwidth_is_warned_of_aliasing(tmp_path, rate_hz,
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         session = read_session(folder)
-    aliasing = [str(w.message) for w in caught if "through its alias" in str(w.message)]
+    aliasing = [str(w.message) for w in caught if "would alias" in str(w.message)]
     assert bool(aliasing) is warned, aliasing
     if warned:
         assert issubclass(caught[0].category, SessionWarning)
-        assert re.search(rf"session\.yaml: key 'daq\.bandwidth_hz' not given, and at {rate_hz / 1e3:g} kHz a plate "
-                         rf"resonance between {rate_hz / 2e3:g} and 30 kHz", aliasing[0]), aliasing[0]
+        assert re.search(rf"session\.yaml: daq\.bandwidth_hz not given: at {rate_hz / 1e3:g} kHz a plate "
+                         rf"resonance above {rate_hz / 2e3:g} kHz would alias", aliasing[0]), aliasing[0]
     assert session.meta.bandwidth_hz == bandwidth_hz
+
+
+def test_bandwidth_warning_is_short_and_says_where_to_find_the_number(tmp_path):
+    """Issue 49: the daq.bandwidth_hz warning took 60 words; it must be short and name the data sheet and the tap
+    test (what a lab reads the number from)."""
+    import warnings
+
+    meta = copy.deepcopy(BASE_META)
+    meta["daq"]["sample_rate_hz"] = 50_000.0
+    folder = make_session(tmp_path, meta=meta)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_session(folder)
+    (message,) = [str(w.message).split(": ", 1)[1] for w in caught if "bandwidth_hz" in str(w.message)]
+    assert len(message.split()) <= 35, (len(message.split()), message)
+    assert "data sheet" in message and "tap test" in message, message
+    assert "25 kHz" in message, message  # what it risks: a resonance above half the 50 kHz
 
 
 def test_unquoted_date_and_exponent_without_dot(tmp_path):
@@ -605,6 +623,32 @@ def test_key_typo_names_the_key_it_misses(tmp_path):
                                             r"effect"):
         session = read_session(folder)
     assert session.meta.balls["pressureless"].kb0_N_m is None
+
+
+def test_top_level_typo_names_the_key_it_resembles(tmp_path):
+    """raw-format v1.2: a misspelt top-level key (descripton:) is warned about with the key it resembles."""
+    meta = copy.deepcopy(BASE_META)
+    meta.pop("description", None)
+    meta["descripton"] = "Four ball types"
+    meta["lab_notes"] = "kept"
+    folder = make_session(tmp_path, meta=meta)
+    with pytest.warns(SessionWarning, match=r"unknown key\(s\) 'descripton', 'lab_notes'.*did you mean "
+                                            r"'description'\? 'descripton' has no effect") as caught:
+        session = read_session(folder)
+    assert session.meta.description == ""
+    assert session.meta.raw["lab_notes"] == "kept"
+    assert not any("'lab_notes' has no effect" in str(w.message) for w in caught)
+
+
+def test_known_top_level_keys_give_no_unknown_key_warning(tmp_path):
+    meta = copy.deepcopy(BASE_META)
+    meta.update(operator="A. Tester", description="x", synthetic=False,
+                rig={"orientation": "horizontal"})
+    folder = make_session(tmp_path, meta=meta)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_session(folder)
+    assert not [w for w in caught if "unknown key" in str(w.message)]
 
 
 # --------------------------------------------------------- v1.1 flight and ITF keys

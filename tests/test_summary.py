@@ -53,12 +53,34 @@ def test_failed_fit_on_the_search_bounds_is_not_shown_as_intervals():
                           "care; only 41 of 200 bootstrap refits converged; bands unreliable"}
     table = parameters_table(_ball_ds([row]))
     warnings = table.loc[0, "fit_warnings"]
-    assert warnings.startswith("AK not determined (at bound); a not determined (at bound); "
-                               "AC not determined (at bound); AK (via kR) sits on its search bound")
+    # a = 1.65 is inside its range: only its interval's lower end is the search bound's (issue 49)
+    assert warnings.startswith("AK not determined (at bound); a: 95 % interval reaches the search bound: the data "
+                               "bound it on one side only; AC not determined (at bound); AK (via kR) sits on its "
+                               "search bound")
     assert "only 41 of 200 bootstrap refits converged" in warnings
-    for key in ("ak", "a", "ac"):
+    for key in ("ak", "ac"):
         assert table.loc[0, [f"{key}_lo", f"{key}_hi"]].isna().all(), key
+    assert math.isnan(table.loc[0, "a_lo"]) and table.loc[0, "a_hi"] == 3.149
     assert table.loc[0, "a"] == GOOD["a"]  # the estimate itself stays
+
+
+def test_a_value_inside_its_range_is_never_called_not_determined():
+    """Issue 49: "a not determined (at bound)" was printed beside a = 1.745, well inside 0.3-4, because its
+    interval reached the bound."""
+    a_lo, a_hi = PARAMETER_BOUNDS["a"]
+    row = {**GOOD, "ball": "b1", "a": 1.745, "a_lo": 1.21, "a_hi": a_hi, "fit_message": "ok"}
+    text = parameters_table(_ball_ds([row])).loc[0, "fit_warnings"]
+    assert "not determined" not in text
+    assert text == "a: 95 % interval reaches the search bound: the data bound it on one side only"
+
+
+def test_an_interval_four_orders_of_magnitude_wide_is_a_fit_warning():
+    """Issue 49: an AK interval of [6 602, 63 974 727] was not flagged at all."""
+    row = {**GOOD, "ball": "b1", "ak_kN_m": 150_000.0, "ak_lo": 6602.0, "ak_hi": 63_974_727.0, "fit_message": "ok"}
+    text = parameters_table(_ball_ds([row])).loc[0, "fit_warnings"]
+    assert text.startswith("AK barely determined: its 95 % interval [6,602, 6.397e+07] spans a factor 9,690 (more than 100)"), text
+    good = parameters_table(_ball_ds([{**GOOD, "ball": "b1", "fit_message": "ok"}])).loc[0, "fit_warnings"]
+    assert good == ""  # GOOD's AK interval spans a factor of 1.75
 
 
 def test_ak_bound_follows_from_the_kr_and_a_bounds():
@@ -156,3 +178,75 @@ def test_large_residual_is_a_fit_warning():
     text = parameters_table(_ball_ds([row])).loc[0, "fit_warnings"]
     assert text.startswith("TC residual 78.0 % RMS (> 5 %): the model does not describe these impacts")
     assert "COR residual" not in text
+
+
+def _exclusions(tmp_path, reasons):
+    folder = _results(tmp_path)
+    pd.DataFrame({"impact_id": [f"i{k}" for k in range(len(reasons))], "ball": ["b1"] * len(reasons),
+                  "status": ["excluded"] * len(reasons), "reason": reasons}).to_csv(folder / "impacts.csv",
+                                                                                     index=False)
+    return [line for line in session_summary(folder) if line.startswith("    excluded")]
+
+
+def test_summary_labels_carry_no_stray_value_marks(tmp_path):
+    """Issue 49: "inbound speed # ... outside physical bounds": a value's number and unit both go."""
+    lines = _exclusions(tmp_path, ["inbound speed 0.014 m/s outside physical bounds (2.0, 80.0)",
+                                   "inbound speed 0.017 m/s outside physical bounds (2.0, 80.0)",
+                                   "contact time 8.60 ms outside physical bounds (1.0, 12.0)",
+                                   "calibration factor 125.0 N/V is 50 % from the session median 250.0 N/V "
+                                   "(robust z = 10591.7)"])
+    assert lines == ["    excluded   2 x inbound speed outside physical bounds",
+                     "    excluded   1 x contact time outside physical bounds",
+                     "    excluded   1 x calibration factor far from the session median"], lines
+
+
+def test_summary_says_why_a_trace_is_unreadable(tmp_path):
+    """Issue 49: "unreadable trace" alone hid the cause (an unknown extension); the file name is left out."""
+    lines = _exclusions(tmp_path, [
+        "unreadable trace: raw/s1/traces/shot05.lvm: unknown trace file extension '.lvm' (expected .csv or .tdms)",
+        "unreadable trace: raw/s1/traces/shot06.lvm: unknown trace file extension '.lvm' (expected .csv or .tdms)",
+        "unreadable trace: /data/raw/s1/traces/b.csv: line 4: non-numeric value 'spike!'"])
+    assert lines == ["    excluded   2 x unreadable trace: unknown trace file extension '.lvm' "
+                     "(expected .csv or .tdms)",
+                     "    excluded   1 x unreadable trace: non-numeric value 'spike!'"], lines
+
+
+def test_a_model_force_unlike_the_measured_one_is_a_fit_warning():
+    """Issue 49: half-sine pulses (not tennis balls) agreed with the fitted model on 25-32 % of the contact, and only
+    `a` was warned about. The median impact's agreement below FORCE_AGREEMENT_WARNING is a fit warning."""
+    ds = _ball_ds([{"ball": "b1", **GOOD, "fit_message": "ok"}, {"ball": "b2", **GOOD, "fit_message": "ok"}])
+    ds["model_agreement_fraction"] = ("impact", [0.25, 0.32, 0.30, 0.2, 1.0, 0.99, 1.0])
+    ds["ball_type"] = ("impact", np.array(["b1"] * 4 + ["b2"] * 3, dtype=object))
+    ds["status"] = ("impact", np.array(["ok"] * 3 + ["excluded"] + ["ok"] * 3, dtype=object))
+    table = parameters_table(ds).set_index("ball")
+    assert table.loc["b1", "fit_warnings"].startswith(
+        "model force unlike the measured force: within 10 % of the peak on 30 % of the contact (median impact")
+    assert table.loc["b2", "fit_warnings"] == ""
+
+
+@pytest.mark.slow
+def test_half_sine_pulses_are_flagged_in_parameters_and_the_run_summary(tmp_path):
+    """Issue 49, end to end without Snakemake: a hand-made session of half-sine pulses (tests/handmade.py) is
+    processed, fitted and archived by the workflow's functions; parameters.csv and the run summary name the cause."""
+    import warnings
+
+    from handmade import HandmadeSpec, write_session
+
+    from ballimpact.pipeline import fit_balls, session_impacts, write_archive
+
+    folder = write_session(tmp_path / "raw" / "hand", HandmadeSpec(formats=["csv"] * 8, header_rates_hz={},
+                                                                  bandwidth_hz=20_000.0))
+    out = tmp_path / "results" / "hand"
+    work = out / "work"
+    work.mkdir(parents=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        session_impacts(folder, work / "session.json", out / "impacts.csv", work / "impacts.nc")
+        fit_balls(work / "impacts.nc", ["yellow"], folder, work / "fits.nc", n_bootstrap=10, seed=0)
+        write_archive(folder, work / "impacts.nc", [work / "fits.nc"], out / "hand.nc", out / "parameters.csv",
+                      work / "session.json")
+    (out / "report.pdf").write_bytes(b"%PDF")
+    text = pd.read_csv(out / "parameters.csv", keep_default_na=False).loc[0, "fit_warnings"]
+    assert text.startswith("model force unlike the measured force"), text
+    assert any(line.startswith("    fit yellow: WARNING: model force unlike the measured force")
+               for line in session_summary(out)), session_summary(out)

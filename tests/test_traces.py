@@ -210,7 +210,8 @@ def test_missing_file(tmp_path):
 def test_unknown_extension(tmp_path):
     path = tmp_path / "a.txt"
     path.write_text("voltage_V\n0.1\n")
-    with pytest.raises(TraceError, match=r"a\.txt: unknown trace file extension '\.txt' \(expected \.csv or \.tdms\)"):
+    with pytest.raises(TraceError, match=r"a\.txt: unknown trace file extension '\.txt' \(expected \.csv, \.tdms, "
+                                         r"\.lvm\)"):
         read_trace(path, SESSION_RATE_HZ)
 
 
@@ -363,3 +364,69 @@ def test_property_garbage_lines_give_trace_error_naming_the_line(tmp_path, garba
         read_trace(path, SESSION_RATE_HZ)
     message = str(info.value)
     assert message.startswith(f"{path}: line {inserted[0]}:"), message
+
+
+# ---------------------------------------------------------------- LabVIEW LVM (raw-format v1.2)
+# The files are written here in LabVIEW's Measurement text format (tests/handmade.py), not by the reader's library.
+
+
+@pytest.mark.parametrize(("x_column", "decimal"), [(True, "."), (False, "."), (True, ",")])
+def test_lvm_voltage_and_rate_from_delta_x(tmp_path, x_column, decimal):
+    from handmade import write_lvm
+
+    v = signal()
+    path = tmp_path / "shot.lvm"
+    write_lvm(path, v, 50_000.0, x_column=x_column, decimal=decimal)
+    trace = read_trace(path, SESSION_RATE_HZ)
+    assert trace.format == "lvm" and trace.sample_rate_source == "Delta_X"
+    np.testing.assert_allclose(trace.sample_rate_hz, 50_000.0, rtol=1e-6)  # Delta_X printed to 8 digits
+    np.testing.assert_allclose(trace.voltage_V, v, atol=5.1e-7)  # written with 6 decimals
+    assert trace.t0_s == 0.0
+
+
+def test_lvm_without_delta_x_takes_the_x_column(tmp_path):
+    from handmade import write_lvm
+
+    path = tmp_path / "shot.lvm"
+    write_lvm(path, signal(), 20_000.0)
+    text = "\n".join(line for line in path.read_text().splitlines() if not line.startswith("Delta_X"))
+    path.write_text(text + "\n")
+    trace = read_trace(path, SESSION_RATE_HZ)
+    assert trace.sample_rate_source == "X_Value"
+    np.testing.assert_allclose(trace.sample_rate_hz, 20_000.0, rtol=1e-6)
+
+
+def test_lvm_header_rate_read_without_the_samples(tmp_path):
+    from handmade import write_lvm
+
+    from ballimpact.traces import trace_header_rate
+
+    path = tmp_path / "shot.lvm"
+    write_lvm(path, signal(), 25_000.0, decimal=",")
+    np.testing.assert_allclose(trace_header_rate(path), 25_000.0, rtol=1e-6)
+
+
+def test_lvm_never_writes_beside_the_trace(tmp_path):
+    """lvm_read.read() caches a .pkl next to the file by default: raw/ must never be written."""
+    from handmade import write_lvm
+
+    write_lvm(tmp_path / "shot.lvm", signal(), 50_000.0)
+    read_trace(tmp_path / "shot.lvm", SESSION_RATE_HZ)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["shot.lvm"]
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda t: t.replace("Y_Unit_Label\tVolts", "Y_Unit_Label\tNewtons"), r"channel 'Voltage' Y_Unit_Label must be volts, got 'Newtons'"),
+    (lambda t: t.replace("LabVIEW Measurement", "Measurement"), r"not a LabVIEW Measurement file"),
+    (lambda t: t.replace("\t0.100000\n", "\tabc\n", 1), r"channel 'Voltage' sample 150: non-finite value"),
+])
+def test_lvm_fault(tmp_path, edit, message):
+    from handmade import write_lvm
+
+    path = tmp_path / "shot.lvm"
+    v = signal()
+    v[150] = 0.1
+    write_lvm(path, v, 50_000.0)
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(TraceError, match=rf"shot\.lvm: {message}"):
+        read_trace(path, SESSION_RATE_HZ)

@@ -92,7 +92,9 @@ def test_clean_session(tmp_path):
     assert "66964.3 Hz" in text and "100000 Hz: 1" in text
     assert "csv: 3, tdms: 1" in text
     assert "Problems: none" in text
-    assert text.splitlines()[-1] == "Verdict: OK, all 4 impacts passed the file-level checks"
+    # p3's own 100 kHz disagrees with session.yaml and the other three traces (raw-format v1.2: suspect)
+    assert [w.split(":")[0] for w in report.warnings] == ["p3"], report.warnings
+    assert text.splitlines()[-1] == "Verdict: OK, all 4 impacts passed the file-level checks; 1 warning(s)"
 
 
 def faulty_session(root):
@@ -133,7 +135,7 @@ def test_problems_by_impact(tmp_path):
     assert problems["mv"] == f"{folder}/traces/mv.csv: line 1: units must be 'V', got 'mV'"
     assert problems["esc"] == "trace path escapes the session folder: ../s1.csv"
     assert problems["short"].endswith("short.csv: truncated trace: only 20 samples (at least 100 required)")
-    assert problems["ext"].endswith("ext.txt: unknown trace file extension '.txt' (expected .csv or .tdms)")
+    assert problems["ext"].endswith("ext.txt: unknown trace file extension '.txt' (expected .csv, .tdms, .lvm)")
     assert report.trace_formats == {"csv": 2}  # ok1 and gap were read
     assert report.impacts_with_problems == ["gap", "lost", "bad", "mv", "esc", "short", "ext"]
     assert not report.ok
@@ -156,9 +158,7 @@ def test_several_problems_one_impact_counted_once(tmp_path):
         "non-numeric mass_g: 'abc'",
         "trace file not found: traces/none.csv",
     ]
-    assert format_validation(report).splitlines()[-1] == (
-        "Verdict: PROBLEMS, 1 of 1 impacts will be excluded; 0 can be processed"
-    )
+    assert format_validation(report).splitlines()[-1] == "Verdict: NOTHING TO PROCESS, all 1 impacts will be excluded"
 
 
 def test_shared_trace_and_suspect_mass_are_warnings(tmp_path):
@@ -209,13 +209,37 @@ def test_gate_times_in_ms_give_speed_problems_and_a_units_hint(tmp_path):
     folder = make_session(tmp_path, [f"a,pressurised,traces/a.csv,{ms},,", f"b,pressurised,traces/a.csv,{ms},,"])
     write_csv_trace(folder / "traces" / "a.csv")
     report = validate_session(folder)
-    # 0.1 m / 4 s = 0.025 m/s and 0.1 m / 4.5 s = 0.0222 m/s: by hand, not by the code under test
+    # 0.1 m / 4 s = 0.025 m/s (COR 4 / 4.5 = 0.889 is plausible): by hand, not by the code under test
     assert [m for i, m in report.problems if i == "a"] == [
-        "inbound speed 0.025 m/s from the gate times is outside 1-80 m/s",
-        "rebound speed 0.02222 m/s from the gate times is outside 1-80 m/s",
+        "inbound speed 0.025 m/s from the gate times is outside 2-80 m/s",
     ]
-    assert any("are the gate times in ms instead of s? in s the speeds would be 25 m/s" in w
-               for w in report.warnings), report.warnings
+    assert any("are the gate times in ms instead of s? in s the speeds would be 25 m/s" in c
+               for c in report.causes), report.causes
+
+
+def test_the_units_hint_comes_before_the_per_impact_lines(tmp_path):
+    """Issue 49: the gate-times-in-ms hint came last, after every per-impact speed line."""
+    ms = "0.0,4.0,10.0,14.5"
+    rows = [f"i{k},pressurised,traces/a.csv,{ms},," for k in range(8)]
+    folder = make_session(tmp_path, rows)
+    write_csv_trace(folder / "traces" / "a.csv")
+    lines = format_validation(validate_session(folder)).splitlines()
+    hint = next(k for k, line in enumerate(lines) if "gate times in ms instead of s" in line)
+    first_problem = next(k for k, line in enumerate(lines) if "from the gate times is outside" in line)
+    assert hint < first_problem, lines
+    assert sum("from the gate times is outside" in line for line in lines) == 8  # one line per impact
+
+
+@pytest.mark.parametrize(("gates", "expected"), [
+    ("0.0,0.0625,0.2,0.3", ["inbound speed 1.6 m/s from the gate times is outside 2-80 m/s"]),  # 0.1 / 0.0625
+    ("0.0,0.05,0.2,0.3", []),  # 2 m/s in, 1 m/s out (COR 0.5): processing takes it, so must validate
+    ("0.0,0.004,0.2,0.4", ["COR 0.02 from the gate times (rebound 0.5 m/s) is outside 0.05-1"]),  # 25 in, 0.5 out
+])
+def test_validate_judges_speeds_with_the_bounds_processing_applies(gates, expected):
+    """Issue 49: validate took 1-80 m/s for both speeds, processing 2-80 m/s inbound and a COR of 0.05-1."""
+    from ballimpact.validation import gate_speed_problems
+
+    assert gate_speed_problems(0.1, [float(g) for g in gates.split(",")]) == expected
 
 
 @pytest.mark.parametrize(("rate", "expected"), [
@@ -250,12 +274,11 @@ def test_slow_trace_rates_without_the_bandwidth_are_warned_of_aliasing(tmp_path,
     write_csv_trace(folder / "traces" / "a.csv", header=f"# sample_rate_hz: {RATE_HZ}\n")
     write_csv_trace(folder / "traces" / "b.csv", header=f"# sample_rate_hz: {slow_rate}\n")
     for read_traces in (True, False):
-        aliasing = [w for w in validate_session(folder, read_traces=read_traces).warnings if "through its alias" in w]
+        aliasing = [w for w in validate_session(folder, read_traces=read_traces).warnings if "would alias" in w]
         if warned:
             assert len(aliasing) == 1, aliasing
-            assert aliasing[0].startswith("1 trace(s) give their own sample rate below 60 kHz and key "
-                                          "'daq.bandwidth_hz' is not given: at 25 kHz a plate resonance between "
-                                          "12.5 and 30 kHz"), aliasing[0]
+            assert aliasing[0].startswith("1 trace(s) sampled below 60 kHz by their own rate, and daq.bandwidth_hz "
+                                          "not given: at 25 kHz a plate resonance above 12.5 kHz"), aliasing[0]
         else:
             assert aliasing == []
 
@@ -267,12 +290,12 @@ def test_polarity_is_guessed_from_the_traces(tmp_path, polarity):
     # a negative pulse: -1 V for 50 samples on a 0.01 V baseline
     write_csv_trace(folder / "traces" / "a.csv", body="voltage_V\n" + "\n".join(repr(-x) for x in voltage().tolist()))
     report = validate_session(folder)
-    mismatch = [w for w in report.warnings if "plate.polarity" in w]
     if polarity == 1:
-        assert mismatch == ["1 of 1 traces show a negative pulse but plate.polarity is +1: is plate.polarity -1? "
-                            "(every such impact would be excluded)"]
+        assert report.causes == ["1 of 1 traces show a negative pulse but plate.polarity is +1: is plate.polarity "
+                                 "-1? (each such impact is excluded)"]
+        assert report.problems == [("a", "pulse is negative: plate.polarity is +1")]
     else:
-        assert mismatch == []
+        assert report.causes == [] and report.problems == []
 
 
 def test_validate_lists_every_session_level_problem(tmp_path):
@@ -284,3 +307,59 @@ def test_validate_lists_every_session_level_problem(tmp_path):
     assert [k for k in ("key 'date'", "key 'gates.spacing_m'", "ball 'tennis' is not defined")
             if any(k in p for p in info.value.problems)] == ["key 'date'", "key 'gates.spacing_m'",
                                                                 "ball 'tennis' is not defined"]
+
+
+# ------------------------------------------------------------ a session made by hand (issue 49)
+
+
+@pytest.mark.parametrize("read_traces", [True, False])
+def test_a_trace_rate_unlike_the_sessions_is_named(tmp_path, read_traces):
+    """Issue 49: one trace's header said 25 kHz, session.yaml and the other traces 50 kHz; validate only listed the
+    rates. The warning names the impact, its file, both rates and what the wrong one does to TC and kCAL."""
+    from handmade import write_session
+
+    folder = write_session(tmp_path / "hand")
+    report = validate_session(folder, read_traces=read_traces)
+    odd = [w for w in report.warnings if w.startswith("shot04:")]
+    assert odd == ["shot04: trace traces/shot04.csv gives its own sample rate as 25000 Hz, but daq.sample_rate_hz and "
+                   "the session's other 6 traces say 50000 Hz: read at 25000 Hz, its contact time comes out x2 and "
+                   "its kCAL x0.5 of what 50000 Hz gives; correct the file's sample rate if it is wrong"], report.warnings
+    assert not [w for w in report.warnings if w.startswith(("shot01", "shot02", "shot03", "shot05"))]
+
+
+def test_a_hand_made_session_with_tdms_and_lvm_validates(tmp_path):
+    """Issue 49: a session of CSV, DAQmx-style TDMS and LabVIEW LVM traces reads without a problem."""
+    from handmade import write_session
+
+    report = validate_session(write_session(tmp_path / "hand"))
+    assert report.problems == []
+    assert report.trace_formats == {"csv": 4, "lvm": 1, "tdms": 2}
+    assert report.sample_rates_hz == {25000.0: 1, 50000.0: 6}
+
+
+def test_validate_verdict_agrees_with_processing_on_polarity(tmp_path):
+    """Issue 49: validate warned that every pulse was positive with plate.polarity -1, yet its verdict said 7 can be
+    processed (exit 0); the run excluded every one. Each impact validate counts out, processing excludes."""
+    import subprocess
+    import sys
+    import warnings
+    from pathlib import Path
+
+    from handmade import HandmadeSpec, write_session
+
+    from ballimpact.processing import process_impact
+    from ballimpact.session import read_session
+
+    folder = write_session(tmp_path / "hand", HandmadeSpec(polarity_yaml=-1, header_rates_hz={}))
+    report = validate_session(folder)
+    assert report.impacts_with_problems == [f"shot{k:02d}" for k in range(1, 8)]
+    assert format_validation(report).splitlines()[-1].startswith(
+        "Verdict: NOTHING TO PROCESS, all 7 impacts will be excluded")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        session = read_session(folder)
+        processed = {row.impact_id: process_impact(row, session) for row in session.impacts}
+    for impact_id, message in report.problems:
+        assert processed[impact_id].status == "excluded" and message in processed[impact_id].reason
+    cli = Path(sys.executable).parent / "ballimpact"
+    assert subprocess.run([str(cli), "validate", str(folder)], capture_output=True).returncode == 1

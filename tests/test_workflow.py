@@ -159,8 +159,8 @@ def test_number_of_chunks(synth_raw, tmp_path, chunk_size, min_chunks, expected)
 def test_dry_run_slurm_profile(synth_raw, tmp_path):
     """The SLURM profile's dry run needs no sbatch (the dry-run executor runs nothing)."""
     proc = run_snakemake(
-        "-n", "--profile", "profiles/slurm", *config_args(synth_raw, tmp_path / "results", "fit_batch_impacts=0"),
-        check=True
+        "-n", "--profile", "profiles/slurm", "--quiet", "host",  # job details: profiles/default hides them
+        *config_args(synth_raw, tmp_path / "results", "fit_batch_impacts=0"), check=True
     )
     assert "profiles/slurm" in proc.stdout
     assert job_counts(proc.stdout)["fit_ball"] == n_balls_used(synth_raw / "s1")
@@ -324,7 +324,9 @@ def mixed_run(synth_raw, tmp_path_factory):
         csv_path.write_text("".join(lines), encoding="utf-8")
 
         results = tmp / "results"
-        proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), check=False)
+        # the failed jobs' blocks ("Error in rule ...") are read: shown with every job's details
+        proc = run_snakemake("--cores", "2", *config_args(raw, results, "bootstrap=10"), "--quiet", "host",
+                             check=False)
         return {"raw": raw, "results": results, "proc": proc, "hostile_ids": hostile_ids, "first_ball": first_ball}
 
     return build_once(tmp_path_factory, "mixed-run", run)

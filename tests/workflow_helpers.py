@@ -38,7 +38,13 @@ IMPACTS_CSV_COLUMNS = [  # docs/outputs.md, in order
 ]
 
 def run_snakemake(*args, cwd=REPO, check=None):
-    """Run the venv's snakemake; returns the CompletedProcess (stdout + stderr merged)."""
+    """Run the venv's snakemake; returns the CompletedProcess (stdout + stderr merged).
+
+    A dry run (``-n``) lists every job's details, which profiles/default leaves out of a run's output
+    (``quiet: [rules]``): the tests read the plan from them.
+    """
+    if "-n" in args and "--quiet" not in args:
+        args = (*args, "--quiet", "host")
     env = dict(os.environ)
     env["PATH"] = f"{BIN}{os.pathsep}{env.get('PATH', '')}"
     proc = subprocess.run(

@@ -851,7 +851,7 @@ def describe(rig: Rig) -> str:
 
 
 def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", impact_id: str = "zoo-1",
-                         daq_extra: dict | None = None) -> Path:
+                         daq_extra: dict | None = None, plate_extra: dict | None = None) -> Path:
     """Write a zoo trace as a one-impact raw session (raw-format.md v1.1).
 
     Parameters
@@ -864,6 +864,8 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
         "csv" (spec CSV with a ``# sample_rate_hz`` header) or "tdms" (fast, exact).
     impact_id : str
         The impact's id.
+    plate_extra : dict, optional
+        Further ``plate`` keys of session.yaml (e.g. ``resonance_hz``, ``damping_ratio``).
     daq_extra : dict, optional
         Keys of session.yaml's ``daq`` to set besides the rig's (e.g. ``{"bandwidth_hz": 10e3}``: a DAQ that
         states an anti-aliasing filter the zoo's chain does not have).
@@ -912,6 +914,7 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
     if rig.bandwidth_known and rig.bandwidth_hz is not None:
         daq["bandwidth_hz"] = rig.bandwidth_hz
     daq.update(daq_extra or {})
+    plate.update(plate_extra or {})
     doc = {
         "session_id": out.name, "date": "2026-11-22", "description": f"zoo trace {trace.label}: {describe(rig)}",
         "plate": plate, "daq": daq,
@@ -922,7 +925,8 @@ def write_session_folder(trace: ZooTrace, folder, *, trace_format: str = "csv", 
     return out
 
 
-def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms", daq_extra: dict | None = None):
+def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms", daq_extra: dict | None = None,
+              plate_extra: dict | None = None):
     """Process a zoo trace with the real ``process_impact``.
 
     Parameters
@@ -949,7 +953,7 @@ def run_trace(trace: ZooTrace, workdir=None, *, trace_format: str = "tdms", daq_
     base = Path(tempfile.mkdtemp(prefix="zoo-")) if own else Path(workdir)
     folder = Path(tempfile.mkdtemp(prefix="zoo-", dir=base))  # its name is the session id
     try:
-        write_session_folder(trace, folder, trace_format=trace_format, daq_extra=daq_extra)
+        write_session_folder(trace, folder, trace_format=trace_format, daq_extra=daq_extra, plate_extra=plate_extra)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             session = read_session(folder)

@@ -4,7 +4,7 @@ Layout (one root group, see docs/outputs.md):
 
 * dims ``impact``, ``sample`` (contact series, NaN padded), ``raw_sample`` (whole
   trace, NaN padded), ``ball``, ``speed``, ``model_time``, ``stiffness_x``;
-* per impact: ``impact_id`` (coordinate), ``impact_ball``, ``status``, ``reason``,
+* per impact: ``impact`` (the index: impact ids), ``impact_id`` (the same), ``ball_type``, ``status``, ``reason``,
   ``trace_file``, ``trace_sha256`` and the scalar results of :data:`IMPACT_COLUMNS`,
   plus ``impact_mass_kg`` and ``sample_rate_hz``, ``model_agreement_fraction`` and
   ``model_rms_N``, and how the trace was conditioned: ``noise_rms_V``,
@@ -52,6 +52,7 @@ from .model_data import (  # noqa: F401
     speed_curves,
     stiffness_curve,
 )
+from .archive_names import current_names, short_long_name, with_impact_index
 from .tables import IMPACT_COLUMNS, PARAMETER_COLUMNS, impacts_table, parameters_table  # noqa: F401
 
 __all__ = [
@@ -102,7 +103,7 @@ _CONTENT_TYPES = (
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
      "modelResult"),
-    (("impact_ball", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
+    (("ball_type", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
       "amplifier_time_constant_source"),
      "auxiliaryInformation"),
 )
@@ -148,7 +149,7 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "model_time_s": ("s", "time since first contact of the modelled 20 m/s impact"),
     "stiffness_x_m": ("m", "centre-of-mass displacement of the stiffness curve"),
     # per impact
-    "impact_ball": ("1", "ball type key of the impact"),
+    "ball_type": ("1", "ball type key of the impact"),
     "status": ("1", "processing status: ok or excluded"),
     "reason": ("1", "why the impact was excluded (empty when ok)"),
     "trace_file": ("1", "trace file path relative to the session folder"),
@@ -286,7 +287,7 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "model_stiffness_kN_m": ("kN m-1", "fitted structural stiffness kB(x) (Eq. 4)"),
 }
 
-_TEXT_PER_IMPACT = ["impact_ball", "status", "reason", "trace_file", "trace_sha256"]
+_TEXT_PER_IMPACT = ["ball_type", "status", "reason", "trace_file", "trace_sha256"]
 _CONDITIONING_TEXT = [
     # (archive name, ImpactResult attribute)
     ("mains_source", "mains_source"),
@@ -350,7 +351,8 @@ def coverage_content_type(name: str) -> str:
 
 
 def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset:
-    """Fill ``units`` and ``long_name`` of every known variable from :data:`VARIABLE_ATTRS`.
+    """Fill ``units``, ``long_name`` (short) and ``comment`` (the rest) of every known variable from
+    :data:`VARIABLE_ATTRS`.
 
     Parameters
     ----------
@@ -368,16 +370,19 @@ def set_variable_attrs(ds: xr.Dataset, *, overwrite: bool = False) -> xr.Dataset
     for name in list(ds.variables):
         attrs = ds[name].attrs
         if name in VARIABLE_ATTRS:
-            units, long_name = VARIABLE_ATTRS[name]
+            units, description = VARIABLE_ATTRS[name]
+            long_name, comment = short_long_name(name, description)
             if units == _AK_UNITS:
                 # kN m-(1+a) changes with each ball's a: no UDUNITS unit exists for it
                 attrs.pop("units", None)
                 attrs["units_metadata"] = f"non-UDUNITS: {_AK_UNITS}"
-                attrs["comment"] = _AK_COMMENT
+                comment = f"{comment} {_AK_COMMENT}".strip()
             elif overwrite or "units" not in attrs:
                 attrs["units"] = units
             if overwrite or "long_name" not in attrs:
                 attrs["long_name"] = long_name
+                if comment:
+                    attrs["comment"] = comment
         elif "units" not in attrs or "long_name" not in attrs:
             warnings.warn(
                 f"archive variable {name!r} has no units/long_name and is not in VARIABLE_ATTRS",
@@ -452,7 +457,7 @@ class _ImpactColumns:
             impact_id,
             (getattr(r, "trace_file", None) or getattr(r, "trace", None) or "", getattr(r, "trace_sha256", "") or ""),
         )
-        self.text["impact_ball"].append(r.ball)
+        self.text["ball_type"].append(r.ball)
         self.text["status"].append(status)
         self.text["reason"].append("" if status == "ok" else (r.reason or ""))
         self.text["trace_file"].append(trace_file)
@@ -920,7 +925,7 @@ def write_dataset(ds: xr.Dataset, path) -> Path:
     path = Path(path)
     if not path.parent.is_dir():
         raise FileNotFoundError(f"cannot write {path}: folder {path.parent} does not exist")
-    ds = _text_to_object(ds)
+    ds = _text_to_object(with_impact_index(ds))
     for var in ds.variables.values():
         var.encoding = {}
     with atomic_path(path) as tmp:
@@ -946,4 +951,4 @@ def open_dataset(path) -> xr.Dataset:
         raise FileNotFoundError(f"archive not found: {path}")
     with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as f:
         ds = f.load()
-    return _text_to_object(ds)
+    return _text_to_object(current_names(ds).drop_vars("impact", errors="ignore"))

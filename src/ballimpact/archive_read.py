@@ -52,6 +52,11 @@ def text_values(values) -> np.ndarray:
     return np.array(["" if v is None else str(v) for v in np.asarray(values).ravel()], dtype=object)
 
 
+def _ball_type_name(ds) -> str:
+    """The variable of each impact's ball type: ``ball_type``, ``impact_ball`` in archives before version 1.2."""
+    return "impact_ball" if "impact_ball" in ds.variables and "ball_type" not in ds.variables else "ball_type"
+
+
 def balls(ds) -> list[str]:
     """Ball type keys of an archive: the ``ball`` coordinate, then any ball seen only in the impacts.
 
@@ -66,8 +71,8 @@ def balls(ds) -> list[str]:
         Keys in archive order.
     """
     keys = list(text_values(ds["ball"].values)) if "ball" in ds.coords else []
-    if "impact_ball" in ds:
-        for b in text_values(ds["impact_ball"].values):
+    if _ball_type_name(ds) in ds:
+        for b in text_values(ds[_ball_type_name(ds)].values):
             if b not in keys:
                 keys.append(b)
     return keys
@@ -212,7 +217,7 @@ def impacts(ds, ball: str | None = None, status: str | None = None, *, quantity_
     n = ds.sizes.get("impact", 0)
     keep = np.ones(n, dtype=bool)
     if ball is not None:
-        keep &= text_values(ds["impact_ball"].values) == ball
+        keep &= text_values(ds[_ball_type_name(ds)].values) == ball
     if status is not None:
         keep &= text_values(ds["status"].values) == status
     if quantity_ok is not None and f"{quantity_ok}_status" in ds:
@@ -263,7 +268,7 @@ def excluded_impacts(ds) -> list[tuple[str, str, str]]:
     """(impact_id, ball, reason) of every excluded impact, in raw order."""
     if ds.sizes.get("impact", 0) == 0:
         return []
-    ids, keys, reasons = (text_values(ds[n].values) for n in ("impact_id", "impact_ball", "reason"))
+    ids, keys, reasons = (text_values(ds[n].values) for n in ("impact_id", _ball_type_name(ds), "reason"))
     return [(ids[i], keys[i], reasons[i]) for i in impacts(ds, status="excluded")]
 
 

@@ -47,7 +47,7 @@ CHANGE_ALPHA = 0.01
 #: First columns of catalogue.csv; parameters.csv's columns follow, then ``pooled_sessions``.
 ID_COLUMNS = ["session_id", "session_date"]
 
-_PER_IMPACT = ("impact_ball", "status", "vin_m_s", "contact_time_ms", "cor", "impact_mass_kg", "used_in_fit")
+_PER_IMPACT = ("ball_type", "status", "vin_m_s", "contact_time_ms", "cor", "impact_mass_kg", "used_in_fit")
 _CURVES = (
     "model_contact_time_ms", "model_contact_time_ms_lo", "model_contact_time_ms_hi",
     "model_cor", "model_cor_lo", "model_cor_hi", "model_peak_force_N",
@@ -170,12 +170,15 @@ def read_session_results(session_results_dir) -> SessionResults:
     if "ball" not in parameters.columns:
         raise ValueError(f"{csv_path}: no column 'ball'")
     parameters["kb0_source"] = parameters.get("kb0_source", pd.Series([""] * len(parameters))).fillna("")
-    with xr.open_dataset(nc_path, engine="netcdf4", decode_times=False, decode_timedelta=False) as f:
+    with xr.open_dataset(nc_path, engine="netcdf4", decode_times=False, decode_timedelta=False) as opened:
+        from .archive_names import current_names
+
+        f = current_names(opened)  # an archive of an earlier version: impact_ball, ...
         archived = str(f.attrs.get("session_id", session_id))
         if archived != session_id:
             raise ValueError(f"{nc_path}: global attribute session_id is {archived!r}, not the folder name {session_id!r}")
         date = str(f.attrs.get("session_date", ""))
-        missing = [v for v in ("vin_m_s", "contact_time_ms", "cor", "status", "impact_ball", "mass_kg") if v not in f]
+        missing = [v for v in ("vin_m_s", "contact_time_ms", "cor", "status", "ball_type", "mass_kg") if v not in f]
         if missing:
             raise ValueError(f"{nc_path}: variable(s) {', '.join(missing)} missing (not a ballimpact session archive)")
         ball_vars = [v for v in f.data_vars if f[v].dims in (("ball",), ("ball", "speed"))]
@@ -186,7 +189,7 @@ def read_session_results(session_results_dir) -> SessionResults:
             balls[name] = (balls[name].dims, np.array(_text(balls[name].values), dtype=object))
     if "ball" in balls.coords:
         balls = balls.assign_coords(ball=np.array(_text(balls["ball"].values), dtype=object))
-    for name in ("impact_ball", "status"):
+    for name in ("ball_type", "status"):
         impacts[name] = ("impact", np.array(_text(impacts[name].values), dtype=object))
     return SessionResults(session_id, date, parameters, balls, impacts)
 
@@ -741,7 +744,9 @@ def write_catalogue(session_results_dirs: Sequence, out_csv, out_nc, out_pdf, *,
     for path in (out_csv, out_nc, out_pdf):
         Path(path).parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(out_csv) as tmp:
-        table.to_csv(tmp, index=False, float_format="%.12g")
+        from .tables import write_csv
+
+        write_csv(table, tmp)
     archive.write_dataset(ds, out_nc)
     write_catalogue_pdf(ds, table, tests, ranking, out_pdf)
     return {"table": table, "tests": tests, "ranking": ranking}

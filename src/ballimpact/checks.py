@@ -204,7 +204,7 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           test="tests/test_conditioning.py -k few"),
     Check(ProblemKind.CONTACT_END_UNDETERMINED, "contact end undetermined",
           "each end's fit: its spread, its standard uncertainty, the force's curve and what stands after it",
-          (_TC, _K),
+          (_TC,),
           thresholds=(_t("conditioning", "END_SE_MAX_FRACTION", "of TC", "expanded uncertainty of the ends"),
                       _t("conditioning", "SPREAD_MAX_FRACTION", "of TC", "an end's spread"),
                       _t("conditioning", "END_CHECK_SIGMA", "standard errors", "force standing after an end")),

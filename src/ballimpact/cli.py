@@ -48,7 +48,7 @@ def _mass_g(text: str) -> float:
 
 
 def _speed_m_s(text: str) -> float:
-    """An inbound speed [m/s] in the plausible 1-80 m/s of validate (SPEED_RANGE_M_S)."""
+    """An inbound speed [m/s] in the bounds processing accepts (validation.SPEED_RANGE_M_S)."""
     from .validation import SPEED_RANGE_M_S
 
     value = _positive_float(text)
@@ -162,7 +162,8 @@ def _cmd_validate(args) -> int:
             print(f"error: {problem}", file=sys.stderr)
         return 2
     print(format_validation(report))
-    return 1 if (args.strict and report.problems) else 0
+    nothing = report.n_impacts > 0 and len(report.impacts_with_problems) == report.n_impacts
+    return 1 if nothing or (args.strict and report.problems) else 0
 
 
 def _cmd_synth(args) -> int:
@@ -233,7 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_itf(sub)
     val = sub.add_parser("validate", help="check a raw session folder without processing it")
     val.add_argument("session", type=Path, help="session folder, e.g. raw/demo-2004")
-    val.add_argument("--strict", action="store_true", help="exit 1 when any impact has a problem")
+    val.add_argument("--strict", action="store_true", help="exit 1 when any impact has a problem (without it, only when no impact can be processed)")
     val.set_defaults(func=_cmd_validate)
     _add_synth(sub)
     return parser

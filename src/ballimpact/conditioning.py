@@ -89,7 +89,7 @@ from .contact import (ContactResult, ContactSearch, contact_threshold, detect_co
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
                     lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain,
-                    fit_front, undone_impulse_response)
+                    fit_front, stated_resonance, undone_impulse_response)
 from .problems import Problem, ProblemKind
 
 __all__ = ["ConditionedSignal", "ConditioningWarning", "condition_voltage", "remove_spikes"]
@@ -897,7 +897,8 @@ def _event_mask(x, fs, noise, contact: ContactResult, pre_guard, post_guard):
 def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S,
-                      undo_plate: bool = True, _kept: tuple | None = None, _near_ends: tuple = ()) -> ConditionedSignal:
+                      undo_plate: bool = True, plate: tuple | None = None, _kept: tuple | None = None,
+                      _near_ends: tuple = ()) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
 
     The force-plate voltage must be proportional to the force for kCAL to be
@@ -933,6 +934,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         Undo a plate resonance identified from its ringing when that ringing
         is the only problem (see the module docstring); False reports the
         ringing as a problem.
+    plate : tuple of float, optional
+        A stated resonance (frequency [Hz], damping ratio [-]), e.g. from a tap
+        test (session.yaml ``plate.resonance_hz``, ``plate.damping_ratio``):
+        undone exactly on every trace, neither identified nor refined.
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the
@@ -1017,7 +1022,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if keep or near_ends:  # the force's own samples at its jump kept, lower spikes at the ends replaced: again
         return condition_voltage(voltage_V, sample_rate_hz, polarity=polarity, mains_hz=mains_hz,
                                  n_harmonics=n_harmonics, t0_s=t0_s, tau_s=tau_s, pre_guard_s=pre_guard_s,
-                                 post_guard_s=post_guard_s, undo_plate=undo_plate, _kept=keep,
+                                 post_guard_s=post_guard_s, undo_plate=undo_plate, plate=plate, _kept=keep,
                                  _near_ends=near_ends)
     messages: list[str] = []
     for msg in it.pending:
@@ -1033,13 +1038,17 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         staircase = _adc_step_problems(it.x, fs, it.fit.noise, adc_step, contact, t0_s, scale)
         staircase += _baseline_step_problems(it.x, fs, it.fit, contact, t0_s, scale, tau_given=tau_s is not None)
         problems.extend(staircase)
-        undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
+        stated = []  # a stated plate's peak problems (its undone force kept, the peak withheld)
+        if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly
+            undone, stated = _stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate)
+        else:
+            undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s) if undo_plate else None
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:
             y, contact, plate, cutoff = undone
             peak_problems = (_undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
-                             + _lowpassed_spike(y, fs, contact, plate, cutoff, t0_s))
+                             + _lowpassed_spike(y, fs, contact, plate, cutoff, t0_s) + stated)
             messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
                             + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))
@@ -1441,6 +1450,27 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     return y, c, plate, cutoff
 
 
+def _stated_plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, plate: tuple):
+    """The force with a stated resonance (fn [Hz], zeta [-]) undone, as :func:`_plate_undone` returns it (force,
+    contact, resonance, cutoff [Hz]; why it was refused, str; None where the contact is cut or doubled, or the
+    ringing is not over before the record ends), and the peak problems it leaves. The resonance is used exactly,
+    neither identified nor refined; the undone force passes the same checks as an identified one
+    (:func:`_undone_candidates`), except that a low-pass that may hide the peak withholds the peak alone (a
+    PEAK_ON_RINGING problem) instead of refusing the force whose ends and impulse every other check passed."""
+    if contact.n_impacts > 1 or {"contact_at_trace_start", "contact_at_trace_end"} & set(contact.flags):
+        return None, []
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    if e_u + PLATE_ID_AFTER_S * fs > x.size - 1:
+        return None, []
+    resonance = stated_resonance(plate[0], plate[1], fs)
+    peak_problems = []
+    hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, resonance, peak_problems=peak_problems)
+    if isinstance(hit, str):
+        return (f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
+                f"plate.resonance_hz and plate.damping_ratio) not undone: {hit}"), []
+    return hit, peak_problems
+
+
 def _undone_peak_spread(x, fs, contact: ContactResult, plate: PlateResonance, cutoff: float, t0_s) -> list:
     """The undone peak's dependence on the identified plate: [a PEAK_ON_RINGING problem] when it moves by more than
     PLATE_PEAK_SPREAD with the damping ratio PLATE_ZETA_UNCERTAINTY off or fn PLATE_FN_UNCERTAINTY off, else [].
@@ -1522,12 +1552,14 @@ def _lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutof
                     "in the zoo, up to 15 % with the sampling's share)")]
 
 
-def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance):
+def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance,
+                       peak_problems: list | None = None):
     """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
     (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
     low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down
     until one hides the peak (:func:`_lowpass_hides_peak`): a lower one would only lower the low-passed peak
-    further."""
+    further. Given a list ``peak_problems``, a low-passed force that only hides the peak is taken, and why goes
+    into that list as a PEAK_ON_RINGING problem."""
     exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
@@ -1536,6 +1568,10 @@ def _undone_candidates(x, fs, fit: _BaselineFit, contact: ContactResult, s_u, t0
         hides = None
         if not isinstance(c, str) and not math.isinf(cutoff):
             hides = _lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
+            if hides and peak_problems is not None:
+                peak_problems.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to "
+                                             f"{cutoff / 1e3:.3g} kHz after the plate was undone, {hides}"))
+                return c[1], c[0], plate, cutoff
             c = hides or c
         if not isinstance(c, str):
             return c[1], c[0], plate, cutoff

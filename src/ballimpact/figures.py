@@ -372,15 +372,35 @@ def draw_contact_time_cor(fig, ds):
             else:
                 _note(ax, f"{_NO_GOOD}\n{_NO_FIT}")
             ax.set_ylabel(unit_label)
-            if good.size or (curve is not None and np.isfinite(curve).any()):
-                ax.legend(loc="upper right" if meas == "contact_time_ms" else "upper right", frameon=True)
         n_used = ar.ball_value(ds, "n_impacts", ball)
         n_used = f", {int(n_used)} in fit" if np.isfinite(float(n_used)) else ""
         ax_tc.set_title(f"{ar.ball_label(ds, ball)}: TC ({good.size} good{n_used})", loc="left")
         ax_cor.set_title(f"{ar.ball_label(ds, ball)}: COR", loc="left")
     for ax in axes[-1]:
         ax.set_xlabel("Inbound speed VB [m/s]")
+    _shared_legend(fig, axes.ravel())
     fig.suptitle("Contact time and COR against inbound speed (cf. Fig. 7 of Goodwill & Haake 2004)")
+
+
+def _shared_legend(fig, axes) -> None:
+    """One legend for every panel, below them (a legend inside a panel covers its data); each entry drawn in grey,
+    as the colour is the ball type's, named by the panel titles."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    neutral = {
+        "measured": Line2D([], [], ls="none", marker="o", ms=4.5, mfc="none", mew=1.2, color="0.35"),
+        "fitted speeds": Patch(color="0.5", alpha=0.2),
+        "95 % confidence (curve)": Patch(color="0.5", alpha=0.35, lw=0),
+        "95 % prediction (one impact)": Line2D([], [], ls="--", lw=0.9, color="0.45"),
+    }
+    handles = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, neutral.get(label, handle))
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncols=min(4, len(handles)),
+                   fontsize=8)
 
 
 def _fitted_range(ds, ball) -> tuple[float, float]:
@@ -912,7 +932,7 @@ def draw_qc(fig, ds, impact_id, *, wrap=90):
     """Draw the raw voltage [V] against time [ms] of one impact (:func:`fig_qc_impact`) into ``fig``;
     the title is wrapped at ``wrap`` characters."""
     i = ar.impact_position(ds, impact_id)
-    ball = ar.text_values(ds["impact_ball"].values)[i]
+    ball = ar.text_values(ds["ball_type"].values)[i]
     status = ar.text_values(ds["status"].values)[i]
     reason = ar.text_values(ds["reason"].values)[i] or "(no reason given)"
     rt = np.asarray(ds["raw_time_s"].values[i], dtype=float) if "raw_time_s" in ds else np.empty(0)

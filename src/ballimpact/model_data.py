@@ -16,6 +16,7 @@ __all__ = [
     "STIFFNESS_X_M",
     "AGREEMENT_START_S",
     "AGREEMENT_TOLERANCE",
+    "force_agreement",
     "CURVE_NAMES",
     "COMPONENT_NAMES",
     "ITF_NAMES",
@@ -419,7 +420,7 @@ def add_model_forces(ds):
     model_force = np.full((n_impact, n_sample), np.nan)
     agreement = np.full(n_impact, np.nan)
     rms = np.full(n_impact, np.nan)
-    balls = ds["impact_ball"].values.astype(str) if n_impact else np.array([], dtype=str)
+    balls = ds["ball_type"].values.astype(str) if n_impact else np.array([], dtype=str)
     for ball in np.unique(balls):
         params = fitted_parameters(ds, ball)
         if params is None:
@@ -439,3 +440,32 @@ def add_model_forces(ds):
     ds["model_agreement_fraction"] = ("impact", agreement)
     ds["model_rms_N"] = ("impact", rms)
     return set_variable_attrs(ds)
+
+
+def force_agreement(ds) -> dict[str, float]:
+    """
+    Per ball type, the median over its ok impacts of ``model_agreement_fraction`` [-].
+
+    How much of a typical contact the fitted model's force follows the measured one
+    (within :data:`AGREEMENT_TOLERANCE` of the peak after :data:`AGREEMENT_START_S`);
+    1 for the paper's balls, far lower for a force of another shape.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Archive with ``model_agreement_fraction``, ``status`` and the impacts' ball.
+
+    Returns
+    -------
+    dict
+        Ball key -> median [-]; balls without an ok impact with a value are left out.
+    """
+    from .archive_read import text_values
+
+    ball_name = "ball_type"
+    if "model_agreement_fraction" not in ds or "status" not in ds or ball_name not in ds:
+        return {}
+    share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
+    ok = (text_values(ds["status"].values) == "ok") & np.isfinite(share)
+    balls = text_values(ds[ball_name].values)
+    return {str(b): float(np.median(share[ok & (balls == b)])) for b in dict.fromkeys(balls[ok])}

@@ -19,6 +19,7 @@ from .atomic import atomic_path
 # sub-folder of QC pages (both from the figure registry, where the workflow reads them too)
 from .figure_registry import FIGURE_STEMS, QC_DIR_NAME
 from .problems import TRACE_FILE_KINDS, has_kind
+from . import tables
 
 __all__ = [
     "FIGURE_STEMS",
@@ -38,7 +39,6 @@ __all__ = [
 ]
 
 SNAPSHOT_FORMAT_VERSION = 1  # version of the work/session.json layout
-CSV_FLOAT_FORMAT = "%.12g"  # numbers in impacts.csv / parameters.csv: 12 significant digits
 
 logger = logging.getLogger(__name__)
 
@@ -141,7 +141,8 @@ def snapshot_session(session_dir, out_json) -> dict:
     # issue 14: the checks of `ballimpact validate` (trace headers only), so that its
     # warnings reach the run's output and summary; every session-level problem at once
     quick = validate_session(session_dir, read_traces=False)
-    for message in quick.warnings:
+    found = list(quick.causes) + list(quick.warnings)  # a cause behind many exclusions first
+    for message in found:
         logger.warning("validate: %s", message)
     session = read_session(session_dir)
     root = session.path.resolve()
@@ -163,7 +164,7 @@ def snapshot_session(session_dir, out_json) -> dict:
         "impacts_per_ball": {key: per_ball[key] for key in session.meta.balls if per_ball[key]},
         "impact_problems": {r.impact_id: [p.message for p in r.problems] for r in session.impacts if r.problems},
         "raw_sha256": raw_sha256,
-        "warnings": list(quick.warnings),
+        "warnings": found,
     }
     if Path(out_json).parent.name == "work":
         clear_stale(Path(out_json).parent.parent)  # results/<session>/ is processed again
@@ -367,7 +368,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     archive.write_dataset(ds, out_nc)
     table = archive.impacts_table(ds)
     with atomic_path(out_csv) as tmp:
-        table.to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+        tables.write_csv(table, tmp)
     n_excluded = int((table["status"] == "excluded").sum())
     logger.info("collected %d impacts from %d chunks: %d ok, %d excluded",
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
@@ -436,7 +437,7 @@ def _fit_mask(ds, ball: str):
     cor = np.asarray(ds["cor"].values, dtype=float)
     with np.errstate(invalid="ignore"):
         return (
-            (np.array([str(b) for b in ds["impact_ball"].values]) == ball)
+            (np.array([str(b) for b in ds["ball_type"].values]) == ball)
             & (np.array([str(v) for v in ds["status"].values]) == "ok")
             & (vin > 0) & (tc_s > 0) & (cor > 0)
         )
@@ -719,7 +720,7 @@ def write_archive(session_dir, impacts_nc, fit_ncs, out_nc, out_parameters_csv, 
     Path(out_nc).parent.mkdir(parents=True, exist_ok=True)
     archive.write_dataset(ds, out_nc)
     with atomic_path(out_parameters_csv) as tmp:
-        archive.parameters_table(ds).to_csv(tmp, index=False, float_format=CSV_FLOAT_FORMAT)
+        tables.write_csv(archive.parameters_table(ds), tmp)
     logger.info("archive %s: %d impacts, %d ball types", out_nc, ds.sizes.get("impact", 0), ds.sizes.get("ball", 0))
 
 

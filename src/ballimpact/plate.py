@@ -49,7 +49,8 @@ import numpy as np
 
 from ._checks import finite_samples, positive_scalar
 
-__all__ = ["PlateResonance", "identify_plate_resonance", "identify_free_ringing", "undo_plate_resonance",
+__all__ = [
+    "stated_resonance","PlateResonance", "identify_plate_resonance", "identify_free_ringing", "undo_plate_resonance",
            "lowpass_zero_phase", "undone_noise_gain", "lowpass_kernel",
            "lowpass_spread_samples", "refine_plate_resonance", "undone_end", "FrontFit", "front_responses", "fit_front",
            "undone_impulse_response"]
@@ -96,6 +97,34 @@ class PlateResonance:
     damping_ratio: float
     a1: float
     a2: float
+
+
+def stated_resonance(frequency_hz: float, damping_ratio: float, sample_rate_hz: float) -> PlateResonance:
+    """The resonance a session states (``plate.resonance_hz``, ``plate.damping_ratio``) as sampled at a rate.
+
+    The poles s = -zeta wn +- i wn sqrt(1 - zeta^2) map to z = exp(s / fs), whose recursion
+    ``x[n] = a1 x[n-1] + a2 x[n-2]`` has a1 = 2 r cos(theta), a2 = -r^2.
+
+    Parameters
+    ----------
+    frequency_hz : float
+        Undamped natural frequency fn [Hz].
+    damping_ratio : float
+        Damping ratio zeta, 0 < zeta < 1 [-].
+    sample_rate_hz : float
+        Sample rate [Hz].
+
+    Returns
+    -------
+    PlateResonance
+    """
+    if not (frequency_hz > 0 and 0 < damping_ratio < 1 and sample_rate_hz > 0):
+        raise ValueError(f"need fn > 0 Hz, 0 < zeta < 1 and fs > 0 Hz, got {frequency_hz!r}, {damping_ratio!r}, "
+                         f"{sample_rate_hz!r}")
+    wn = 2.0 * math.pi * frequency_hz
+    s = complex(-damping_ratio * wn, wn * math.sqrt(1.0 - damping_ratio**2)) / sample_rate_hz
+    z = complex(math.exp(s.real) * math.cos(s.imag), math.exp(s.real) * math.sin(s.imag))
+    return PlateResonance(float(frequency_hz), float(damping_ratio), float(2.0 * z.real), float(-abs(z) ** 2))
 
 
 def _resonance_from_recursion(a1: float, a2: float, fs: float) -> PlateResonance | None:

@@ -446,7 +446,8 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
         try:
             cond = condition_voltage(raw, fs, polarity=meta.polarity,
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
-                                     n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s)
+                                     n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s,
+                                     plate=meta.plate_resonance)
         except ValueError as exc:
             res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None

@@ -19,6 +19,7 @@ from . import figures as _fig
 from . import summary as _summary
 from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
+from .model_data import force_agreement
 
 __all__ = ["A4_PORTRAIT_IN", "FIGURE_CAPTIONS", "conditioning_summary", "impact_conditioning", "itf_comparison",
            "session_warnings", "write_report", "report_pages", "report_page_count"]
@@ -34,20 +35,34 @@ FIGURE_CAPTIONS = {f.file_name: (f.title, f.caption) for f in REPORT_FIGURES}
 
 
 MAX_SHOWN_CHARS = 400  # longest text taken from the data onto a page (file names, reasons) [characters]
+MAX_DESCRIPTION_CHARS = 1200  # longest session description shown on page 1 [characters]
+DESCRIPTION_LINES = 10  # lines of the description on page 1; a longer one ends with " ..." between words [-]
+MIN_DESCRIPTION_LINES = 3  # fewest lines of it when the parameter table needs the room [-]
+LEGIBLE_TABLE_PT = 6.5  # smallest font [pt] of the parameter table before the description gives up lines
+_NOTES_RESERVE_IN = 0.55  # room kept under the table and its fit warnings for the no-fit notes and the reference [in]
+MAX_NOTE_LINES = 8  # lines of one fit warning under the parameter table [-]
+MIN_NOTE_LINES = 2  # fewest lines of it when the parameter table needs the room [-]
+NOTE_CHARS = 98  # characters of a line of a fit warning (8.5 pt bold, the text width) [-]
 MAX_WARNING_LINES = 24  # lines of session warnings before the list of excluded impacts; the rest are counted [-]
 
 
-def _text(value) -> str:
+def _text(value, max_chars: int = MAX_SHOWN_CHARS) -> str:
     """Text from the archive as it can be printed: control characters escaped, at most
-    MAX_SHOWN_CHARS (a 10 000-character trace path must not push a page's figure off it)."""
+    ``max_chars`` (a 10 000-character trace path must not push a page's figure off it); a longer
+    text keeps its start and end, cut between words where it has spaces."""
     if value is None:
         return ""
     if isinstance(value, bytes):
         value = value.decode("utf-8", "replace")
     text = "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in str(value))
-    if len(text) > MAX_SHOWN_CHARS:
-        half = MAX_SHOWN_CHARS // 2 - 2
-        text = f"{text[:half]} ... {text[-half:]}"
+    if len(text) > max_chars:
+        half = max_chars // 2 - 2
+        head, tail = text[:half], text[-half:]
+        if " " in head[half // 2:]:
+            head = head[:head.rindex(" ")]
+        if " " in tail[:half // 2]:
+            tail = tail[tail.index(" ") + 1:]
+        text = f"{head} ... {tail}"
     return text
 
 
@@ -58,7 +73,7 @@ def _session_info(ds) -> dict:
         "session_id": _text(attrs.get("session_id", "")),
         "date": _text(attrs.get("session_date", "")),
         "operator": _text(attrs.get("operator", "")),
-        "description": _text(attrs.get("session_description", "")),
+        "description": _text(attrs.get("session_description", ""), MAX_DESCRIPTION_CHARS),
         "software_version": _text(attrs.get("software_version", "")),
         "date_created": _text(attrs.get("date_created", "")),
         "synthetic": False,
@@ -169,6 +184,38 @@ def _table(ax, cells, col_widths, *, header_rows=1, font_size=8, row_height=None
     return table
 
 
+CELL_PAD_IN = 0.05  # room left and right of a table cell's text [in]
+
+
+def _fit_columns(fig, ax, table, font_size: float, *, min_font: float = 5.0) -> float:
+    """Widen each column of ``table`` to its widest text and shrink the font [pt] until the columns fit the
+    axes' width; returns the font size used."""
+    renderer = fig.canvas.get_renderer()
+    width_px = ax.get_window_extent(renderer).width
+    pad = 2 * CELL_PAD_IN * fig.dpi
+    cells = table.get_celld()
+    n_cols = 1 + max(c for _, c in cells)
+    size = font_size
+    while True:
+        table.set_fontsize(size)
+        need = [0.0] * n_cols
+        for (_, c), cell in cells.items():
+            text = cell.get_text()
+            if text.get_text():
+                need[c] = max(need[c], text.get_window_extent(renderer).width + pad)
+        if sum(need) <= width_px or size <= min_font:
+            break
+        size = max(min_font, size * min(0.95, width_px / sum(need)))
+    need = [max(n, pad) for n in need]
+    spare = max(width_px - sum(need), 0.0)
+    widths = [(n + spare * n / sum(need)) / width_px for n in need]
+    for (_, c), cell in cells.items():
+        cell.set_width(widths[c])
+        if c == 0:
+            cell.PAD = CELL_PAD_IN * fig.dpi / (widths[c] * width_px)
+    return size
+
+
 def _interval(value, lo, hi, fmt) -> str:
     main = _fmt(value, fmt)
     if main == "-":
@@ -182,10 +229,10 @@ def _interval(value, lo, hi, fmt) -> str:
 def _force_curve_validation(ds) -> list[str]:
     """One line per ball: mean share of the contact after 0.2 ms where model and measured
     force agree within 10 % of the peak, and the mean RMS difference [N]."""
-    needed = ("model_agreement_fraction", "model_rms_N", "impact_ball", "status")
+    needed = ("model_agreement_fraction", "model_rms_N", "ball_type", "status")
     if not all(name in ds for name in needed):
         return []
-    balls = np.array([str(b) for b in ds["impact_ball"].values])
+    balls = np.array([str(b) for b in ds["ball_type"].values])
     ok = np.array([str(v) == "ok" for v in ds["status"].values])
     share = np.asarray(ds["model_agreement_fraction"].values, dtype=float)
     rms = np.asarray(ds["model_rms_N"].values, dtype=float)
@@ -378,34 +425,38 @@ def impact_conditioning(ds, i: int) -> str:
     return ", ".join(parts)
 
 
-def _summary_page(ds, info) -> Figure:
+def _summary_page(ds, info, description_lines: int = DESCRIPTION_LINES, note_lines: int = MAX_NOTE_LINES,
+                  compact: bool = False) -> Figure:
+    """Page 1; when the parameter table would need a font below LEGIBLE_TABLE_PT, the page is laid out again with
+    fewer lines of the session description (down to MIN_DESCRIPTION_LINES), then of each fit warning (down to
+    MIN_NOTE_LINES; parameters.csv has them in full), then with the table's explanation in brief (``compact``)."""
     fig = _page()
     cur = _Cursor(fig)
-    _summary_header(fig, cur, info)
+    _summary_header(fig, cur, info, description_lines)
     _counts_block(fig, cur, ds)
     cur.text(_MARGIN_IN, "Fitted model parameters (95 % intervals) beside the paper's Table 2", size=12,
              weight="bold", dy=0.28)
-    cur.text(
-        _MARGIN_IN,
-        "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
-        "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
-        "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
-        "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
-        "TC and COR over the impacts used in the fit."
-        + _conditional_note(ds),
-        size=8, color="0.25",
-    )
+    cur.text(_MARGIN_IN, _TABLE_BRIEF + _conditional_note(ds, brief=True) if compact else _TABLE_EXPLAINED
+             + _conditional_note(ds), size=8, color="0.25")
     cur.skip(0.08)
     cells, shade, no_fit_notes, fit_notes = _parameter_cells(ds)
     # room for the fit warnings under the table (issue 14): they must stay visible
-    notes_h = sum(0.19 * min(3, len(textwrap.wrap(note, 110))) for note in fit_notes)
-    _parameter_table(fig, cur, cells, shade, notes_h)
-    _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h)
+    notes_h = sum(min(note_lines, len(textwrap.wrap(note, NOTE_CHARS))) * 8.5 * 1.45 / 72 for note in fit_notes)
+    missing = _parameter_table(fig, cur, cells, shade, notes_h)
+    if missing > 0 and description_lines > MIN_DESCRIPTION_LINES:
+        fewer = max(MIN_DESCRIPTION_LINES, description_lines - math.ceil(missing / (9.5 * 1.45 / 72)))
+        return _summary_page(ds, info, fewer, note_lines)
+    if missing > 0 and note_lines > MIN_NOTE_LINES and fit_notes:
+        fewer = max(MIN_NOTE_LINES, note_lines - math.ceil(missing / (8.5 * 1.45 / 72) / len(fit_notes)))
+        return _summary_page(ds, info, description_lines, fewer)
+    if missing > 0 and not compact:
+        return _summary_page(ds, info, description_lines, note_lines, compact=True)
+    _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h, note_lines)
     _footer(fig, info, "page 1: summary")
     return fig
 
 
-def _summary_header(fig, cur, info) -> None:
+def _summary_header(fig, cur, info, description_lines: int = DESCRIPTION_LINES) -> None:
     """Title, synthetic-data warning and the session's metadata."""
     w, h = A4_PORTRAIT_IN
     x0 = _MARGIN_IN
@@ -429,7 +480,11 @@ def _summary_header(fig, cur, info) -> None:
         fig.text(x0 / w, 1 - cur.y / h, key, fontsize=9.5, va="top", weight="bold")
         cur.text(x0 + 1.35, value, size=9.5)
     desc = info["description"] or "-"
-    desc_lines = textwrap.wrap(" ".join(desc.split()), 84)[:8] or ["-"]
+    desc_lines = textwrap.wrap(" ".join(desc.split()), 84) or ["-"]
+    if len(desc_lines) > description_lines:  # cut between words, and say so
+        desc_lines = desc_lines[:description_lines]
+        last = desc_lines[-1]
+        desc_lines[-1] = (last.rsplit(" ", 1)[0] if len(last) > 80 else last) + " ..."
     fig.text(x0 / w, 1 - cur.y / h, "Description", fontsize=9.5, va="top", weight="bold")
     cur.text(x0 + 1.35, "\n".join(desc_lines), size=9.5)
 
@@ -462,8 +517,9 @@ def _counts_block(fig, cur, ds) -> None:
     cells.append(["All", str(n_total), str(n_ok), str(n_total - n_ok), ""])
     row_h = 0.22
     tab_h = row_h * len(cells)
-    ax = fig.add_axes([x0 / w, 1 - (cur.y + tab_h) / h, 5.4 / w, tab_h / h])
-    _table(ax, cells, [0.4, 0.15, 0.15, 0.15, 0.15], font_size=8.5, shade_rows=(len(cells) - 1,))
+    ax = fig.add_axes([x0 / w, 1 - (cur.y + tab_h) / h, (w - 2 * x0) / w, tab_h / h])
+    table = _table(ax, cells, [0.4, 0.15, 0.15, 0.15, 0.15], font_size=8.5, shade_rows=(len(cells) - 1,))
+    _fit_columns(fig, ax, table, 8.5)
     cur.skip(tab_h + 0.1)
     conditioning = conditioning_summary(ds)
     if conditioning:
@@ -508,10 +564,12 @@ def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
     undetermined = _summary.undetermined_parameters(
         {k: get(k) for k in ("ak_kN_m", "ak_lo", "ak_hi", "a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi")},
         fit_message)
-    warn_text = _summary.fit_warnings(fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"),
-                                      cor_rmse_pct=get("cor_rmse_pct"))
+    warn_text = _summary.fit_warnings(
+        fit_message, undetermined, contact_time_rmse_pct=get("contact_time_rmse_pct"), cor_rmse_pct=get("cor_rmse_pct"),
+        values={k: get(k) for k in ("ak_lo", "ak_hi", "ac_lo", "ac_hi")},
+        force_agreement=force_agreement(ds).get(ball, math.nan))
     fitted = [
-        "\n".join(textwrap.wrap(ar.ball_label(ds, ball), 22)[:2]),
+        "\n".join(textwrap.wrap(ar.ball_label(ds, ball), 24)),
         "this session" + (f"\nkB(0) {_SOURCE_SHORT.get(src, src)}" if src else ""),
         _fmt(get("n_impacts"), ".0f"),
         interval("kb0_kN_m", ".1f"), interval("ak_kN_m", ",.0f"), interval("a", ".3f"),
@@ -520,8 +578,11 @@ def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
         _fmt(get("cor_rmse_pct"), ".2f"),
     ]
     for col, (key, fmt) in zip((4, 5, 6), (("ak_kN_m", ",.0f"), ("a", ".3f"), ("ac_kN_s_m3", ".2f"))):
-        if key.split("_")[0] in undetermined and fitted[col] != "-":
-            fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined\n(at bound)"
+        verdict = undetermined.get(key.split("_")[0])
+        if verdict == _summary.NOT_DETERMINED and fitted[col] != "-":
+            fitted[col] = f"{_fmt(get(key), fmt)}\nnot determined"
+        elif verdict == _summary.OPEN_INTERVAL and fitted[col] != "-":
+            fitted[col] = f"{_fmt(get(key), fmt)}\ninterval open"
     if warn_text and not all(c == "-" for c in fitted[3:7]):
         fitted[0] += f"\n(see fit warning {len(fit_notes) + 1})"
         fit_notes.append(f"Fit warning {len(fit_notes) + 1}, {ar.ball_label(ds, ball)}: {warn_text}")
@@ -534,21 +595,25 @@ def _fitted_row(ds, ball, no_fit_notes, fit_notes) -> list[str]:
     return fitted
 
 
-def _parameter_table(fig, cur, cells, shade, notes_h) -> None:
-    """The parameter table, row heights by their lines of text, shrunk when the page is short."""
+def _parameter_table(fig, cur, cells, shade, notes_h) -> float:
+    """The parameter table, row heights by their lines of text, shrunk when the page is short; returns the height
+    [in] it lacks for a font of LEGIBLE_TABLE_PT (0 when it has it)."""
     w, h = A4_PORTRAIT_IN
     x0 = _MARGIN_IN
-    available = h - _MARGIN_IN - 0.9 - cur.y - notes_h
+    available = h - _MARGIN_IN - _NOTES_RESERVE_IN - cur.y - notes_h
     line_h = 0.17
     heights = [max(c.count("\n") + 1 for c in row) for row in cells]
     total_h = sum(heights) * line_h + 0.06 * len(cells)
     font = 8.0
+    missing = max(0.0, total_h * LEGIBLE_TABLE_PT / font - available)
+    available = max(available, 0.5)  # the first layout of a crowded page; it is laid out again (_summary_page)
     if total_h > available:  # many ball types: shrink the table to fit the page
         scale = available / total_h
         total_h, font = available, max(5.0, 8.0 * scale)
     ax = fig.add_axes([x0 / w, 1 - (cur.y + total_h) / h, (w - 2 * x0) / w, total_h / h])
     table = _table(ax, cells, [0.14, 0.1, 0.035, 0.085, 0.135, 0.1, 0.095, 0.095, 0.095, 0.06, 0.06], font_size=font,
                    shade_rows=tuple(shade))
+    _fit_columns(fig, ax, table, font)
     # row heights proportional to the number of text lines
     units = [hh * line_h + 0.06 for hh in heights]
     total_units = sum(units)
@@ -562,20 +627,24 @@ def _parameter_table(fig, cur, cells, shade, notes_h) -> None:
     for (r, c), cell in table.get_celld().items():
         cell.set_y(tops[r])
     cur.skip(total_h + 0.15)
+    return missing
 
 
-def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h) -> None:
+def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h, note_lines: int = MAX_NOTE_LINES) -> None:
     """The no-fit and fit-warning notes under the table, and the reference."""
     h = A4_PORTRAIT_IN[1]
     x0 = _MARGIN_IN
     for note in no_fit_notes:
-        if cur.y < h - _MARGIN_IN - 0.9:
+        if cur.y < h - _MARGIN_IN - _NOTES_RESERVE_IN:
             cur.text(x0, "\n".join(textwrap.wrap("No fit for " + note, 110)[:2]), size=8.5, color="#8a4b00")
     for note in fit_notes:
-        if cur.y < h - _MARGIN_IN - 0.9 + notes_h:
-            cur.text(x0, "\n".join(textwrap.wrap(note, 110)[:3]), size=8.5, color="#8a4b00", weight="bold")
+        if cur.y < h - _MARGIN_IN - _NOTES_RESERVE_IN + notes_h:
+            lines = textwrap.wrap(note, NOTE_CHARS)
+            if len(lines) > note_lines:
+                lines = lines[:note_lines - 1] + ["... (in full: parameters.csv, column fit_warnings)"]
+            cur.text(x0, "\n".join(lines), size=8.5, color="#8a4b00", weight="bold")
     cur.skip(0.1)
-    if cur.y < h - _MARGIN_IN - 0.7:
+    if cur.y < h - _MARGIN_IN - 0.35:
         ref = _text(ds.attrs.get("references", "")) or (
             "Goodwill S R, Haake S J (2004) Modelling of tennis ball impacts on a rigid surface. "
             "Proc. IMechE Part C 218:1139-1153"
@@ -583,11 +652,15 @@ def _summary_notes(fig, cur, ds, no_fit_notes, fit_notes, notes_h) -> None:
         cur.text(x0, "\n".join(textwrap.wrap("Reference: " + ref, 110)), size=7.5, color="0.3")
 
 
+TITLE_CHARS = 80  # a figure page's title is wrapped to this many characters (11 pt bold, the text width) [-]
+
+
 def _caption_block(fig, top_in, title, caption, *, width_chars=105):
     w, h = A4_PORTRAIT_IN
-    fig.text(_MARGIN_IN / w, 1 - top_in / h, title, fontsize=11, weight="bold", va="top")
-    fig.text(_MARGIN_IN / w, 1 - (top_in + 0.28) / h, "\n".join(textwrap.wrap(caption, width_chars)),
-             fontsize=8.8, va="top", linespacing=1.35)
+    title_lines = textwrap.wrap(title, TITLE_CHARS)
+    fig.text(_MARGIN_IN / w, 1 - top_in / h, "\n".join(title_lines), fontsize=11, weight="bold", va="top")
+    fig.text(_MARGIN_IN / w, 1 - (top_in + 0.28 + 0.2 * (len(title_lines) - 1)) / h,
+             "\n".join(textwrap.wrap(caption, width_chars)), fontsize=8.8, va="top", linespacing=1.35)
 
 
 def _place_png(fig, png, top_in: float, max_h_in: float):
@@ -678,7 +751,8 @@ def _figure_page(ds, info, name, number, figures_dir, images=None) -> Figure:
     w, h = A4_PORTRAIT_IN
     top = _MARGIN_IN
     caption_lines = len(textwrap.wrap(caption, 105))
-    caption_h = 0.28 + caption_lines * 8.8 * 1.35 / 72 + 0.25
+    title_lines = len(textwrap.wrap(f"{figure_label(name)} ({name}): {title}", TITLE_CHARS))
+    caption_h = 0.28 + 0.2 * (title_lines - 1) + caption_lines * 8.8 * 1.35 / 72 + 0.25
     max_fig_h = h - top - caption_h - _MARGIN_IN - 0.2
     png = _figure_file(figures_dir, name, images)
     if png is not None:
@@ -698,8 +772,19 @@ def _figure_page(ds, info, name, number, figures_dir, images=None) -> Figure:
     return fig
 
 
-def _conditional_note(ds) -> str:
-    """The sentence saying AK and a are conditional on kB(0) from the config, when one is."""
+_TABLE_EXPLAINED = (
+    "kB = kB(0) + AK x^a (Eq. 4, x in m) and cB = AC dCONT\u00b2 (Eq. 7), in the units of Table 2 "
+    "(the paper prints AK in kN/m\u00b2).\nBrackets: 95 % interval. kB(0) is fixed in session.yaml "
+    "(config), fitted with AK, a, AC (impacts below 10 m/s) or\nextrapolated from the Kelvin-Voigt "
+    "stiffness to zero speed (interval includes the extrapolation model). RMSE: relative\nRMS residual of "
+    "TC and COR over the impacts used in the fit.")
+_TABLE_BRIEF = ("kB = kB(0) + AK x^a (Eq. 4, x in m), cB = AC dCONT\u00b2 (Eq. 7), Table 2 units; brackets: 95 %\n"
+                "interval; RMSE: relative RMS residual (docs/outputs.md).")
+
+
+def _conditional_note(ds, *, brief: bool = False) -> str:
+    """The sentence saying AK and a are conditional on kB(0) from the config, when one is (``brief``: without
+    naming the balls)."""
     if "kb0_source" not in ds:
         return ""
     labels = [ar.ball_label(ds, b) for b in ar.balls(ds) if _text(ar.ball_value(ds, "kb0_source", b, "")) == "config"]
@@ -707,14 +792,16 @@ def _conditional_note(ds) -> str:
         return ""
     text = ("AK and a are conditional on kB(0) from config (" + ", ".join(labels)
             + "): their intervals do not include kB(0)'s uncertainty.")
-    return "\n" + "\n".join(textwrap.wrap(text, 118)[:2])
+    if brief:
+        text = "AK and a of a kB(0) from config leave its uncertainty out of their intervals."
+    return "\n" + "\n".join(textwrap.wrap(text, 118))
 
 
 def _fit_outlier_rows(ds) -> list[tuple[str, str, str]]:
     """(impact_id, ball, note) of every good impact left out of its ball type's fit."""
     if ds.sizes.get("impact", 0) == 0 or "used_in_fit" not in ds:
         return []
-    ids, balls, status = (ar.text_values(ds[n].values) for n in ("impact_id", "impact_ball", "status"))
+    ids, balls, status = (ar.text_values(ds[n].values) for n in ("impact_id", "ball_type", "status"))
     used = np.asarray(ds["used_in_fit"].values, dtype=float) > 0
     notes = ar.text_values(ds["fit_note"].values) if "fit_note" in ds else [""] * len(ids)
     return [(ids[i], balls[i], "left out of the fit (status ok): " + (notes[i] or "fit outlier"))
@@ -796,7 +883,7 @@ def _hline(fig, y_in):
 def _qc_page(ds, info, impact_id, number, n_total, figures_dir, images=None) -> Figure:
     w, h = A4_PORTRAIT_IN
     i = ar.impact_position(ds, impact_id)
-    ball = _text(ar.text_values(ds["impact_ball"].values)[i])
+    ball = _text(ar.text_values(ds["ball_type"].values)[i])
     reason = _text(ar.text_values(ds["reason"].values)[i]) or "(no reason given)"
     png = _figure_file(figures_dir, f"{QC_DIR_NAME}/{_fig.qc_file_stem(impact_id)}.png", images)
     use_png = png is not None

@@ -56,12 +56,15 @@ FAST_BALL_SPEED_M_S = 50.0  # [m/s] faster than any ball on the rig; sets the ti
 MAX_GATE_SPACING_M = 2.0  # [m] a larger spacing is almost surely given in mm: warning
 
 _KNOWN_SECTION_KEYS = {
-    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s"},
+    "plate": {"polarity", "kcal_range_N_per_V", "time_constant_s", "resonance_hz", "damping_ratio"},
     "daq": {"sample_rate_hz", "adc_range_v", "mains_hz", "bandwidth_hz"},
     "gates": {"spacing_m", "resolution_s", "distance_to_plate_m"},
     "rig": {"orientation", "air_density_kg_m3"},
 }
 _KNOWN_BALL_KEYS = {"label", "mass_g", "diameter_mm", "kb0_kN_m", "itf_rebound_cm"}
+#: The top-level keys of session.yaml (raw-format.md): any other is kept, and warned about.
+_KNOWN_TOP_KEYS = {"session_id", "date", "operator", "description", "synthetic", "plate", "daq", "gates", "rig",
+                   "balls"}
 #: File names a lab may give session.yaml / impacts.csv by mistake (near misses).
 _NEAR_MISS_NAMES = {
     SESSION_FILE: ("session.yml", "Session.yaml", "SESSION.yaml", "session.YAML", "session.yaml.txt",
@@ -156,6 +159,8 @@ class SessionMeta:
     air_density_kg_m3: float = DEFAULT_AIR_DENSITY_KG_M3  # [kg/m^3] optional `rig.air_density_kg_m3` (v1.1)
     time_constant_s: float | None = None  # [s] optional `plate.time_constant_s`; None = estimate it per trace
     bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency at the ADC; None = unknown
+    # v1.2: ([Hz], [-]) optional `plate.resonance_hz` and `plate.damping_ratio` (a tap test); None = identify them
+    plate_resonance: tuple[float, float] | None = None
 
 
 @dataclass
@@ -368,6 +373,11 @@ def _text(value, dotted: str, file: str) -> str:
 
 
 def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> None:
+    """Warn of the keys of ``mapping`` that are not in ``known``, naming the known key each resembles.
+
+    ``prefix`` is the dotted path of the mapping ("" for the top level of session.yaml).
+    """
+    dotted = (lambda k: f"{prefix}.{k}") if prefix else str
     unknown = [str(k) for k in mapping if k not in known]
     if unknown:
         import difflib
@@ -377,9 +387,9 @@ def _warn_unknown(mapping: dict, known: set[str], prefix: str, file: str) -> Non
         for k in unknown:  # a near miss, e.g. kb0_kn_m for kb0_kN_m: say what it silently changes
             close = lowered.get(k.lower()) or next(iter(difflib.get_close_matches(k, sorted(known), 1, 0.8)), None)
             if close is not None:
-                hints.append(f"did you mean '{prefix}.{close}'? '{prefix}.{k}' has no effect")
+                hints.append(f"did you mean '{dotted(close)}'? '{dotted(k)}' has no effect")
         warnings.warn(
-            f"{file}: unknown key(s) {', '.join(repr(f'{prefix}.{k}') for k in unknown)} "
+            f"{file}: unknown key(s) {', '.join(repr(dotted(k)) for k in unknown)} "
             f"(kept in raw, not used; known: {', '.join(sorted(known))})"
             + "".join(f"; {h}" for h in hints),
             SessionWarning,
@@ -451,7 +461,7 @@ def _parse_date(data: dict, file: str) -> str:
     return date
 
 
-def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None, float | None]:
+def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None, float | None, tuple | None]:
     plate = _section(data, "plate", file)
     polarity_value = _require(plate, "polarity", "plate.polarity", file)
     polarity_number = _to_float(polarity_value)
@@ -470,13 +480,26 @@ def _parse_plate(data: dict, file: str) -> tuple[int, tuple[float, float] | None
     time_constant_s = None
     if plate.get("time_constant_s") is not None:
         time_constant_s = _number(plate["time_constant_s"], "plate.time_constant_s", file, positive=True)
+    stated = [plate.get(k) is not None for k in ("resonance_hz", "damping_ratio")]
+    resonance = None
+    if any(stated):
+        if not all(stated):
+            given, missing = ("resonance_hz", "damping_ratio") if stated[0] else ("damping_ratio", "resonance_hz")
+            raise SessionError(f"{file}: key 'plate.{given}' is given without 'plate.{missing}': a tap test gives "
+                               "both (state both, or neither to identify the plate from the session)")
+        fn = _number(plate["resonance_hz"], "plate.resonance_hz", file, positive=True)
+        zeta = _number(plate["damping_ratio"], "plate.damping_ratio", file, positive=True)
+        if not zeta < 1.0:
+            raise SessionError(f"{file}: key 'plate.damping_ratio' must be below 1 (a resonance rings), "
+                               f"got {plate['damping_ratio']!r}")
+        resonance = (fn, zeta)
     _warn_unknown(plate, _KNOWN_SECTION_KEYS["plate"], "plate", file)
-    return int(polarity_number), kcal_range, time_constant_s
+    return int(polarity_number), kcal_range, time_constant_s, resonance
 
 
 def alias_risk(sample_rate_hz: float) -> str:
     """
-    What a rig sampled below twice PLATE_RESONANCE_MAX_HZ risks without `daq.bandwidth_hz`, and what to state.
+    What a rig sampled below twice PLATE_RESONANCE_MAX_HZ risks without `daq.bandwidth_hz`, and where to find it.
 
     The text of the warnings of :func:`read_session` (daq.sample_rate_hz) and of
     ``ballimpact.validation.validate_session`` (a trace's own rate).
@@ -491,10 +514,9 @@ def alias_risk(sample_rate_hz: float) -> str:
     str
         One sentence, starting "at ... kHz".
     """
-    return (f"at {sample_rate_hz / 1e3:g} kHz a plate resonance between {sample_rate_hz / 2e3:g} and "
-            f"{PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz (plates have up to {PLATE_RESONANCE_MAX_HZ / 1e3:g} kHz) reaches "
-            "the samples through its alias, which no check can tell from the force: give the anti-aliasing "
-            "filter's cut-off, or the plate's highest resonance (docs/raw-format.md)")
+    return (f"at {sample_rate_hz / 1e3:g} kHz a plate resonance above {sample_rate_hz / 2e3:g} kHz would alias "
+            "into the force unseen; give the anti-aliasing filter's cut-off or the plate's highest resonance "
+            "(data sheet, or a tap test)")
 
 
 def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float | None, float | None]:
@@ -515,7 +537,7 @@ def _parse_daq(data: dict, file: str) -> tuple[float, tuple[float, float], float
     if daq.get("bandwidth_hz") is not None:
         bandwidth_hz = _number(daq["bandwidth_hz"], "daq.bandwidth_hz", file, positive=True)
     elif sample_rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
-        warnings.warn(f"{file}: key 'daq.bandwidth_hz' not given, and {alias_risk(sample_rate_hz)}",
+        warnings.warn(f"{file}: daq.bandwidth_hz not given: {alias_risk(sample_rate_hz)}",
                       SessionWarning, stacklevel=3)
     _warn_unknown(daq, _KNOWN_SECTION_KEYS["daq"], "daq", file)
     return sample_rate_hz, (adc[0], adc[1]), mains_hz, bandwidth_hz
@@ -653,11 +675,12 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
     synthetic = collect(_parse_synthetic, data, file)
     operator = collect(_text, data.get("operator"), "operator", file)
     description = collect(_text, data.get("description"), "description", file)
+    _warn_unknown(data, _KNOWN_TOP_KEYS, "", file)
     if len(collect.problems) > n_before:
         if own:
             _raise_collected(collect.problems)
         return None
-    polarity, kcal_range, time_constant_s = plate
+    polarity, kcal_range, time_constant_s, resonance = plate
     sample_rate_hz, adc, mains_hz, bandwidth_hz = daq
     spacing_m, resolution_s, distance_to_plate_m = gates
     orientation, air_density = rig
@@ -681,6 +704,7 @@ def _parse_meta(data: dict, folder_name: str, file: str, collect: _Collector | N
         air_density_kg_m3=air_density,
         time_constant_s=time_constant_s,
         bandwidth_hz=bandwidth_hz,
+        plate_resonance=resonance,
     )
 
 

@@ -12,6 +12,9 @@ from .problems import ProblemKind, kind_of_message
 
 __all__ = [
     "NOT_DETERMINED",
+    "OPEN_INTERVAL",
+    "WIDE_INTERVAL_FACTOR",
+    "FORCE_AGREEMENT_WARNING",
     "STALE_FILE",
     "undetermined_parameters",
     "fit_warnings",
@@ -24,6 +27,15 @@ __all__ = [
 
 #: How a parameter that sits on its search bound is shown instead of an interval.
 NOT_DETERMINED = "not determined (at bound)"
+#: How a parameter whose value is inside its search range but whose 95 % interval reaches a bound is described.
+OPEN_INTERVAL = "95 % interval reaches the search bound: the data bound it on one side only"
+#: A 95 % interval of AK or AC whose ends differ by more than this factor [-] is a fit warning (the demo's, 10
+#: impacts per ball: 2.6-3.7 for AK, 1.04-1.07 for AC; a synth session of 3 impacts per ball: 38-1900 for AK;
+#: hand-made half-sine sessions: about 1e4). AK and a are correlated: a factor of a few is normal.
+WIDE_INTERVAL_FACTOR = 100.0
+#: A ball type whose impacts' median model_agreement_fraction is below this [-] gets a fit warning: the model's
+#: force does not follow the measured one (measured by bench/force_shape_map.py; see docs/outputs.md).
+FORCE_AGREEMENT_WARNING = 0.8
 #: File written into results/<session_id>/ when a session-level error left an earlier run's results there.
 STALE_FILE = "STALE"
 #: Results an earlier run leaves in results/<session_id>/ (outputs.md).
@@ -63,12 +75,28 @@ def _on_bound(value: float, lo: float, hi: float, log: bool) -> bool:
     return min(abs(f(value) - f(lo)), abs(f(value) - f(hi))) < _BOUND_TOL * span
 
 
+def _numbers(values, key: str, value_name: str) -> list[float]:
+    """[value, lo, hi] of one parameter from a parameters.csv row (NaN where missing)."""
+    numbers = []
+    for name in (value_name, f"{key}_lo", f"{key}_hi"):
+        try:
+            numbers.append(float(values.get(name, math.nan)))
+        except (TypeError, ValueError):
+            numbers.append(math.nan)
+    return numbers
+
+
+_VALUE_NAMES = {"ak": "ak_kN_m", "a": "a", "ac": "ac_kN_s_m3"}
+
+
 def undetermined_parameters(values, fit_message: str = "") -> dict[str, str]:
     """
-    The fitted parameters whose value or 95 % interval end sits on the fit's search bound.
+    The fitted parameters whose value, or an end of whose 95 % interval, sits on the fit's search bound.
 
-    Such an "interval" is the search range, not a property of the data: it must be shown
-    as :data:`NOT_DETERMINED`, never as an interval.
+    A value on its bound (or one the fit says "sits on its search bound", or whose interval
+    spans the whole search range) is not determined by the data: :data:`NOT_DETERMINED`,
+    and no interval. A value inside its
+    range whose interval reaches a bound is determined on one side only: :data:`OPEN_INTERVAL`.
 
     Parameters
     ----------
@@ -82,27 +110,51 @@ def undetermined_parameters(values, fit_message: str = "") -> dict[str, str]:
     Returns
     -------
     dict
-        ``{"ak" | "a" | "ac": NOT_DETERMINED}`` for each such parameter.
+        ``{"ak" | "a" | "ac": NOT_DETERMINED or OPEN_INTERVAL}`` for each such parameter.
     """
     bounds = _search_bounds_table_units()
     found = {}
-    for key, value_name in (("ak", "ak_kN_m"), ("a", "a"), ("ac", "ac_kN_s_m3")):
+    for key, value_name in _VALUE_NAMES.items():
         lo, hi, log = bounds[key]
-        numbers = []
-        for name in (value_name, f"{key}_lo", f"{key}_hi"):
-            try:
-                numbers.append(float(values.get(name, math.nan)))
-            except (TypeError, ValueError):
-                numbers.append(math.nan)
+        value, v_lo, v_hi = _numbers(values, key, value_name)
         said = re.search(rf"(^|[;:] ?){re.escape(_PARAM_NAMES[key])}( \(via kR\))? sits on its search bound",
                          fit_message or "")
-        if said or any(_on_bound(v, lo, hi, log) for v in numbers):
-            found[key] = NOT_DETERMINED
+        if said or _on_bound(value, lo, hi, log) or (_on_bound(v_lo, lo, hi, log) and _on_bound(v_hi, lo, hi, log)):
+            found[key] = NOT_DETERMINED  # the value, or the whole "interval", is the search range's
+        elif _on_bound(v_lo, lo, hi, log) or _on_bound(v_hi, lo, hi, log):
+            found[key] = OPEN_INTERVAL
     return found
 
 
+def _interval_notes(values, undetermined: dict) -> list[str]:
+    """Fit warnings of the AK and AC intervals wider than WIDE_INTERVAL_FACTOR (a parameters.csv row)."""
+    notes = []
+    for key in ("ak", "ac"):
+        if key in undetermined:
+            continue
+        _, lo, hi = _numbers(values, key, _VALUE_NAMES[key])
+        if math.isfinite(lo) and math.isfinite(hi) and lo > 0 and hi / lo > WIDE_INTERVAL_FACTOR:
+            notes.append(f"{_PARAM_NAMES[key]} barely determined: its 95 % interval [{lo:,.4g}, {hi:,.4g}] spans a "
+                         f"factor {hi / lo:,.0f} (more than {WIDE_INTERVAL_FACTOR:g})")
+    return notes
+
+
+def _force_note(force_agreement: float) -> list[str]:
+    """The fit warning of a ball whose model force does not follow the measured one (agreement [-])."""
+    try:
+        share = float(force_agreement)
+    except (TypeError, ValueError):
+        return []
+    if not math.isfinite(share) or share >= FORCE_AGREEMENT_WARNING:
+        return []
+    return [f"model force unlike the measured force: within 10 % of the peak on {100 * share:.0f} % of the contact "
+            f"(median impact; tennis balls: {100 * FORCE_AGREEMENT_WARNING:.0f} % or more): not the kind of ball the "
+            "model describes, or the plate distorts the force; do not use these parameters"]
+
+
 def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None, *,
-                 contact_time_rmse_pct: float = math.nan, cor_rmse_pct: float = math.nan) -> str:
+                 contact_time_rmse_pct: float = math.nan, cor_rmse_pct: float = math.nan,
+                 values=None, force_agreement: float = math.nan) -> str:
     """
     One-line warnings of a ball's fit: empty when all is well.
 
@@ -116,6 +168,13 @@ def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None, *
     contact_time_rmse_pct, cor_rmse_pct : float, optional
         Relative RMS residuals of TC and COR [%]; above :data:`RESIDUAL_WARNING_PCT`
         the model does not describe the impacts (e.g. a mistyped ball mass).
+    values : mapping, optional
+        The ball's parameters.csv row: AK and AC intervals wider than
+        :data:`WIDE_INTERVAL_FACTOR` are warned about.
+    force_agreement : float, optional
+        Median over the ball's ok impacts of ``model_agreement_fraction`` [-]
+        (:func:`ballimpact.model_data.force_agreement`); below
+        :data:`FORCE_AGREEMENT_WARNING` the model's force shape is not the measured one.
 
     Returns
     -------
@@ -129,7 +188,13 @@ def fit_warnings(fit_message: str, undetermined: dict[str, str] | None = None, *
         text = ""
     elif text.startswith("ok; "):
         text = text[4:]
-    notes = [f"{_PARAM_NAMES[k]} {v}" for k, v in (undetermined or {}).items()]
+    notes = _force_note(force_agreement)
+    for key, verdict in (undetermined or {}).items():
+        if verdict == NOT_DETERMINED:
+            notes.append(f"{_PARAM_NAMES[key]} {verdict}")
+        elif f"the {_PARAM_NAMES[key]} interval reaches" not in text:  # the fit may have said it already
+            notes.append(f"{_PARAM_NAMES[key]}: {verdict}")
+    notes += _interval_notes({} if values is None else values, undetermined or {})
     for what, value in (("TC", contact_time_rmse_pct), ("COR", cor_rmse_pct)):
         try:
             value = float(value)
@@ -149,24 +214,32 @@ def parameter_fit_warnings(table):
     ----------
     table : pandas.DataFrame
         :func:`ballimpact.archive.parameters_table` rows; a ``fit_message`` column (the
-        archive's) is read and dropped.
+        archive's) and a ``force_agreement`` column [-] (median model_agreement_fraction),
+        when present, are read and dropped.
 
     Returns
     -------
     pandas.DataFrame
         The same rows: ``<param>_lo`` / ``_hi`` emptied (NaN) for each parameter on its
-        search bound, ``fit_warnings`` (text, empty when all is well) appended.
+        search bound, the end on the bound alone for an interval that reaches it,
+        ``fit_warnings`` (text, empty when all is well) appended.
     """
     table = table.copy()
     messages = table.pop("fit_message") if "fit_message" in table else [""] * len(table)
+    agreement = table.pop("force_agreement") if "force_agreement" in table else [math.nan] * len(table)
+    bounds = _search_bounds_table_units()
     column = []
-    for i, message in zip(table.index, messages):
+    for i, message, share in zip(table.index, messages, agreement):
         row = table.loc[i]
         undetermined = undetermined_parameters(row, "" if message is None else str(message))
-        for key in undetermined:
-            table.loc[i, [f"{key}_lo", f"{key}_hi"]] = math.nan
+        for key, verdict in undetermined.items():
+            ends = [f"{key}_lo", f"{key}_hi"]
+            if verdict == OPEN_INTERVAL:  # only the end the search bound set
+                lo, hi, log = bounds[key]
+                ends = [e for e in ends if _on_bound(float(row.get(e, math.nan)), lo, hi, log)]
+            table.loc[i, ends] = math.nan
         column.append(fit_warnings(message, undetermined, contact_time_rmse_pct=row.get("contact_time_rmse_pct"),
-                                   cor_rmse_pct=row.get("cor_rmse_pct")))
+                                   cor_rmse_pct=row.get("cor_rmse_pct"), values=row, force_agreement=share))
     table["fit_warnings"] = column
     return table
 
@@ -217,16 +290,37 @@ def clear_stale(results_session_dir) -> None:
 # ---------------------------------------------------------------------- the summary
 
 
+#: Summary labels of the exclusion kinds whose message reads badly with its numbers left out.
+_SUMMARY_LABELS = {ProblemKind.KCAL_OUTLIER: "calibration factor far from the session median",
+                   ProblemKind.TOO_FEW_SAMPLES: "too few samples in the contact"}
+#: A number with its unit (the value of one impact: left out of a label) [m/s, ms, s, N/V, N, %, Hz, kHz, V, mm, m].
+_VALUE = re.compile(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?(\s*(m/s|ms|s|N/V|N|%|Hz|kHz|V|mm|m)(?![\w/]))?")
+_LOCATION = re.compile(r"^(line \d+|channel .* sample \d+|LVM segment \d+)$")
+
+
+def _trace_fault_label(first: str) -> str:
+    """"unreadable trace: <file>: line 7: <what>" -> "unreadable trace: <what>" (the file and place left out)."""
+    head, *parts = first.split(": ")
+    parts = [p for p in parts if not ("/" in p or "\\" in p or _LOCATION.match(p.strip()))]
+    return f"{head}: {parts[0]}" if parts else head
+
+
 def _reason_kind(reason: str) -> str:
-    """The summary label of an exclusion reason: its first reason, file names and numbers left out."""
+    """The summary label of an exclusion reason: its first reason, file names and values left out."""
     first = str(reason).split("; ")[0].strip()
-    if kind_of_message(first) is ProblemKind.POLARITY:
+    kind = kind_of_message(first)
+    if kind is ProblemKind.POLARITY:
         return first  # "pulse is negative: plate.polarity is +1" says it all
-    first = re.sub(r"\s*\([^()]*\d[^()]*\)", "", first)  # "(3 found: second contact at ...)" and the like
-    first = first.split(": ")[0]
-    first = re.sub(r"\S*/\S*", "...", first)
-    first = re.sub(r"(?<![\w.])[-+]?\d[\d.]*(e[-+]?\d+)?", "#", first)
-    return re.sub(r"\s*\([^)]*#[^)]*\)", "", first).strip()  # "(2 found)" and the like
+    if kind in _SUMMARY_LABELS:
+        return _SUMMARY_LABELS[kind]
+    first = re.sub(r"\s*[(\[][^()\[\]]*\d[^()\[\]]*[)\]](\s*N/V)?", "", first)  # "(3 found: ...)", "[100, 400] N/V"
+    if kind in (ProblemKind.TRACE_UNREADABLE, ProblemKind.TRACE_UNUSABLE):
+        first = _trace_fault_label(first)
+    else:
+        first = first.split(": ")[0]
+    first = _VALUE.sub("", first)  # "0.014 m/s", "1.200": one impact's values
+    first = re.sub(r"\S*/\S*", "...", first)  # a path
+    return " ".join(first.split())
 
 
 def _verdict_counts(rows: list[dict]) -> tuple[Counter, Counter]:

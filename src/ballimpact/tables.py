@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-__all__ = ["IMPACT_COLUMNS", "PARAMETER_COLUMNS", "WITHHELD_CELLS", "impacts_table", "parameters_table"]
+__all__ = ["IMPACT_COLUMNS", "PARAMETER_COLUMNS", "WITHHELD_CELLS", "CSV_FORMATS", "CSV_DEFAULT_FORMAT",
+           "impacts_table", "parameters_table", "write_csv"]
 
 #: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
@@ -114,7 +115,7 @@ def impacts_table(ds: xr.Dataset) -> pd.DataFrame:
         if col == "impact_id":
             data[col] = _column(ds, "impact_id", n, text=True)
         elif col == "ball":
-            data[col] = _column(ds, "impact_ball", n, text=True)
+            data[col] = _column(ds, "ball_type", n, text=True)
         elif col in ("status", "reason"):
             data[col] = _column(ds, col, n, text=True)
         elif col == "used_in_fit":
@@ -150,6 +151,7 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
         Parameters in the paper's Table 2 units: kB(0) [kN/m], AK [kN/m^(1+a)],
         a [-], AC [kN s/m^3]; mass [kg]; residuals [%].
     """
+    from .model_data import force_agreement
     from .summary import parameter_fit_warnings
 
     n = ds.sizes.get("ball", 0)
@@ -166,7 +168,65 @@ def parameters_table(ds: xr.Dataset) -> pd.DataFrame:
             )
         else:
             data[col] = np.asarray(_column(ds, col, n), dtype=float)
-    table = pd.DataFrame(data, columns=[c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS])
+    agreement = force_agreement(ds)
+    data["force_agreement"] = [agreement.get(str(b), np.nan) for b in data["ball"]]
+    columns = [c if c != "fit_warnings" else "fit_message" for c in PARAMETER_COLUMNS] + ["force_agreement"]
+    table = pd.DataFrame(data, columns=columns)
     return parameter_fit_warnings(table)[PARAMETER_COLUMNS]
 
 
+
+
+#: How each number of the CSV tables is written: to what its measurement supports (docs/outputs.md, "Numbers").
+#: Speeds [m/s] to 1 mm/s (a 1 us timer over 4 ms of flight: 0.03 %); COR to 1e-4; times [ms] to 1 us (TC is
+#: found to a fraction of a 15 us sample); kCAL [N/V] to 0.01 (the calibration holds to about 0.03 N/V); forces [N]
+#: to 0.1 N; displacements [mm] to 10 um; the fitted parameters to 4-5 significant digits (their 95 % intervals are
+#: several % wide).
+CSV_FORMATS = {
+    **dict.fromkeys(("vin_m_s", "vout_m_s", "vin_gate_m_s", "vout_gate_m_s"), "%.3f"),
+    "cor": "%.4f",
+    **dict.fromkeys(("contact_time_ms", "time_to_peak_ms"), "%.3f"),
+    **dict.fromkeys(("kcal_N_per_V", "kv_stiffness_kN_m", "kv_damping_N_s_m", "max_displacement_mm"), "%.2f"),
+    "impulse_N_s": "%.4f",
+    "peak_force_N": "%.1f",
+    "mass_kg": "%.5f",
+    **dict.fromkeys(("kb0_kN_m", "kb0_lo", "kb0_hi", "kb_10mm_kN_m", "kb_10mm_lo", "kb_10mm_hi", "kb_20mm_kN_m",
+                     "kb_20mm_lo", "kb_20mm_hi"), "%.2f"),
+    **dict.fromkeys(("ak_kN_m", "ak_lo", "ak_hi"), "%.5g"),
+    **dict.fromkeys(("a", "a_lo", "a_hi", "ac_kN_s_m3", "ac_lo", "ac_hi"), "%.4f"),
+    **dict.fromkeys(("contact_time_rmse_pct", "cor_rmse_pct"), "%.3f"),
+    **dict.fromkeys(("itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm"),
+                    "%.1f"),
+}
+#: Any other number column: 6 significant digits.
+CSV_DEFAULT_FORMAT = "%.6g"
+
+
+def _formatted(values, fmt: str) -> list[str]:
+    """Numbers as text in ``fmt``; an empty cell for NaN (and "-0" written as "0")."""
+    out = []
+    for value in values:
+        if value is None or value is pd.NA or (isinstance(value, float) and not np.isfinite(value)):
+            out.append("")
+            continue
+        text = fmt % value
+        out.append(text[1:] if text.startswith("-") and float(text) == 0 else text)
+    return out
+
+
+def write_csv(table: pd.DataFrame, path) -> None:
+    """
+    Write a results table as CSV, each float column in its :data:`CSV_FORMATS` format.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        impacts.csv, parameters.csv or catalogue.csv rows; text and integer columns are written as they are.
+    path : str or Path
+        The file (written directly: the caller makes it atomic).
+    """
+    out = table.copy()
+    for column in out.columns:
+        if pd.api.types.is_float_dtype(out[column].dtype):
+            out[column] = _formatted(out[column].to_numpy(), CSV_FORMATS.get(column, CSV_DEFAULT_FORMAT))
+    out.to_csv(path, index=False)

@@ -1,4 +1,4 @@
-"""Trace file reader: one charge-amplifier voltage trace per impact (CSV or NI TDMS)."""
+"""Trace file reader: one charge-amplifier voltage trace per impact (CSV, NI TDMS or LabVIEW LVM)."""
 
 from __future__ import annotations
 
@@ -10,15 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TraceError", "Trace", "read_trace", "MIN_SAMPLES", "TRACE_FORMATS"]
+__all__ = ["TraceError", "Trace", "read_trace", "trace_header_rate", "MIN_SAMPLES", "TRACE_FORMATS"]
 
 MIN_SAMPLES = 100  # fewer samples than this is a truncated trace
 UNIFORM_SAMPLING_RTOL = 0.01  # time_s steps may differ from the median step by this fraction
 RATE_AGREEMENT_RTOL = 0.005  # header sample_rate_hz vs time_s column: largest relative difference
-TRACE_FORMATS = {".csv": "csv", ".tdms": "tdms"}
+TRACE_FORMATS = {".csv": "csv", ".tdms": "tdms", ".lvm": "lvm"}
 VOLTAGE_COLUMN = "voltage_V"
 TIME_COLUMN = "time_s"
-_TDMS_VOLT_UNITS = {"v", "volt", "volts"}  # accepted `unit_string` values of a TDMS channel
+_TDMS_VOLT_UNITS = {"v", "volt", "volts"}  # accepted `unit_string` (TDMS) and `Y_Unit_Label` (LVM) values
+_LVM_END = "***End_of_Header***"  # closes the file header and each segment header of an LVM file
 _QUANTUM_PROBE_LINES = 50  # time_s strings looked at (each end) to find their printed resolution
 
 
@@ -35,8 +36,8 @@ class Trace:
     t0_s: float  # [s] time of the first sample
     metadata: dict  # header keys / TDMS properties
     path: Path
-    format: str  # "csv" or "tdms"
-    sample_rate_source: str  # "header", "time_s", "wf_increment" or "session"
+    format: str  # "csv", "tdms" or "lvm"
+    sample_rate_source: str  # "header", "time_s", "wf_increment", "Delta_X", "X_Value" or "session"
 
     @property
     def n_samples(self) -> int:
@@ -371,6 +372,117 @@ def _read_tdms(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
     )
 
 
+# ---------------------------------------------------------------------------- LVM
+
+
+def _lvm_text(path: Path, file: str) -> str:
+    """The text of an LVM file (UTF-8, else the Windows code page LabVIEW writes), checked to be one."""
+    data = _read_bytes(path, file)
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = data.decode("cp1252", errors="replace")
+    if not text.lstrip().startswith("LabVIEW Measurement"):
+        first = text.strip().splitlines()[0][:60] if text.strip() else ""
+        raise TraceError(f"{file}: not a LabVIEW Measurement file: its first line is {first!r}, "
+                         "expected 'LabVIEW Measurement'")
+    return text
+
+
+def _lvm_channel(segment: dict) -> tuple[int, int | None, str]:
+    """Column of the first data channel in a segment's data, column of its X values (None), its name."""
+    names = [str(n).strip() for n in segment.get("Channel names", [])]
+    for k, name in enumerate(names):
+        if name not in ("X_Value", "Comment", ""):
+            return k, (k - 1 if k > 0 and names[k - 1] == "X_Value" else None), name
+    raise TraceError("no data channel")
+
+
+def _lvm_value(segment: dict, key: str, index: int):
+    """A per-channel header value of an LVM segment (``Delta_X``, ``X0``, ``Y_Unit_Label``), None if absent."""
+    values = segment.get(key)
+    if not isinstance(values, list) or index >= len(values):
+        return None
+    value = values[index]
+    return value.strip() if isinstance(value, str) else value
+
+
+def _lvm_samples(file: str, lvm: dict) -> tuple[np.ndarray, np.ndarray | None, dict, str]:
+    """Voltage [V], X values [s] or None, the first segment's header and the channel's name."""
+    voltage, xs, first = [], [], None
+    for k in range(int(lvm.get("Segments", 0))):
+        segment = lvm[k]
+        try:
+            column, x_column, name = _lvm_channel(segment)
+        except TraceError:
+            raise TraceError(f"{file}: LVM segment {k + 1} has no data channel") from None
+        data = np.asarray(segment.get("data", np.empty((0, 0))), dtype=np.float64)
+        if data.ndim != 2 or data.shape[1] <= column:
+            raise TraceError(f"{file}: LVM segment {k + 1}: no samples for channel {name!r}")
+        if first is None:
+            first = (segment, name, _lvm_value(segment, "Delta_X", 0))
+        elif _lvm_value(segment, "Delta_X", 0) != first[2]:
+            raise TraceError(f"{file}: LVM segment {k + 1} has Delta_X {_lvm_value(segment, 'Delta_X', 0)!r}, "
+                             f"segment 1 {first[2]!r}: one trace must have one sample rate")
+        voltage.append(data[:, column])
+        xs.append(data[:, x_column] if x_column is not None else None)
+    if first is None:
+        raise TraceError(f"{file}: LVM file without a data segment")
+    x = np.concatenate(xs) if all(v is not None for v in xs) else None
+    return np.concatenate(voltage), x, first[0], first[1]
+
+
+def _read_lvm(path: Path, file: str, default_sample_rate_hz: float) -> Trace:
+    import lvm_read
+
+    text = _lvm_text(path, file)
+    try:
+        lvm = lvm_read.read_str(text)
+    except Exception as exc:  # lvm_read raises ValueError, SyntaxError, KeyError, ... on a damaged file
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise TraceError(f"{file}: not a readable LabVIEW Measurement file: {detail}") from None
+    voltage, x, segment, name = _lvm_samples(file, lvm)
+    _check_samples(file, voltage, lambda i: f"channel {name!r} sample {i}")
+    units = _lvm_value(segment, "Y_Unit_Label", 0)
+    if units not in (None, "") and str(units).lower() not in _TDMS_VOLT_UNITS:
+        raise TraceError(f"{file}: channel {name!r} Y_Unit_Label must be volts, got {units!r}")
+    delta = _lvm_value(segment, "Delta_X", 0)
+    increment = _positive_float(delta) if delta is not None else None
+    if increment is not None:
+        rate, source = 1.0 / increment, "Delta_X"
+    elif x is not None and np.isfinite(x).all() and x.size > 1:
+        rate, source = _time_column_rate(x, [], 1, f"{file}: X_Value column"), "X_Value"
+    else:
+        rate, source = default_sample_rate_hz, "session"
+    x0 = _lvm_value(segment, "X0", 0)
+    t0_s = float(x0) if isinstance(x0, (int, float)) and math.isfinite(x0) else 0.0
+    metadata = {str(k): v for k, v in lvm.items() if isinstance(k, str) and isinstance(v, str)}
+    metadata.update(lvm_channel=name, lvm_segments=int(lvm.get("Segments", 1)))
+    return Trace(voltage_V=voltage, sample_rate_hz=float(rate), t0_s=t0_s, metadata=metadata, path=path,
+                 format="lvm", sample_rate_source=source)
+
+
+def _lvm_header_rate(path: Path) -> float | None:
+    """``Delta_X`` of an LVM file's first channel as a rate [Hz], from its header lines alone."""
+    separator, decimal, ends = "\t", ".", 0
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for line in fh:
+            line = line.rstrip("\r\n")
+            if line.startswith("Separator") and len(line) > 9:
+                separator = line[9]
+            elif line.startswith("Decimal_Separator") and len(line) > 18:
+                decimal = line[18]
+            elif line.startswith(_LVM_END):
+                ends += 1
+                if ends == 2:
+                    return None
+            elif line.startswith("Delta_X") and ends == 1:
+                fields = line.split(separator)
+                increment = _positive_float(fields[1].replace(decimal, ".")) if len(fields) > 1 else None
+                return None if increment is None else 1.0 / increment
+    return None
+
+
 # ------------------------------------------------------------------------- public
 
 
@@ -382,8 +494,11 @@ def read_trace(path, default_sample_rate_hz: float) -> Trace:
     ----------
     path : str or Path
         Trace file, ``.csv`` (``# key: value`` header lines, then a ``voltage_V``
-        column, optionally preceded by ``time_s``) or ``.tdms`` (first channel of
-        the first group; ``wf_increment`` [s] and ``wf_start_offset`` [s] used).
+        column, optionally preceded by ``time_s``), ``.tdms`` (first channel of
+        the first group; ``wf_increment`` [s] and ``wf_start_offset`` [s] used) or
+        ``.lvm`` (LabVIEW Measurement text, read by ``lvm_read``: the first data
+        channel; its ``Delta_X`` [s], else its X column [s], and ``X0`` [s] used;
+        the segments of a file with several are joined).
     default_sample_rate_hz : float
         Sample rate [Hz] used when the file gives none (session.yaml's
         ``daq.sample_rate_hz``).
@@ -415,4 +530,47 @@ def read_trace(path, default_sample_rate_hz: float) -> Trace:
         return _read_csv(path, file, default_sample_rate_hz)
     if kind == "tdms":
         return _read_tdms(path, file, default_sample_rate_hz)
-    raise TraceError(f"{file}: unknown trace file extension {path.suffix!r} (expected .csv or .tdms)")
+    if kind == "lvm":
+        return _read_lvm(path, file, default_sample_rate_hz)
+    raise TraceError(f"{file}: unknown trace file extension {path.suffix!r} (expected {', '.join(TRACE_FORMATS)})")
+
+
+def trace_header_rate(path) -> float | None:
+    """
+    The sample rate a trace file gives itself, from its header alone (no samples read).
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.csv`` (``# sample_rate_hz: ...`` header line), ``.tdms`` (channel property
+        ``wf_increment`` [s]) or ``.lvm`` trace (``Delta_X`` [s] of its first channel).
+
+    Returns
+    -------
+    float or None
+        [Hz]; None when the header states none (a CSV ``time_s`` column is not read).
+
+    Raises
+    ------
+    OSError, ValueError
+        The file cannot be read (:func:`read_trace` says why).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".tdms":
+        from nptdms import TdmsFile
+
+        groups = TdmsFile.read_metadata(path).groups()
+        props = groups[0].channels()[0].properties if groups and groups[0].channels() else {}
+        increment = _positive_float(props["wf_increment"]) if "wf_increment" in props else None
+        return None if increment is None else 1.0 / increment
+    if suffix == ".lvm":
+        return _lvm_header_rate(path)
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for line in fh:
+            if not line.startswith("#"):
+                return None
+            key, _, value = line[1:].partition(":")
+            if key.strip() == "sample_rate_hz":
+                return _positive_float(value)
+    return None

@@ -11,20 +11,23 @@ from pathlib import Path
 import numpy as np
 
 from .problems import TRACE_FILE_KINDS, ProblemKind, has_kind
+from .processing import PHYSICAL_BOUNDS
+from .processing import _opposite_pulse_reason as opposite_pulse_problem  # the very test processing applies
 from .session import PLATE_RESONANCE_MAX_HZ, alias_risk, read_session
-from .traces import TraceError, read_trace
+from .traces import TraceError, read_trace, trace_header_rate
 
 __all__ = ["ValidationReport", "validate_session", "format_validation"]
 
 RATE_SIGNIFICANT_DIGITS = 9  # sample rates are grouped after rounding to this many digits
-SPEED_RANGE_M_S = (1.0, 80.0)  # [m/s] plausible inbound and rebound gate speeds of a ball on the rig
+SPEED_RANGE_M_S = PHYSICAL_BOUNDS["vin_m_s"]  # [m/s] inbound speeds processing accepts
+COR_RANGE = PHYSICAL_BOUNDS["cor"]  # [-] rebound / inbound speeds processing accepts
 RATE_RTOL = 0.005  # daq.sample_rate_hz vs a trace's own rate: largest relative difference
 RATE_RANGE_HZ = (1.0e3, 1.0e7)  # [Hz] plausible daq.sample_rate_hz (the rigs: 20-200 kHz)
 
 
 def gate_speed_problems(spacing_m: float, gates_s) -> list[str]:
     """
-    Inbound and rebound speed from one impact's gate times, and what is implausible about them.
+    Inbound speed and COR from one impact's gate times, and what processing would refuse in them.
 
     Parameters
     ----------
@@ -36,18 +39,22 @@ def gate_speed_problems(spacing_m: float, gates_s) -> list[str]:
     Returns
     -------
     list of str
-        Empty when both speeds are in :data:`SPEED_RANGE_M_S` [m/s] (or cannot be
-        computed: the reader reports missing or disordered gate times itself).
+        Empty when the inbound speed is in :data:`SPEED_RANGE_M_S` [m/s] and the COR in
+        :data:`COR_RANGE` [-], the bounds of ``ballimpact.processing.PHYSICAL_BOUNDS`` (or when
+        they cannot be computed: the reader reports missing or disordered gate times itself).
     """
     in_1, in_2, out_2, out_1 = (float(g) for g in gates_s)
-    lo, hi = SPEED_RANGE_M_S
     found = []
-    for what, dt in (("inbound", in_2 - in_1), ("rebound", out_1 - out_2)):
-        if not math.isfinite(dt) or dt <= 0:
-            continue
-        speed = spacing_m / dt
-        if not lo <= speed <= hi:
-            found.append(f"{what} speed {speed:.4g} m/s from the gate times is outside {lo:g}-{hi:g} m/s")
+    dt_in, dt_out = in_2 - in_1, out_1 - out_2
+    vin = spacing_m / dt_in if math.isfinite(dt_in) and dt_in > 0 else math.nan
+    vout = spacing_m / dt_out if math.isfinite(dt_out) and dt_out > 0 else math.nan
+    lo, hi = SPEED_RANGE_M_S
+    if math.isfinite(vin) and not lo <= vin <= hi:
+        found.append(f"inbound speed {vin:.4g} m/s from the gate times is outside {lo:g}-{hi:g} m/s")
+    cor_lo, cor_hi = COR_RANGE
+    if math.isfinite(vin) and math.isfinite(vout) and not cor_lo <= vout / vin <= cor_hi:
+        found.append(f"COR {vout / vin:.3g} from the gate times (rebound {vout:.4g} m/s) is outside "
+                     f"{cor_lo:g}-{cor_hi:g}")
     return found
 
 
@@ -100,6 +107,7 @@ class ValidationReport:
     problems: list[tuple[str, str]]  # (impact_id or "", message)
     sample_rate_sources: dict[str, int] = field(default_factory=dict)  # "header", "time_s", ...
     warnings: list[str] = field(default_factory=list)  # usable but suspect input
+    causes: list[str] = field(default_factory=list)  # one cause behind many problems (gate times in ms, polarity)
 
     @property
     def impacts_with_problems(self) -> list[str]:
@@ -119,8 +127,8 @@ def trace_own_rate(path) -> float | None:
     Parameters
     ----------
     path : str or Path
-        A ``.csv`` trace (``# sample_rate_hz: ...`` header line) or ``.tdms`` trace
-        (channel property ``wf_increment`` [s]).
+        A ``.csv`` (``# sample_rate_hz: ...`` header line), ``.tdms`` (channel property
+        ``wf_increment`` [s]) or ``.lvm`` trace (``Delta_X`` [s] of its channel header).
 
     Returns
     -------
@@ -128,26 +136,10 @@ def trace_own_rate(path) -> float | None:
         [Hz]; None when the header gives none or cannot be read (``validate`` reads the
         whole trace and reports why).
     """
-    path = Path(path)
     try:
-        if path.suffix.lower() == ".tdms":
-            from nptdms import TdmsFile
-
-            groups = TdmsFile.read_metadata(path).groups()
-            props = groups[0].channels()[0].properties if groups and groups[0].channels() else {}
-            increment = float(props["wf_increment"]) if "wf_increment" in props else math.nan
-            return 1.0 / increment if math.isfinite(increment) and increment > 0 else None
-        with open(path, encoding="utf-8-sig", errors="replace") as fh:
-            for line in fh:
-                if not line.startswith("#"):
-                    return None
-                key, _, value = line[1:].partition(":")
-                if key.strip() == "sample_rate_hz":
-                    rate = float(value)
-                    return rate if math.isfinite(rate) and rate > 0 else None
+        return trace_header_rate(path)
     except Exception:  # noqa: BLE001 - a damaged file: processing reports it
         return None
-    return None
 
 
 def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
@@ -190,14 +182,16 @@ def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
             if has_kind(row.problems, TRACE_FILE_KINDS):
                 continue  # no readable trace file to look at
             _check_row_trace(session, row, read_traces, tally)
+        causes = []
         if len(tally.bad_speeds) >= max(2, len(session.impacts) // 2):
-            warnings.warn(
-                f"{len(tally.bad_speeds)} of {len(session.impacts)} impacts have gate speeds outside "
+            causes.append(
+                f"{len(tally.bad_speeds)} of {len(session.impacts)} impacts have an inbound gate speed outside "
                 f"{SPEED_RANGE_M_S[0]:g}-{SPEED_RANGE_M_S[1]:g} m/s{_units_hint(tally.bad_speeds)}"
             )
-        _check_sample_rate(meta.sample_rate_hz, tally.own_rates, tally.n_default_rate)
-        _check_alias_rates(meta.sample_rate_hz, meta.bandwidth_hz, tally.own_rates)
-        _check_polarity(meta.polarity, tally.signs)
+        _check_sample_rate(meta.sample_rate_hz, [r for _, _, r in tally.own_rates], tally.n_default_rate)
+        _check_odd_rates(meta.sample_rate_hz, tally.own_rates, tally.n_default_rate)
+        _check_alias_rates(meta.sample_rate_hz, meta.bandwidth_hz, [r for _, _, r in tally.own_rates])
+        causes += _polarity_cause(meta.polarity, tally.signs)
     per_ball = Counter(row.ball for row in session.impacts)
     return ValidationReport(
         session_id=session.meta.session_id,
@@ -208,6 +202,7 @@ def validate_session(path, *, read_traces: bool = True) -> ValidationReport:
         problems=tally.problems,
         sample_rate_sources=dict(sorted(tally.sources.items())),
         warnings=[str(w.message) for w in caught],
+        causes=causes,
     )
 
 
@@ -221,7 +216,7 @@ class _Tally:
     formats: Counter = field(default_factory=Counter)  # trace formats
     trace_users: dict = field(default_factory=dict)  # resolved trace path -> first impact_id
     bad_speeds: list = field(default_factory=list)  # [m/s] implausible inbound gate speeds
-    own_rates: list = field(default_factory=list)  # [Hz] rates the traces give themselves (header, time_s, TDMS)
+    own_rates: list = field(default_factory=list)  # (impact_id, trace, rate [Hz]) of traces that give their own rate
     n_default_rate: int = 0  # traces that take daq.sample_rate_hz
     signs: Counter = field(default_factory=Counter)  # pulse sign per trace
 
@@ -234,7 +229,7 @@ def _check_row_gates(row, spacing_m: float, tally: _Tally) -> None:
         return
     speed_problems = gate_speed_problems(spacing_m, gates)
     tally.problems.extend((row.impact_id, message) for message in speed_problems)
-    if speed_problems and math.isfinite(gates[1] - gates[0]) and gates[1] > gates[0]:
+    if any(m.startswith("inbound") for m in speed_problems):
         tally.bad_speeds.append(spacing_m / (gates[1] - gates[0]))
 
 
@@ -252,7 +247,7 @@ def _check_row_trace(session, row, read_traces: bool, tally: _Tally) -> None:
         if rate is None:
             tally.n_default_rate += 1
         else:
-            tally.own_rates.append(rate)
+            tally.own_rates.append((row.impact_id, row.trace, rate))
         return
     try:
         trace = read_trace(trace_path, session.meta.sample_rate_hz)
@@ -265,7 +260,10 @@ def _check_row_trace(session, row, read_traces: bool, tally: _Tally) -> None:
     if trace.sample_rate_source == "session":
         tally.n_default_rate += 1
     else:
-        tally.own_rates.append(trace.sample_rate_hz)
+        tally.own_rates.append((row.impact_id, row.trace, trace.sample_rate_hz))
+    wrong_sign = opposite_pulse_problem(trace.voltage_V, session.meta.polarity)
+    if wrong_sign is not None:  # processing excludes the impact for it: so does the verdict
+        tally.problems.append((row.impact_id, wrong_sign.message))
     tally.signs[pulse_sign(trace.voltage_V)] += 1
 
 
@@ -296,20 +294,40 @@ def _check_alias_rates(rate_hz: float, bandwidth_hz: float | None, own_rates: li
     slow = [r for r in own_rates if r < 2.0 * PLATE_RESONANCE_MAX_HZ]
     if bandwidth_hz is not None or not slow or rate_hz < 2.0 * PLATE_RESONANCE_MAX_HZ:
         return
-    warnings.warn(f"{len(slow)} trace(s) give their own sample rate below {2e-3 * PLATE_RESONANCE_MAX_HZ:g} kHz and "
-                  f"key 'daq.bandwidth_hz' is not given: {alias_risk(min(slow))}")
+    warnings.warn(f"{len(slow)} trace(s) sampled below {2e-3 * PLATE_RESONANCE_MAX_HZ:g} kHz by their own rate, and "
+                  f"daq.bandwidth_hz not given: {alias_risk(min(slow))}")
 
 
-def _check_polarity(polarity: int, signs: Counter) -> None:
-    """Warn when most traces pulse the other way than plate.polarity says."""
+def _check_odd_rates(rate_hz: float, own_rates: list, n_default: int) -> None:
+    """Warn of each trace whose own sample rate [Hz] disagrees with daq.sample_rate_hz [Hz] while most of the
+    session's other traces agree with it: a wrong header scales that impact's times (TC, kCAL) by the ratio."""
+    rates = [r for _, _, r in own_rates]
+    for k, (impact_id, trace, rate) in enumerate(own_rates):
+        if abs(rate - rate_hz) <= RATE_RTOL * rate_hz:
+            continue
+        others = rates[:k] + rates[k + 1:]
+        agree = n_default + sum(abs(r - rate_hz) <= RATE_RTOL * rate_hz for r in others)
+        if agree <= (len(others) + n_default) / 2:
+            continue  # most traces disagree with session.yaml: _check_sample_rate says so
+        n_others = len(others) + n_default
+        agreeing = f"the session's other {n_others}" if agree == n_others else f"{agree} of the other {n_others}"
+        warnings.warn(
+            f"{impact_id}: trace {trace} gives its own sample rate as {rate:g} Hz, but daq.sample_rate_hz and "
+            f"{agreeing} traces say {rate_hz:g} Hz: "
+            f"read at {rate:g} Hz, its contact time comes out x{rate_hz / rate:.3g} and its kCAL "
+            f"x{rate / rate_hz:.3g} of what {rate_hz:g} Hz gives; correct the file's sample rate if it is wrong"
+        )
+
+
+def _polarity_cause(polarity: int, signs: Counter) -> list[str]:
+    """The likely cause when most traces pulse the other way than plate.polarity says (empty list if not)."""
     opposite = signs.get(-polarity, 0)
     n = opposite + signs.get(polarity, 0)
     if n and opposite > n / 2:
         sign = "negative" if polarity == 1 else "positive"
-        warnings.warn(
-            f"{opposite} of {n} traces show a {sign} pulse but plate.polarity is {polarity:+d}: "
-            f"is plate.polarity {-polarity:+d}? (every such impact would be excluded)"
-        )
+        return [f"{opposite} of {n} traces show a {sign} pulse but plate.polarity is {polarity:+d}: "
+                f"is plate.polarity {-polarity:+d}? (each such impact is excluded)"]
+    return []
 
 
 def _counts(mapping: dict, unit: str = "") -> str:
@@ -340,6 +358,7 @@ def format_validation(report: ValidationReport) -> str:
         + (f" (from {_counts(report.sample_rate_sources)})" if report.sample_rate_sources else ""),
         f"  trace formats:         {_counts(report.trace_formats)}",
     ]
+    lines.extend(f"Likely cause: {cause}" for cause in report.causes)
     if report.problems:
         lines.append(f"Problems ({len(report.problems)}):")
         lines.extend(f"  {impact_id or '(session)'}: {message}" for impact_id, message in report.problems)
@@ -357,6 +376,8 @@ def format_validation(report: ValidationReport) -> str:
             f"Verdict: PROBLEMS, {len(bad)} of {report.n_impacts} impacts will be excluded; "
             f"{report.n_impacts - len(bad)} can be processed"
         )
+        if report.n_impacts and len(bad) == report.n_impacts:
+            verdict = f"Verdict: NOTHING TO PROCESS, all {report.n_impacts} impacts will be excluded"
         if session_level:
             verdict += " (see the session problems above)"
     if report.warnings:
