@@ -238,3 +238,76 @@ def test_front_spike_sweep_puts_its_spike_on_the_fronts_sample_and_judges_it():
     assert (seed, index, offset, amplitude) == (2, 1847, 1, -1.0)
     assert category == "excluded_measurable", (errors, reason)
     assert "contact start not determined" in reason
+
+
+def _rigs():
+    rigs = bench_module("rigs")
+    return rigs, rigs.rig_zoo  # imported by name (its dataclasses need a module in sys.modules)
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_rig_zoo_samples_the_force_over_kcal_on_an_ideal_quiet_rig():
+    import dataclasses
+
+    _, rig_zoo = _rigs()
+    rig = dataclasses.replace(rig_zoo.draw_rig(1000, 1), plate_hz=None, antialias_hz=None, tau_s=1e12, hum_V=0.0,
+                              noise_V=0.0, offset_V=0.0, drift_V_s=0.0, spikes=False, kcal_spread=0.0, polarity=-1)
+    ball = rig.balls[0]
+    volts, truth = rig_zoo.render_impact(rig, ball, 21.7, "", "x-1", np.random.default_rng(5))
+    knots_t, knots_f, _ = rig_zoo.force_knots(ball, 21.7)
+    fs = rig.sample_rate_hz
+    lsb = 2 * rig.rail_V / 2**rig_zoo.ADC_BITS
+    pre = int(rig.pre_s * fs) - 2
+    assert np.ptp(volts[:pre]) <= lsb  # a flat baseline: the trace's own offset alone
+    volts = volts - np.median(volts[:pre])
+    force = -volts * truth.kcal_N_per_V  # polarity -1
+    assert np.max(np.abs(force)) == pytest.approx(truth.peak_N, rel=0.05)
+    # the impulse of the samples is m (vin + vout) of the truth, and the contact lasts TC
+    assert np.sum(force) / fs == pytest.approx(ball.mass_kg * (truth.vin_m_s + truth.vout_m_s), rel=2e-3)
+    above = np.flatnonzero(np.abs(volts) > lsb)
+    assert (above[-1] - above[0]) / fs == pytest.approx(truth.contact_time_s, abs=2.5 / fs)
+    assert truth.contact_time_s == pytest.approx(knots_t[-1]) and truth.fault == ""
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_rigs_score_reads_the_v12_verdicts_and_falls_back_to_status():
+    import pandas as pd
+
+    rigs, _ = _rigs()
+    truth = pd.DataFrame({"impact_id": ["a", "b", "c"], "fault": ["", "", "clipped"],
+                          "contact_time_ms": [4.0, 4.0, 4.0], "kcal_N_per_V": [200.0] * 3,
+                          "peak_force_N": [1000.0] * 3, "peak_is_spike": [False, True, False], "cor": [0.6] * 3})
+    old = pd.DataFrame({"impact_id": ["c", "b", "a"], "ball": "x", "vin_m_s": ["20", "21", "22"],
+                        "status": ["ok", "ok", "ok"], "reason": ["", "", ""],
+                        "used_in_fit": ["true", "true", "false"], "contact_time_ms": ["4.0", "4.1", "4.0"],
+                        "kcal_N_per_V": ["200", "200", "200"], "peak_force_N": ["1000", "1045", ""],
+                        "cor": ["0.6", "0.6", "0.6025"]})
+    s = rigs.score_impacts(old, truth)
+    # b's TC is 2.5 % off (its peak 4.5 % is within the spike's 5 %); a's empty peak is withheld; its COR is off
+    assert sorted((i, q) for i, q, _ in s["wrong"]) == [("a", "cor"), ("b", "tc")]
+    assert (s["clean"], s["used"], s["used_right"], s["faulty_used"]) == (2, 1, 0, [("c", "clipped")])
+    assert [rigs._reason_head(x) for x in s["lost_reasons"]] == ["left out of the fit"]  # a: ok, not used
+    assert s["speeds"] == {"x": (20.0, 21.0)}  # of the impacts used in the fit, c (faulty) among them
+    new = old.assign(contact_time_status=["ok", "withheld", "ok"], kcal_status="ok",
+                     peak_status=["ok", "ok", "withheld"], cor_status=["ok", "ok", "withheld"])
+    s = rigs.score_impacts(new, truth)
+    assert s["wrong"] == [] and s["used"] == 1  # the withheld quantities are not given as ok
+    s = rigs.score_impacts(new.assign(status=["ok", "excluded", "ok"], used_in_fit=["true", "false", "false"],
+                                      reason_code=["", "contact_end;aliasing", ""]), truth)
+    assert sorted(s["lost_reasons"]) == ["TC withheld [contact_end, aliasing]", "left out of the fit: "]
+    s = rigs.score_impacts(new.assign(peak_status="ok"), truth)
+    assert [(i, q) for i, q, _ in s["wrong"]] == [("a", "peak")]  # ok, yet no value: not right
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_rigs_runs_a_tiny_ideal_plate_session_through_the_workflow(capsys):
+    rigs, rig_zoo = _rigs()
+    rig = rig_zoo.draw_rig(1000, 1, (8, 8))
+    assert rig.plate_hz is None and rig.sample_rate_hz < 60e3 and not rig.clear_class
+    assert rigs.main(["--n", "2", "--seed", "1000", "--jobs", "1", "--impacts", "8", "8", "--only", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "rig-1000-001 [other]" in out and "CRASH" not in out
+    line = next(x for x in out.splitlines() if x.startswith("  clean used"))
+    n_faulty = len(rig.faults)
+    assert line.startswith(f"  clean used {8 - n_faulty}/{8 - n_faulty} (right {8 - n_faulty}); ok but wrong 0; "
+                           f"faulty used 0/{n_faulty};")

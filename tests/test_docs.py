@@ -157,7 +157,7 @@ def test_every_page_of_the_docs_folder_is_in_the_nav():
     assert pages == in_nav or pages - in_nav == set(), sorted(pages - in_nav)
 
 
-@pytest.mark.parametrize("page", ["accuracy.md", "coverage.md", "robustness.md"])
+@pytest.mark.parametrize("page", ["accuracy.md", "coverage.md", "robustness.md", "rigs.md"])
 def test_each_validation_page_names_the_command_that_regenerates_it(page):
     text = (DOCS / page).read_text(encoding="utf-8")
     note = text.split('!!! note "Regenerate these numbers"', 1)
