@@ -111,10 +111,10 @@ def _page_texts(fig):
 def test_summary_page_counts_the_good_impacts_whose_peak_is_withheld(ds):
     withheld = ds.copy()
     ok = np.flatnonzero(np.asarray(withheld["status"].values).astype(str) == "ok")
-    notes = np.array([""] * withheld.sizes["impact"], dtype=object)
-    notes[ok[:2]] = "peak force between samples: ..."
-    notes[np.flatnonzero(np.asarray(withheld["status"].values).astype(str) != "ok")[:1]] = "ignored: not ok"
-    withheld["peak_note"] = ("impact", notes)
+    status = np.array(["ok"] * withheld.sizes["impact"], dtype=object)
+    status[ok[:2]] = "withheld"
+    status[np.flatnonzero(np.asarray(withheld["status"].values).astype(str) != "ok")[:1]] = "withheld"  # not ok
+    withheld["peak_status"] = ("impact", status)
     text = " ".join(_page_texts(report._summary_page(withheld, report._session_info(withheld))))
     assert re.search(r"The\s+peak\s+force\s+of\s+2\s+good\s+impacts\s+is\s+withheld", text), text
     plain = " ".join(_page_texts(report._summary_page(ds, report._session_info(ds))))
