@@ -280,9 +280,7 @@ def test_session_kcal_outlier_is_its_kind():
                for k, k_cal in enumerate([180.0, 181.0, 179.5, 180.5, 240.0])]
     apply_calibration_check(results)
     assert [_kinds(r.problems) for r in results] == [[]] * 4 + [[ProblemKind.KCAL_OUTLIER]]
-    # kCAL and the peak withheld, the impact still in the fit (TC and COR stand)
-    assert results[4].status == "ok" and results[4].kcal_status == "withheld"
-    assert results[4].withheld_note.startswith("kcal: " + results[4].problems[0].message)
+    assert results[4].status == "excluded" and results[4].reason == results[4].problems[0].message
 
 
 # ----------------------------------------------------------------------------- decisions test kinds, not text

@@ -95,8 +95,16 @@ def test_a_finding_may_widen_what_it_biases():
 
 
 def test_kcal_withheld_withholds_the_peak_in_newtons():
-    v = judge_quantities([_p(ProblemKind.KCAL_OUTLIER)], SMALL)
+    v = judge_quantities([_p(ProblemKind.IMPULSE_UNRESOLVED)], SMALL)
     assert not v.excluded and v.status["kcal"] == v.status["peak"] == "withheld"
+    v = judge_quantities([_p(ProblemKind.UNDERSHOOT_NOT_MEASURABLE, {"kcal": 0.03, "peak": 0.0})], SMALL)
+    assert not v.excluded and v.status["kcal"] == v.status["peak"] == "withheld"  # the peak in N is kCAL's
+
+
+def test_a_kcal_unlike_the_session_s_withholds_every_quantity():
+    # a symptom of a gate time off (COR too) or of a sample rate or gain unlike the session's (TC too)
+    v = judge_quantities([_p(ProblemKind.KCAL_OUTLIER)], SMALL)
+    assert v.excluded and not v.fault and set(v.status.values()) == {"withheld"}
 
 
 def test_an_estimated_effect_enters_the_budget_as_a_uniform_bound():
@@ -197,14 +205,20 @@ def test_ringing_effects_bound_the_shift_of_a_triangle_s_end():
 # ------------------------------------------------------------------ the session's checks
 
 
-def test_a_kcal_outlier_keeps_the_impact_in_the_fit_with_its_kcal_withheld():
+def test_a_kcal_outlier_excludes_that_impact_and_no_other():
     cols = {"status": ["ok", "ok"], "reason": ["", ""], "reason_code": ["", ""]}
     out = apply_session_flags(cols, ["", "calibration factor 300 N/V is 40 % from the session median"],
                               ProblemKind.KCAL_OUTLIER)
-    assert out["status"] == ["ok", "ok"]
-    assert out["kcal_status"] == ["ok", "withheld"] and out["peak_status"] == ["ok", "withheld"]
-    assert out["contact_time_status"] == ["ok", "ok"]
-    assert out["reason_code"][1] == "kcal_outlier" and "kcal: calibration factor" in out["withheld_note"][1]
+    assert out["status"] == ["ok", "excluded"]
+    assert out["kcal_status"] == ["ok", "withheld"] and out["contact_time_status"] == ["ok", "withheld"]
+    assert out["reason_code"] == ["", "kcal_outlier"] and out["reason"][1].startswith("calibration factor 300")
+
+
+def test_a_session_finding_that_withholds_only_kcal_keeps_the_impact_in_the_fit():
+    out = apply_session_flags({"status": ["ok"], "reason": [""]}, ["impulse not known: a spike"],
+                              ProblemKind.IMPULSE_UNRESOLVED)
+    assert out["status"] == ["ok"] and out["kcal_status"] == out["peak_status"] == ["withheld"]
+    assert out["withheld_note"] == ["kcal: impulse not known: a spike; peak: impulse not known: a spike"]
 
 
 def test_a_time_constant_outlier_excludes_the_impact():

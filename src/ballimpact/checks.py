@@ -245,9 +245,11 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           test="tests/test_processing.py -k bounds"),
     Check(ProblemKind.NO_CALIBRATION, "no calibration", "a finite positive voltage integral over the contact",
           (_TC, _K, _P, _C), fault=True, test="tests/test_calibration.py"),
-    Check(ProblemKind.KCAL_OUT_OF_RANGE, "kCAL out of range", "kCAL against plate.kcal_range_N_per_V", (_K, _P),
-          test="tests/test_processing.py -k kcal_range"),
-    Check(ProblemKind.KCAL_OUTLIER, "kCAL outlier", "kCAL against the session's median", (_K, _P),
+    # a kCAL unlike the plate's is a symptom: a gate time off (then COR too), a trace's sample rate or gain unlike
+    # the session's (then TC too); which one the impact cannot tell, so it withholds every quantity
+    Check(ProblemKind.KCAL_OUT_OF_RANGE, "kCAL out of range", "kCAL against plate.kcal_range_N_per_V",
+          (_TC, _K, _P, _C), test="tests/test_processing.py -k kcal_range"),
+    Check(ProblemKind.KCAL_OUTLIER, "kCAL outlier", "kCAL against the session's median", (_TC, _K, _P, _C),
           thresholds=(_t("session_checks", "KCAL_MAX_ROBUST_Z", "-", "robust z-score"),
                       _t("session_checks", "KCAL_MAX_RELATIVE", "-", "relative deviation")),
           test="tests/test_verdicts.py -k outlier"),
