@@ -938,8 +938,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         A stated resonance (frequency [Hz], damping ratio [-]), e.g. from a tap
         test (session.yaml ``plate.resonance_hz``, ``plate.damping_ratio``):
         undone exactly on every trace, neither identified nor refined; where the
-        force so undone fails the undone force's checks, the resonance is
-        identified from the trace instead, as without it.
+        force so undone fails the undone force's checks, the trace is
+        conditioned as without it (its plate identified where it rings).
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the
@@ -1045,9 +1045,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
             undone, stated = _stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate)
         if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
-            identified = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s)
-            if plate is None or (identified is not None and not isinstance(identified, str)):
-                undone = identified
+            undone = _plate_undone(it.x, fs, it.fit, contact, problems, t0_s)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
         elif undone is not None:
