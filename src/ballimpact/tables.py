@@ -197,6 +197,11 @@ CSV_FORMATS = {
     **dict.fromkeys(("contact_time_rmse_pct", "cor_rmse_pct"), "%.3f"),
     **dict.fromkeys(("itf_rebound_pred_cm", "itf_rebound_pred_cm_lo", "itf_rebound_pred_cm_hi", "itf_rebound_cm"),
                     "%.1f"),
+    # v1.2 standard uncertainties: to the last digit their quantity is written to, and one more
+    "contact_time_u_ms": "%.4f",
+    "kcal_u_N_per_V": "%.3f",
+    "peak_force_u_N": "%.2f",
+    "cor_u": "%.5f",
 }
 #: Any other number column: 6 significant digits.
 CSV_DEFAULT_FORMAT = "%.6g"
