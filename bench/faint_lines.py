@@ -17,9 +17,7 @@ import single_thread  # noqa: F401  (first: one BLAS thread per process, before 
 import argparse
 import math
 import multiprocessing as mp
-import shutil
 import sys
-import tempfile
 from collections import defaultdict
 from pathlib import Path
 
@@ -37,11 +35,7 @@ def run_one(args):
     """Make, process and judge faint case (seed, index)."""
     seed, index = args
     tr = faint.draw_faint(seed, index)
-    scratch = Path(tempfile.mkdtemp(prefix="faint-"))
-    try:
-        result, j = zoo.run_trace(tr, scratch)
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+    result, j = zoo.run_trace(tr)  # in a temporary folder of its own, removed afterwards
     tol = dict(TOL, peak=zoo.TOL_PEAK_SPIKE if tr.truth.peak_is_spike else zoo.TOL_PEAK)
     out = {"id": f"{seed}:{index}", "label": tr.label, "line_hz": float(tr.label.split("line ")[1].split(" Hz")[0]),
            "codes": result.reason_code, "status": result.status}
