@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
+
+from .conditioning import PLATE_SLOPE_S
+from .problems import ProblemKind
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "end_slopes", "line_amplitude_after", "ringing_effects",
            "ringing_after", "finding_effects"]
 
-#: The force's slope at an end is read over this long inside it [s].
-END_SLOPE_S = 0.1e-3
+#: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
+END_SLOPE_S = PLATE_SLOPE_S
 #: A line's amplitude at the contact's end is fitted over this long after it [s].
 LINE_FIT_S = 1.0e-3
 #: What stands after the contact's end is taken for ringing when a damped sinusoid and a level explain this long of
@@ -229,10 +233,6 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     -------
     ballimpact.problems.Problem
     """
-    from dataclasses import replace
-
-    from .problems import ProblemKind
-
     def line_effects(p):
         x = np.asarray(voltage_V, dtype=float)
         i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
