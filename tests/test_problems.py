@@ -56,9 +56,9 @@ def test_problem_rejects_bad_fields(kind, message, error, match):
         Problem(kind, message)
 
 
-def test_exclude_takes_a_problem_not_text():
+def test_find_takes_a_problem_not_text():
     with pytest.raises(TypeError, match="must be a ballimpact.problems.Problem"):
-        ImpactResult(impact_id="x", ball="b").exclude("no contact found")
+        ImpactResult(impact_id="x", ball="b").find("no contact found")
 
 
 def test_has_kind_takes_one_kind_or_several():

@@ -160,8 +160,8 @@ def test_kcal_spread_of_a_few_percent_is_not_flagged():
 
 
 def test_excluded_result_row_has_reason():
-    r = ImpactResult(impact_id="x", ball="b").exclude(Problem(ProblemKind.NO_CONTACT, "no contact found"))
-    r.exclude(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
+    r = ImpactResult(impact_id="x", ball="b").find(Problem(ProblemKind.NO_CONTACT, "no contact found"))
+    r.find(Problem(ProblemKind.CLIPPING, "clipping at the ADC rails"))
     assert [p.kind for p in r.problems] == [ProblemKind.NO_CONTACT, ProblemKind.CLIPPING]
     assert r.row()["status"] == "excluded"
     assert r.row()["reason"] == "no contact found; clipping at the ADC rails"

@@ -84,8 +84,8 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from .calibration import force_top
-from .contact import (ContactResult, ContactSearch, contact_threshold, detect_contact, finite_median, quantization_step,
-                      robust_noise)
+from .contact import (ContactResult, ContactSearch, contact_threshold, detect_contact, end_standard_uncertainties,
+                      finite_median, quantization_step, robust_noise)
 from .model import BUCKLING_TIME_S
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
                     lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_end, undone_noise_gain,
@@ -1418,11 +1418,9 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
         return None
-    if contact.n_impacts > 1 or {"contact_at_trace_start", "contact_at_trace_end"} & set(contact.flags):
-        return None  # excluded whatever the plate
+    if not _plate_can_be_undone(x, fs, contact, t0_s):
+        return None
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    if e_u + PLATE_ID_AFTER_S * fs > x.size - 1:
-        return None  # the inverse's backward pass starts from rest at the record's end: the ringing must be over
     a = max(int(math.ceil(s_u)) + 2, 0)
     b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
     ra = max(int(s_u - PLATE_REFINE_S[0] * fs), 0)
@@ -1453,6 +1451,15 @@ def _plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, problems, t0
     return y, c, plate, cutoff
 
 
+def _plate_can_be_undone(x, fs, contact: ContactResult, t0_s) -> bool:
+    """Whether a plate's resonance can be undone on this contact: one contact, inside the record, that ends
+    PLATE_ID_AFTER_S before the record does (the inverse's backward pass starts from rest at the record's end: the
+    ringing must be over). A cut or doubled contact is excluded whatever the plate."""
+    if contact.n_impacts > 1 or {"contact_at_trace_start", "contact_at_trace_end"} & set(contact.flags):
+        return False
+    return (contact.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs <= x.size - 1
+
+
 def _stated_plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s, plate: tuple):
     """The force with a stated resonance (fn [Hz], zeta [-]) undone, as :func:`_plate_undone` returns it (force,
     contact, resonance, cutoff [Hz]; why it was refused, str; None where the contact is cut or doubled, or the
@@ -1460,11 +1467,9 @@ def _stated_plate_undone(x, fs, fit: _BaselineFit, contact: ContactResult, t0_s,
     neither identified nor refined; the undone force passes the same checks as an identified one
     (:func:`_undone_candidates`), except that a low-pass that may hide the peak withholds the peak alone (a
     PEAK_ON_RINGING problem) instead of refusing the force whose ends and impulse every other check passed."""
-    if contact.n_impacts > 1 or {"contact_at_trace_start", "contact_at_trace_end"} & set(contact.flags):
+    if not _plate_can_be_undone(x, fs, contact, t0_s):
         return None, []
-    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
-    if e_u + PLATE_ID_AFTER_S * fs > x.size - 1:
-        return None, []
+    s_u = (contact.start_s - t0_s) * fs
     resonance = stated_resonance(plate[0], plate[1], fs)
     peak_problems = []
     hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, resonance, peak_problems=peak_problems)
@@ -2317,9 +2322,7 @@ def _hinge_problems(contact: ContactResult) -> list:
     0.1-0.5 % of the peak (bench/ideal_plate_map.py), the line through the last samples met zero up to 1.8 % of TC
     late, and was ok."""
     tc = contact.contact_time_s
-    ses = {"start": 0.0 if "start_jump" in contact.flags else contact.start_se_s,
-           "end": contact.curve_end_se_s if "end_curve" in contact.flags
-           else 0.0 if "end_jump" in contact.flags else contact.end_se_s}
+    ses = dict(zip(("start", "end"), end_standard_uncertainties(contact)))
     if any(math.isnan(v) for v in ses.values()) or not tc > 0:
         return []  # no fit to judge (the other checks judge such an end)
     spread = END_SE_COVERAGE * math.hypot(ses["start"], ses["end"])

@@ -64,6 +64,7 @@ __all__ = [
     "contact_threshold",
     "contact_samples",
     "end_from_curve",
+    "end_standard_uncertainties",
     "MAD_TO_SIGMA",
 ]
 
@@ -846,6 +847,32 @@ def _main_run(above: np.ndarray, peak_index: int, merge_gap: int):
     starts, ends = _merge_runs(*_runs(above), merge_gap)
     k = int(np.searchsorted(starts, peak_index, side="right")) - 1
     return starts, ends, k
+
+
+def end_standard_uncertainties(contact: ContactResult, jump_s: float = 0.0) -> tuple[float, float]:
+    """Standard uncertainties of the contact's start and end from their fits [s].
+
+    Each end's hinge's (``start_se_s``, ``end_se_s``); the force's curve's where the end came from it
+    (``end_curve``: ``curve_end_se_s``); ``jump_s`` where the force jumps from zero between two samples
+    (``start_jump``, ``end_jump``). NaN where no fit was made.
+
+    Parameters
+    ----------
+    contact : ContactResult
+        The contact (found with ``curve=True`` for the fits' uncertainties).
+    jump_s : float
+        What an end at a jump counts [s]: 0 where its half sample is judged apart, 1 / (fs sqrt 12) for a
+        uniform half sample.
+
+    Returns
+    -------
+    (float, float)
+        The start's and the end's standard uncertainty [s].
+    """
+    start = jump_s if "start_jump" in contact.flags else contact.start_se_s
+    if "end_curve" in contact.flags:
+        return start, contact.curve_end_se_s
+    return start, jump_s if "end_jump" in contact.flags else contact.end_se_s
 
 
 def detect_contact(voltage_V, sample_rate_hz: float, *, t0_s: float = 0.0, noise_rms_V: float | None = None,

@@ -23,7 +23,7 @@ from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
 from .conditioning import condition_voltage
 from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_samples, detect_clipping,
-                      detect_saturation)
+                      detect_saturation, end_standard_uncertainties)
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
@@ -150,9 +150,6 @@ class ImpactResult:
         self.problems.append(problem)
         return self.judge()
 
-    #: The name of :meth:`find` before per-quantity verdicts: a finding excludes only where it must.
-    exclude = find
-
     def judge(self) -> "ImpactResult":
         """Statuses, uncertainties, reason and codes from the findings so far and the random uncertainties."""
         u_random = {q: self.u_random.get(q, 0.0) for q in QUANTITIES}
@@ -267,7 +264,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     contact = _contact(res, t, raw, cond, meta)
     if contact is not None:
         _calibrated(res, row, t, cond, contact, meta)
-    return res.settle(_random_uncertainties(res, row, meta, cond))
+    return res.settle(_random_uncertainties(res, row, meta, cond, float(t[0])))
 
 
 #: A problem of the peak alone withholds the peak only where the stated band limit rounds the contact's jump over
@@ -589,8 +586,7 @@ def _end_standard_uncertainties(cond, fs: float, t0_s: float) -> tuple[float, fl
     end came from it), a uniform half sample where the force jumps, else the noise over the force's slope there."""
     c = cond.contact
     half = 1.0 / (fs * math.sqrt(12.0))
-    fitted = {"start": half if "start_jump" in c.flags else c.start_se_s,
-              "end": c.curve_end_se_s if "end_curve" in c.flags else half if "end_jump" in c.flags else c.end_se_s}
+    fitted = dict(zip(("start", "end"), end_standard_uncertainties(c, jump_s=half)))
     slopes = dict(zip(("start", "end"), end_slopes(cond.voltage_V, fs, (c.start_s - t0_s) * fs,
                                                    (c.end_s - t0_s) * fs)))
     out = []
@@ -602,8 +598,9 @@ def _end_standard_uncertainties(cond, fs: float, t0_s: float) -> tuple[float, fl
     return out[0], out[1]
 
 
-def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None) -> dict:
-    """The impact's random uncertainties for :func:`ballimpact.verdicts.random_uncertainties` [-]."""
+def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0_s: float = 0.0) -> dict:
+    """The impact's random uncertainties for :func:`ballimpact.verdicts.random_uncertainties` [-] (``t0_s``: the
+    trace's first sample [s])."""
     u_vin, u_vout = gate_uncertainties(row.gate_in_2_s - row.gate_in_1_s, row.gate_out_1_s - row.gate_out_2_s,
                                        meta.gate_resolution_s)
     nan = {q: math.nan for q in QUANTITIES}
@@ -611,7 +608,6 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None) ->
     if cond is None or not cond.contact.found or res.voltage_V.size < 2:
         return nan
     fs, c = res.sample_rate_hz, cond.contact
-    t0_s = float(res.raw_time_s[0] + c.start_s) if res.raw_time_s.size else 0.0
     start_se, end_se = _end_standard_uncertainties(cond, fs, t0_s)
     kappa_se = cond.baseline_coefficients.get("kappa_se_per_s", 0.0) if cond.tau_source == "estimated" else 0.0
     return random_uncertainties(

@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 
-from .checks import check_of
+from .checks import QUANTITIES
 from .problems import Problem, ProblemKind
+from .verdicts import judge_quantities
 
 __all__ = [
     "KCAL_MAX_ROBUST_Z", "KCAL_MAX_RELATIVE", "TAU_MAX_Z", "TAU_MAX_IMPULSE", "VERDICT_COLUMNS",
@@ -83,9 +84,10 @@ VERDICT_COLUMNS = ("status", "reason", "reason_code", "withheld_note", "peak_not
 def apply_session_flags(columns: dict, flags: list[str], kind: ProblemKind) -> dict:
     """Per-impact verdict columns with a session check's findings applied, as :meth:`ImpactResult.find` would.
 
-    Each flagged impact withholds the quantities the check of ``kind`` can bias (ballimpact.checks); it is
-    excluded, its flag appended to ``reason``, when that withholds TC or COR, and otherwise keeps ``ok`` with the
-    flag in ``withheld_note`` (and ``peak_note`` for the peak).
+    Each flagged impact withholds what the finding withholds (:func:`ballimpact.verdicts.judge_quantities`: the
+    quantities the check of ``kind`` can bias); it is excluded, its flag appended to ``reason``, when that
+    withholds TC or COR, and otherwise keeps ``ok`` with the flag in ``withheld_note`` (and ``peak_note`` for the
+    peak).
 
     Parameters
     ----------
@@ -106,30 +108,31 @@ def apply_session_flags(columns: dict, flags: list[str], kind: ProblemKind) -> d
     for c in VERDICT_COLUMNS:
         if c.endswith("_status"):
             out[c] = [v or "ok" for v in out[c]]
-    check = check_of(kind)
+    code = kind.value
     for k, flag in enumerate(flags):
         if not flag:
             continue
-        for q in check.biases:
+        v = judge_quantities([Problem(kind, flag)], dict.fromkeys(QUANTITIES, 0.0))  # what the finding withholds
+        withheld = [q for q in QUANTITIES if v.status[q] != "ok"]
+        for q in withheld:
             out[f"{q}_status"][k] = "withheld"
-        out["reason_code"][k] = ";".join(dict.fromkeys([c for c in out["reason_code"][k].split(";") if c]
-                                                       + [check.code]))
-        if check.fault or out["contact_time_status"][k] != "ok" or out["cor_status"][k] != "ok":
+        out["reason_code"][k] = ";".join(dict.fromkeys([c for c in out["reason_code"][k].split(";") if c] + [code]))
+        if v.excluded or out["contact_time_status"][k] != "ok" or out["cor_status"][k] != "ok":
             out["status"][k] = "excluded"
             out["reason"][k] = f"{out['reason'][k]}; {flag}" if out["reason"][k] else flag
             out["withheld_note"][k] = out["peak_note"][k] = ""
         else:
-            note = "; ".join(f"{q}: {flag}" for q in check.biases)
+            note = "; ".join(f"{q}: {v.why[q]}" for q in withheld)
             out["withheld_note"][k] = f"{out['withheld_note'][k]}; {note}" if out["withheld_note"][k] else note
-            out["peak_note"][k] = flag if "peak" in check.biases else out["peak_note"][k]
+            out["peak_note"][k] = v.why["peak"] if "peak" in withheld else out["peak_note"][k]
     return out
 
 
-def _exclude_flagged_results(results: list, flags: list[str], kind: ProblemKind) -> None:
-    """Exclude, in place, every result whose flag is not empty, for a problem of ``kind`` with the flag's message."""
+def _find_flagged_results(results: list, flags: list[str], kind: ProblemKind) -> None:
+    """Record, in place, a finding of ``kind`` with the flag's message on every result whose flag is not empty."""
     for r, flag in zip(results, flags):
         if flag:
-            r.exclude(Problem(kind, flag))
+            r.find(Problem(kind, flag))
 
 
 def calibration_outlier_columns(columns: dict, kcal_N_per_V):
@@ -262,7 +265,7 @@ def apply_time_constant_check(results: list) -> float:
     flags, median = flag_time_constant_outliers(tau, [r.tau_se_s for r in results],
                                                 [r.contact_time_ms for r in results],
                                                 [r.status == "ok" for r in results])
-    _exclude_flagged_results(results, flags, ProblemKind.TIME_CONSTANT_OUTLIER)
+    _find_flagged_results(results, flags, ProblemKind.TIME_CONSTANT_OUTLIER)
     return median
 
 
@@ -271,5 +274,5 @@ def apply_calibration_check(results: list) -> tuple[float, float]:
     spread) [N/V]."""
     flags, median, spread = flag_calibration_outliers([r.kcal_N_per_V for r in results],
                                                       [r.status == "ok" and r.kcal_status == "ok" for r in results])
-    _exclude_flagged_results(results, flags, ProblemKind.KCAL_OUTLIER)
+    _find_flagged_results(results, flags, ProblemKind.KCAL_OUTLIER)
     return median, spread
