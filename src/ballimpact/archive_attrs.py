@@ -70,6 +70,15 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
         "1", "where the time constant came from: given (plate.time_constant_s), estimated or none"),
     "plate_resonance_hz": ("Hz", "plate resonance identified from its ringing and undone (NaN when none was)"),
     "plate_damping_ratio": ("1", "damping ratio of the plate resonance undone (NaN when none was)"),
+    # v1.2: the session's rig (ballimpact.rig), one value per quantity of ballimpact.rig.RIG_QUANTITIES
+    "rig_quantity": ("1", "a quantity of the session's rig (ballimpact.rig.RIG_QUANTITIES)"),
+    "rig_value": ("1", "the rig quantity's value for the whole session, in rig_unit (NaN: not known)"),
+    "rig_low": ("1", "lower end of its 95 % interval, in rig_unit (the value itself when stated)"),
+    "rig_high": ("1", "upper end of its 95 % interval, in rig_unit (the value itself when stated)"),
+    "rig_source": ("1", "stated (session.yaml), identified (pooled over the session's impacts) or none"),
+    "rig_n_impacts": ("1", "impacts the identification rests on"),
+    "rig_unit": ("1", "unit of rig_value, rig_low and rig_high"),
+    "rig_note": ("1", "why a rig quantity is not known, or what the traces gave beside a stated value"),
     "model_agreement_fraction": (
         "1",
         "share of the contact after 0.2 ms where the fitted model force is within 10 % of the measured peak",

@@ -363,7 +363,9 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds.attrs["time_constant_median_s"] = tau_median
-    ds = mark_fit_outliers(ds, read_session(session_dir).meta.balls)
+    meta = read_session(session_dir).meta
+    ds = mark_fit_outliers(ds, meta.balls)
+    ds = ds.merge(_session_rig_variables(ds, meta))
     ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)
     table = archive.impacts_table(ds)
@@ -372,6 +374,24 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     n_excluded = int((table["status"] == "excluded").sum())
     logger.info("collected %d impacts from %d chunks: %d ok, %d excluded",
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
+
+
+def _session_rig_variables(ds, meta):
+    """The session's rig identified from all its impacts (:func:`ballimpact.rig_archive.session_rig`), as archive
+    variables; each warning (a stated key the traces disagree with) logged."""
+    import warnings
+
+    from .rig_archive import rig_variables, session_rig
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rig = session_rig(ds, meta)
+    for w in caught:
+        logger.warning("%s", w.message)
+    for name, est in rig.estimates.items():
+        if est.source == "identified" or est.note:
+            logger.info("rig %s: %.6g [%.6g, %.6g] %s %s", name, est.value, est.low, est.high, est.source, est.note)
+    return rig_variables(rig)
 
 
 @contextlib.contextmanager

@@ -1,0 +1,119 @@
+"""The session's rig between the impacts dataset and the archive: gathered, identified, stored and read back."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import xarray as xr
+
+from .rig import RIG_QUANTITIES, Rig, RigEstimate, identify_rig
+
+__all__ = ["RIG_DIM", "session_rig", "rig_variables", "read_rig", "rig_warnings"]
+
+RIG_DIM = "rig_quantity"  #: the archive's dimension of the rig's quantities (RIG_QUANTITIES, in order)
+
+
+def _texts(ds: xr.Dataset, name: str) -> list[str]:
+    return [str(v) for v in ds[name].values] if name in ds else [""] * ds.sizes["impact"]
+
+
+def _floats(ds: xr.Dataset, name: str) -> np.ndarray:
+    return np.asarray(ds[name].values, dtype=float) if name in ds else np.full(ds.sizes["impact"], np.nan)
+
+
+def session_rig(ds: xr.Dataset, meta) -> Rig:
+    """Identify the rig of a session from its impacts dataset (``work/impacts.nc``) and its session.yaml.
+
+    The impacts whose trace was read and whose contact was found, with no fault excluding them, lend their free
+    ringing, hum, noise and time constant; those whose kCAL is ok lend their kCAL (:func:`ballimpact.rig.identify_rig`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The per-impact dataset (:func:`ballimpact.archive.impacts_dataset`, chunks joined).
+    meta : ballimpact.session.SessionMeta
+        The session's metadata (its stated keys).
+
+    Returns
+    -------
+    Rig
+    """
+    from .checks import check_of
+    from .problems import ProblemKind
+
+    codes = _texts(ds, "reason_code")
+    status = _texts(ds, "status")
+    fault_codes = {k.value for k in ProblemKind if check_of(k).fault}
+    usable = [s != "excluded" or not (set(c.split(";")) & fault_codes) for s, c in zip(status, codes)]
+    usable = np.asarray(usable) & np.isfinite(_floats(ds, "contact_time_ms"))
+    impacts = {
+        "impact_id": [str(v) for v in ds["impact_id"].values],
+        "raw_time_s": list(np.asarray(ds["raw_time_s"].values, dtype=float)),
+        "raw_voltage_V": list(np.asarray(ds["raw_voltage_V"].values, dtype=float)),
+        "contact_time_ms": _floats(ds, "contact_time_ms"), "noise_rms_V": _floats(ds, "noise_rms_V"),
+        "hum_amplitude_V": _floats(ds, "hum_amplitude_V"), "mains_hz": _floats(ds, "mains_frequency_hz"),
+        "mains_source": _texts(ds, "mains_source"), "tau_s": _floats(ds, "amplifier_time_constant_s"),
+        "tau_se_s": _floats(ds, "amplifier_time_constant_se_s"),
+        "tau_source": _texts(ds, "amplifier_time_constant_source"),
+        "kcal_N_per_V": _floats(ds, "kcal_N_per_V"), "sample_rate_hz": _floats(ds, "sample_rate_hz"),
+        "usable": usable,
+        "kcal_ok": np.array([s == "ok" for s in _texts(ds, "kcal_status")]),
+    }
+    return identify_rig(impacts, meta.sample_rate_hz, stated_plate=meta.plate_resonance,
+                        stated_time_constant_s=meta.time_constant_s, stated_mains_hz=meta.mains_hz,
+                        bandwidth_hz=meta.bandwidth_hz)
+
+
+def rig_variables(rig: Rig) -> xr.Dataset:
+    """The rig as archive variables on the ``rig_quantity`` dimension (value, interval, source, impacts, note).
+
+    The plate fit's detection statistic and the warnings go into attributes of ``rig_value``.
+    """
+    names = list(RIG_QUANTITIES)
+    est = [rig[n] for n in names]
+    text = lambda values: np.array(values, dtype=object)  # noqa: E731
+    ds = xr.Dataset(
+        {
+            "rig_value": (RIG_DIM, np.array([e.value for e in est], dtype=float)),
+            "rig_low": (RIG_DIM, np.array([e.low for e in est], dtype=float)),
+            "rig_high": (RIG_DIM, np.array([e.high for e in est], dtype=float)),
+            "rig_source": (RIG_DIM, text([e.source for e in est])),
+            "rig_n_impacts": (RIG_DIM, np.array([e.n_impacts for e in est], dtype=np.int32)),
+            "rig_unit": (RIG_DIM, text([RIG_QUANTITIES[n][0] for n in names])),
+            "rig_note": (RIG_DIM, text([e.note for e in est])),
+        },
+        coords={RIG_DIM: text(names)},
+    )
+    fit = rig.plate_fit
+    ds["rig_value"].attrs.update({
+        "plate_detection_z": float(fit.detection_z) if fit is not None else math.nan,
+        "plate_ringing_fraction": float(fit.amplitude_fraction) if fit is not None else math.nan,
+        "plate_impacts": ",".join(_segment_ids(fit)),
+        "rig_warnings": json.dumps(list(rig.warnings)),
+    })
+    return ds
+
+
+def _segment_ids(fit) -> list[str]:
+    return [] if fit is None else list(fit.impact_ids)
+
+
+def read_rig(ds: xr.Dataset) -> dict:
+    """The rig stored by :func:`rig_variables`: name -> RigEstimate; empty for an archive without one."""
+    if "rig_value" not in ds:
+        return {}
+    out = {}
+    for i, name in enumerate(str(n) for n in ds[RIG_DIM].values):
+        out[name] = RigEstimate(float(ds["rig_value"].values[i]), float(ds["rig_low"].values[i]),
+                                float(ds["rig_high"].values[i]), str(ds["rig_source"].values[i]),
+                                int(ds["rig_n_impacts"].values[i]), str(ds["rig_note"].values[i]))
+    return out
+
+
+def rig_warnings(ds: xr.Dataset) -> list[str]:
+    """The warnings of the rig's identification stored in the archive (stated keys the traces disagree with)."""
+    if "rig_value" not in ds:
+        return []
+    return list(json.loads(ds["rig_value"].attrs.get("rig_warnings", "[]")))
