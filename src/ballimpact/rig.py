@@ -264,15 +264,16 @@ def fit_free_ringing(segments, sample_rate_hz: float, *, mains_hz: float | None 
     res = least_squares(residuals, p0, bounds=bounds, x_scale=[0.05, 0.5], method="trf")
     if not res.success and res.status <= 0:
         raise RuntimeError(f"plate resonance fit to the free ringing failed: {res.message}")
-    fit_u = _jacobian_uncertainties(res, pooled.mask.sum())
-    jack_u = _jackknife_uncertainties(residuals, res.x, bounds, len(segments))
-    fn, zeta = math.exp(res.x[0]), math.exp(res.x[1])
-    u_log = np.maximum(fit_u, jack_u)
     chi0, chi1 = float(np.sum(pooled.y ** 2)), float(np.sum(res.fun ** 2))
     k = 2 * len(segments) + 2
+    z = (chi0 - chi1 - k) / math.sqrt(2 * k)
+    u_log = _jacobian_uncertainties(res, pooled.mask.sum())
+    if z > DETECT_Z:  # the jackknife's refits only where there is a resonance to report
+        u_log = np.maximum(u_log, _jackknife_uncertainties(residuals, res.x, bounds, len(segments)))
+    fn, zeta = math.exp(res.x[0]), math.exp(res.x[1])
     _, amps = pooled.solve(fn, zeta)  # [V]: the columns carry the weight the scaled samples do
     fraction = float(np.median([math.hypot(*a) / s.peak_V for a, s in zip(amps, segments)]))
-    return PlateFit(fn, zeta, fn * float(u_log[0]), zeta * float(u_log[1]), (chi0 - chi1 - k) / math.sqrt(2 * k),
+    return PlateFit(fn, zeta, fn * float(u_log[0]), zeta * float(u_log[1]), z,
                     len(segments), fraction, amps, tuple(s.impact_id for s in segments), res)
 
 
