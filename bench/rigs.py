@@ -191,6 +191,33 @@ def score_curves(parameters: pd.DataFrame, rig: rig_zoo.Rig) -> list[dict]:
     return rows
 
 
+def score_rig(impacts_nc: Path, rig: rig_zoo.Rig) -> dict:
+    """The session's rig as the workflow identified it (ballimpact.rig) against the truth: per quantity with a
+    true value, (source, value, low, high, truth, inside the interval); the plate's resonance and damping ratio
+    (an ideal plate or one above half the sample rate: truth NaN, nothing should be identified) and the
+    amplifier's time constant."""
+    from ballimpact import archive
+    from ballimpact.rig_archive import read_rig
+
+    with archive.open_dataset(impacts_nc) as ds:
+        est = read_rig(ds)
+    ringing = (rig.plate_hz is not None and rig.plate_hz < 0.45 * rig.sample_rate_hz
+               and (rig.antialias_hz is None or rig.plate_hz < rig.antialias_hz))
+    truth = {"plate_resonance_hz": rig.plate_hz if ringing else math.nan,
+             "plate_damping_ratio": rig.plate_zeta if ringing else math.nan, "time_constant_s": rig.tau_s}
+    out = {}
+    for name, true in truth.items():
+        e = est.get(name)
+        if e is None:
+            continue
+        if e.source == "stated":  # the session.yaml's value, rounded as a lab writes it
+            inside = math.isfinite(true) and abs(e.value / true - 1.0) < 1e-3
+        else:
+            inside = e.low <= true <= e.high if math.isfinite(true) else not math.isfinite(e.value)
+        out[name] = (e.source, e.value, e.low, e.high, true, bool(inside))
+    return out
+
+
 def run_rig(job) -> dict:
     """Draw, write, run and score rig (seed, index); a plain dict (a crash is a finding, kept as its message)."""
     seed, index, keep, use_snakemake, n_impacts = job
@@ -209,6 +236,7 @@ def run_rig(job) -> dict:
         truth = pd.DataFrame([t.row() for t in truth_list])
         record.update(score_impacts(pd.read_csv(out / "impacts.csv", dtype=str, keep_default_na=False), truth))
         record["curves"] = score_curves(pd.read_csv(out / "parameters.csv"), rig)
+        record["identified"] = score_rig(out / "work" / "impacts.nc", rig)
     except Exception as exc:  # noqa: BLE001  (a crash of the workflow is itself a result)
         record["error"] = f"{type(exc).__name__}: {exc}"
     finally:
@@ -247,6 +275,8 @@ def rig_block(r: dict) -> list[str]:
                      + ", ".join(f"{q} {n}" for q, n in Counter(q for _, q, _ in r["wrong"][SHOW:]).items()))
     lines += [f"    faulty used {i}: {f}" for i, f in r["faulty_used"]]
     lines.append("  curves 15-30 m/s: " + "; ".join(_curve_text(c, r["speeds"]) for c in r["curves"]))
+    lines.append("  rig: " + "; ".join(f"{n} {src} {v:.4g} [{lo:.4g}, {hi:.4g}] truth {t:.4g}{'' if ok else ' *'}"
+                                       for n, (src, v, lo, hi, t, ok) in r.get("identified", {}).items()))
     if r["used"] < r["clean"]:
         heads = Counter(_reason_head(x) for x in r["lost_reasons"])
         lines.append("  clean not used: " + ", ".join(f"{h} {n}" for h, n in heads.most_common(4)))
@@ -323,6 +353,24 @@ def lost_by_class(records: list[dict], k: int = 6) -> list[str]:
     return out
 
 
+def identification_table(records: list[dict]) -> list[str]:
+    """The rig's identification over the rigs: per quantity and source, how often the truth is inside the 95 %
+    interval (for a plate that cannot ring in the samples: how often nothing was identified)."""
+    rows = Counter()
+    for r in records:
+        for name, (src, _, _, _, true, ok) in r.get("identified", {}).items():
+            kind = "rings" if math.isfinite(true) else "cannot ring"
+            if name == "time_constant_s":
+                kind = "all"
+            rows[(name, kind, src, ok)] += 1
+    lines = ["| rig quantity | plate | source | rigs | truth inside the interval (or, cannot ring: none identified) |",
+             "| --- | --- | --- | --- | --- |"]
+    for name, kind, src in sorted({k[:3] for k in rows}):
+        good, bad = rows[(name, kind, src, True)], rows[(name, kind, src, False)]
+        lines.append(f"| {name} | {kind} | {src} | {good + bad} | {good} |")
+    return lines
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=12, help="number of rigs")
@@ -354,6 +402,8 @@ def main(argv=None) -> int:
     print("\n".join(by_factor(records)))
     print()
     print("\n".join(lost_by_class(records)))
+    print()
+    print("\n".join(identification_table(records)))
     return 0
 
 
