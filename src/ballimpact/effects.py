@@ -10,8 +10,9 @@ import numpy as np
 from .conditioning import PLATE_SLOPE_S
 from .problems import ProblemKind
 
-__all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "end_slopes", "line_amplitude_after", "ringing_effects",
-           "ringing_after", "finding_effects"]
+__all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
+           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after", "ringing_effects",
+           "ringing_after", "finding_effects", "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -25,6 +26,16 @@ RINGING_RESIDUAL = 1.5
 RINGING_LEVEL_SIGMA = 3.0
 #: ... and the line's frequency at or above this [Hz]
 RINGING_MIN_HZ = 500.0
+#: The signal this long before the contact's start is searched for where it departs from the noise ... [s]
+DEPARTURE_WINDOW_S = 0.5e-3
+#: ... a departure: a sample this many of the quiet signal's noise deviations from zero ... [-]
+DEPARTURE_SIGMA = 4.5
+#: ... reached from the start through samples beyond this many deviations ... [-]
+DEPARTURE_CHAIN_SIGMA = 3.0
+#: ... none further apart than this [s]; the samples this close to the start are not looked at (its sub-sample
+#: place, and the transient an undone plate leaves in the sample interval of a jump) [samples]
+DEPARTURE_GAP_S = 0.05e-3
+DEPARTURE_SKIP = 2
 #: damping rates tried for the sinusoid [1/s]
 _DECAY_RATES = (0.0, 250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0)
 
@@ -261,3 +272,56 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
             return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in effects]))
                                              for q in ("contact_time", "kcal", "peak")})
     return problem
+
+
+def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DEPARTURE_WINDOW_S,
+                           sigma: float = DEPARTURE_SIGMA, chain_sigma: float = DEPARTURE_CHAIN_SIGMA,
+                           gap_s: float = DEPARTURE_GAP_S) -> tuple[float, float]:
+    """How long before the contact's start the signal already departs from its noise [s], and that noise [V].
+
+    Before the force starts, the conditioned signal is noise. Signal standing out of it before the start found
+    is force or what the chain spread of it: a linear-phase anti-aliasing filter rings ahead of the force's jump
+    (Gibbs), over its half-length, and that ringing can hide a low foot of the force (the cloth's first
+    compression), so that the start is read at the jump, late by up to the foot's length. The start is then known
+    only to within the span from the earliest departure to the start found: a bound on its shift, whatever made
+    the departure. The departure is walked back from DEPARTURE_SKIP samples before the start through samples beyond ``chain_sigma`` noise
+    deviations, none more than ``gap_s`` apart; it counts when one of them stands beyond ``sigma``. The noise is
+    the quiet signal's before the window (its median absolute deviation), so an undone plate's amplified noise is
+    its own.
+
+    Parameters
+    ----------
+    x : array_like
+        The conditioned force signal (undone where a plate was) [V].
+    fs : float
+        Sample rate [Hz].
+    start_u : float
+        The contact's start in samples from ``x[0]`` [samples].
+
+    Returns
+    -------
+    (float, float)
+        The span from the earliest departure to the start [s] (0: none) and the quiet signal's noise [V]; (NaN,
+        NaN) when the record before the window is too short to tell the noise.
+    """
+    x = np.asarray(x, dtype=float)
+    n, gap = max(int(round(window_s * fs)), 2), max(int(round(gap_s * fs)), 1)
+    last = int(math.ceil(start_u)) - 1 - DEPARTURE_SKIP  # the last sample looked at
+    quiet = x[:max(last - n, 0)]
+    if quiet.size < 20 or last < 0:
+        return math.nan, math.nan
+    noise = 1.4826 * float(np.median(np.abs(quiet - np.median(quiet))))
+    if not noise > 0:
+        return math.nan, math.nan
+    z = np.abs(x[last - n + 1:last + 1]) / noise  # z[-1] is the last sample before the start
+    earliest, strong, since = None, False, 0
+    for k in range(z.size - 1, -1, -1):
+        if z[k] > chain_sigma:
+            earliest, strong, since = k, strong or z[k] > sigma, 0
+        else:
+            since += 1
+            if since > gap:
+                break
+    if earliest is None or not strong:
+        return 0.0, noise
+    return (start_u - (last - n + 1 + earliest)) / fs, noise

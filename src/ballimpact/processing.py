@@ -30,7 +30,7 @@ from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .effects import end_slopes, finding_effects
+from .effects import departure_before_start, end_slopes, finding_effects
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
@@ -564,12 +564,28 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
             problem = Problem(problem.kind, problem.message, data={**problem.data,
                                                                    "also_biases": ("contact_time", "kcal")})
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
+    if cond.plate is None:  # an undone plate's start is fitted through its chain, the low-pass's spread included
+        _departure_problem(res, cond, float(t[0]))
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
         res.find(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
                             f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}"))
     return contact
+
+
+def _departure_problem(res: ImpactResult, cond, t0_s: float) -> None:
+    """A finding, with its effect on TC, where the signal departs from its noise before the contact's start
+    (:func:`ballimpact.effects.departure_before_start`)."""
+    c = cond.contact
+    span, noise = departure_before_start(cond.voltage_V, res.sample_rate_hz, (c.start_s - t0_s) * res.sample_rate_hz)
+    if not (math.isfinite(span) and span > 0 and c.contact_time_s > 0):
+        return
+    res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                     f"contact start not known to better than {1e3 * span:.3g} ms: the signal departs from its "
+                     f"noise ({noise * 1e3:.2g} mV) that long before the start found (an anti-aliasing filter's "
+                     "ringing ahead of a jump, or a foot of the force)",
+                     data={"departure_s": span}, effects={"contact_time": span / c.contact_time_s}))
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:

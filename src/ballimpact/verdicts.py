@@ -79,6 +79,7 @@ def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -
     var = {q: float(u_random.get(q, math.nan)) ** 2 for q in QUANTITIES}
     why = {q: [] for q in QUANTITIES}
     used = []
+    contributed = {q: [] for q in QUANTITIES}  # (effect, code, message) of the findings in each budget
     fault = False
     for p in findings:
         check = check_of(p.kind)
@@ -92,6 +93,7 @@ def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -
             effect = float(p.effects.get(q, math.nan))
             if math.isfinite(effect):
                 var[q] += (abs(effect) / math.sqrt(3.0)) ** 2
+                contributed[q].append((abs(effect), check.code, p.message))
             else:
                 why[q].append(p.message)
                 used.append(check.code)
@@ -102,6 +104,10 @@ def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -
         if over and not why[q]:
             why[q].append(f"{q.replace('_', ' ')} uncertain: expanded uncertainty {COVERAGE * u[q]:.3g} above its "
                           f"tolerance {_tolerance(q, peak_is_spike):g}")
+            if contributed[q]:  # the largest estimated effect in the budget, named by its check
+                _, code, message = max(contributed[q])
+                why[q].append(message)
+                used.append(code)
         status[q] = "withheld" if why[q] else "ok"
     if status["kcal"] == "withheld" and status["peak"] == "ok":  # the peak in newtons is kCAL times volts
         status["peak"] = "withheld"
