@@ -264,3 +264,49 @@ def test_a_faint_plate_line_keeps_every_quantity(index):
     assert result.status == "ok", (trace.label, result.reason)
     assert all(o == "ok_right" for o in j.outcomes.values()), (trace.label, j.outcomes, j.errors,
                                                                   result.withheld_note)
+
+
+def _foot_and_jump(fs, *, foot_s=150e-6, foot_N=10.0, jump_N=400.0, tc=4e-3, pre_s=20e-3, noise=0.5):
+    """A force [N] on a 1 us grid resampled at fs: zero, a linear foot (the cloth) to foot_N, a jump to jump_N, a
+    half-sine over the rest of TC; white noise. The true start is at pre_s."""
+    t = np.arange(0.0, pre_s + 2 * tc, 1e-6)
+    u = t - pre_s
+    main = np.where((u >= foot_s) & (u <= tc), jump_N + 1000.0 * np.sin(np.pi * np.clip(u - foot_s, 0, None)
+                                                                      / (tc - foot_s)), 0.0)
+    force = np.where((u >= 0) & (u < foot_s), foot_N * u / foot_s, main)
+    return t, force
+
+
+def test_departure_before_start_bounds_a_foot_hidden_by_an_antialias_filter():
+    """A linear-phase FIR (scipy.signal.firwin) rings ahead of the jump: the start read at the jump is late by the
+    foot, and the departure's span covers it."""
+    from scipy.signal import firwin, lfilter
+
+    from ballimpact.effects import departure_before_start
+
+    fs = 70_000.0
+    t, force = _foot_and_jump(fs)
+    sampled = force[::int(round(1e6 / fs))][: int((t[-1]) * fs)]  # every ~14th us: about fs
+    fs = 1e6 / int(round(1e6 / fs))
+    taps = firwin(61, 0.4 * fs, fs=fs)
+    filtered = lfilter(taps, 1.0, sampled)[30:]  # the filter's delay of 30 samples removed: zero phase
+    x = filtered + np.random.default_rng(0).normal(0, 0.5, filtered.size)
+    true_start = 20e-3 * fs
+    jump_u = true_start + 150e-6 * fs  # where a start read at the jump would be
+    span, noise = departure_before_start(x, fs, jump_u)
+    assert_allclose(noise, 0.5, rtol=0.15)
+    assert span >= (jump_u - true_start) / fs  # the foot's 150 us covered
+    clean = sampled + np.random.default_rng(1).normal(0, 0.5, sampled.size)
+    span, _ = departure_before_start(clean, fs, true_start)  # no filter, start read at the foot: nothing before it
+    assert span == 0.0
+
+
+def test_a_quantity_withheld_by_its_budget_names_the_check_of_its_largest_effect():
+    small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001})
+    large = Problem(ProblemKind.CONTACT_END_UNDETERMINED, "signal before the start", effects={"contact_time": 0.03})
+    v = judge_quantities([small, large], SMALL)
+    assert v.status["contact_time"] == "withheld"
+    assert v.codes == ["contact_end_undetermined"]
+    assert "signal before the start" in v.why["contact_time"]
+    kept = judge_quantities([small], SMALL)
+    assert kept.status["contact_time"] == "ok" and kept.codes == []

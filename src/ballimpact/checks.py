@@ -207,8 +207,11 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           (_TC,),
           thresholds=(_t("conditioning", "END_SE_MAX_FRACTION", "of TC", "expanded uncertainty of the ends"),
                       _t("conditioning", "SPREAD_MAX_FRACTION", "of TC", "an end's spread"),
-                      _t("conditioning", "END_CHECK_SIGMA", "standard errors", "force standing after an end")),
-          test="tests/test_conditioning.py -k end"),
+                      _t("conditioning", "END_CHECK_SIGMA", "standard errors", "force standing after an end"),
+                      _t("effects", "DEPARTURE_SIGMA", "noise deviations", "signal before the start")),
+          test="tests/test_conditioning.py -k end",
+          effect="signal departing from its noise before the start (ballimpact.effects.departure_before_start): "
+                 "the span from the earliest departure to the start bounds the start's shift (TC)"),
     Check(ProblemKind.CONTACT_JUMP_UNRESOLVED, "contact jump unresolved",
           "half a sample at an end where the force jumps, against TC", (_TC,),
           thresholds=(_t("conditioning", "JUMP_MAX_FRACTION", "of TC", "half a sample at most this"),),
