@@ -302,7 +302,8 @@ def test_departure_before_start_bounds_a_foot_hidden_by_an_antialias_filter():
 
 
 def test_a_quantity_withheld_by_its_budget_names_the_check_of_its_largest_effect():
-    small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001})
+    small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001, "kcal": 0.001,
+                                                                       "peak": 0.001})
     large = Problem(ProblemKind.CONTACT_END_UNDETERMINED, "signal before the start", effects={"contact_time": 0.03})
     v = judge_quantities([small, large], SMALL)
     assert v.status["contact_time"] == "withheld"
