@@ -201,7 +201,7 @@ def score_rig(impacts_nc: Path, rig: rig_zoo.Rig) -> dict:
 
     with archive.open_dataset(impacts_nc) as ds:
         est = read_rig(ds)
-    ringing = (rig.plate_hz is not None and rig.plate_hz < 0.45 * rig.sample_rate_hz
+    ringing = (rig.plate_hz is not None and rig.plate_hz < 0.5 * rig.sample_rate_hz
                and (rig.antialias_hz is None or rig.plate_hz < rig.antialias_hz))
     truth = {"plate_resonance_hz": rig.plate_hz if ringing else math.nan,
              "plate_damping_ratio": rig.plate_zeta if ringing else math.nan, "time_constant_s": rig.tau_s}
@@ -211,7 +211,7 @@ def score_rig(impacts_nc: Path, rig: rig_zoo.Rig) -> dict:
         if e is None:
             continue
         if e.source == "stated":  # the session.yaml's value, rounded as a lab writes it
-            inside = math.isfinite(true) and abs(e.value / true - 1.0) < 1e-3
+            inside = math.isfinite(true) and abs(e.value / true - 1.0) < 5e-3
         else:
             inside = e.low <= true <= e.high if math.isfinite(true) else not math.isfinite(e.value)
         out[name] = (e.source, e.value, e.low, e.high, true, bool(inside))
