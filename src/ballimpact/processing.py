@@ -21,16 +21,16 @@ import numpy as np
 
 from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
-from .conditioning import condition_voltage
-from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_samples, detect_clipping,
-                      detect_saturation, end_standard_uncertainties)
+from .signal.conditioning import condition_voltage
+from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect_clipping, detect_saturation
+from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .effects import end_slopes, finding_effects
+from .signal.effects import end_slopes, finding_effects
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [

@@ -7,11 +7,19 @@ from dataclasses import replace
 
 import numpy as np
 
-from .conditioning import PLATE_SLOPE_S
-from .problems import ProblemKind
+from ..problems import ProblemKind
+from .end_checks import PLATE_SLOPE_S
 
-__all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "end_slopes", "line_amplitude_after", "ringing_effects",
-           "ringing_after", "finding_effects"]
+__all__ = [
+    "END_SLOPE_S",
+    "LINE_FIT_S",
+    "RINGING_AFTER_S",
+    "end_slopes",
+    "line_amplitude_after",
+    "ringing_effects",
+    "ringing_after",
+    "finding_effects",
+]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
