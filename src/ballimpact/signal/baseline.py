@@ -390,8 +390,8 @@ def _best_kappa(ne, kappa_given, use_post):
     if not _solve_kappa(ne, k)[0] <= rss[j]:
         k = float(grid[j])
     # the curvature from the analytic second derivative: a central difference of the residual (steps of 1e-3 of
-    # kappa) subtracts sums that agree to 1e-13 where the residual is flat, and came out up to 70 % high on zoo
-    # trace 0:52 (kappa 0.15 per s), its standard error as much too small
+    # kappa) subtracts sums that agree to 1e-13 where the residual is flat, and can come out tens of per cent high,
+    # kappa's standard error as much too small
     return k, _rss_slope(ne, k)[1]
 
 

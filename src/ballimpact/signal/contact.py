@@ -195,8 +195,7 @@ def contact_samples(time_s, values, start_s: float, end_s: float, *, include_end
         anywhere in the interval, uniformly, holds that value over half a
         sample on average, and the trapezium sum then covers it so; the line
         from the quiet sample covers 3/8 of a sample, a bias of 1/8 of a
-        sample times the jump (zoo traces at 20-25 kHz: kCAL +0.17 % on
-        average over the ok ones, up to +0.8 % on a noiseless 20 kHz trace).
+        sample times the jump (a few tenths of a per cent of kCAL at 20-25 kHz).
         The model's force jumps at 2 mm of compression (section 3.2.4 in
         Goodwill & Haake 2004).
 
@@ -440,8 +439,8 @@ class ContactSearch:
         # the ends' uncertainties go with the curve's (what the conditioning's checks read)
         ses = _end_ses(xs, u_start, u_end, windows, flags) if curve else (math.nan, math.nan)
         by_curve = (math.nan, math.nan)
-        # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one (zoo traces
-        # 0:709, 1:763), and the curve's uncertainty tells whether its end is pinned
+        # also after an end flagged as a jump: a concave fade's last step out of low noise looks like one, and the
+        # curve's uncertainty tells whether its end is pinned
         if curve and not {"ringing_after_contact", "contact_at_trace_end"} & set(flags):
             by_curve = curve_end(xs, sigma, u_start, u_line, peak_index, max(run_b, peak_index), fs)
 
@@ -479,8 +478,7 @@ def _end_ses(xs, u_start, u_end, windows, flags):
     return (math.hypot(hinge_se(xs, u_start, windows.get("start"), "start_jump" in flags),
                        windows.get("start_step", 0.0) / math.sqrt(12.0)),
             # the bent hinge's (one more parameter) and never less than the straight one's: where no straight
-            # line pins the end, no bend does (zoo trace 1:1448, noise 0.6 % of the peak: TC -1.4 % with the
-            # bent hinge's own)
+            # line pins the end, no bend does
             np.fmax(hinge_se(xs[::-1], n - 1 - u_end, windows.get("end"), "end_jump" in flags),
                     windows.get("end_se", math.nan)))
 

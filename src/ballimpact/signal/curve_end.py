@@ -41,9 +41,7 @@ def end_from_curve(force, sample_rate_hz: float, start_s: float, end_s: float, n
     over 3: the three-sigma interval over three. Where the residual is not a
     parabola in the end (a steep fall with a few samples on it, one of them
     low in the noise, decides between two ends) the one-sigma interval is
-    narrow while the end is not known; the wider interval sees the other end
-    (zoo trace 1:707 at 50 kHz, 20 noise draws: one end 0.92 % of TC early
-    passed with a one-sigma uncertainty of 0.19 %). The same
+    narrow while the end is not known; the wider interval sees the other end. The same
     fit with a cubic over ``CURVE_FITS[1][1]`` of TC tells how much the end
     depends on the curve's model; that difference is added in quadrature.
 

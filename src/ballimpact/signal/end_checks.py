@@ -49,18 +49,16 @@ def adc_step_problems(x, fs, noise, step, contact: ContactResult, t0_s, scale) -
     the force fades slowly to zero at an end, the recorded trace stays on one
     step for several samples and then drops to the next, and the line through
     the end's samples is fitted to a staircase whose errors are neither random
-    nor independent. The end found was 1.2 samples late, 3 of its standard
-    errors (``python bench/adc_map.py --n 400 --seed 3`` trace 3:262: 12 bits,
-    noise 0.25 mV under a step of 4.9 mV, TC +1.1 %). Each end is known to
+    nor independent: the end found can be more than a sample late, several of
+    its standard errors. Each end is known to
     about the time the force takes to cross a step there (read over the
     samples from the end to where it first stands ADC_STEP_CROSSING steps
     above zero): the force meets zero within half a step's crossing of the
     staircase's last edge. Where a crossing takes more than
     ADC_STEP_MAX_FRACTION of TC, that half is more than half of the 1 %
-    budget, and the end is not determined to 1 % (at half that fraction the
-    map's seed 1 lost 57 more of its 400 traces, every one of them right, TC
-    within 0.8 %). A jump crosses many steps within a sample and passes. Not
-    in the paper; see docs/robustness-history.md, "A coarse ADC".
+    budget, and the end is not determined to 1 % (half that fraction excluded
+    right traces). A jump crosses many steps within a sample and passes. Not
+    in the paper.
 
     Parameters
     ----------
@@ -142,14 +140,13 @@ def curve_end_contact(contact: ContactResult, fs, t0_s) -> ContactResult:
     its end (concave, a punctured ball's), and the lower samples are nearer
     the truth. Where it moves earlier the force flattens into its end
     (convex), its last part is below the noise, and every fit through the
-    samples above it, the curve's too, ends early (TC -1.1 % on zoo trace
-    2:1489, whose spread passed; tests/test_contact.py).
+    samples above it, the curve's too, ends early, its spread passing
+    (tests/test_contact.py).
 
     Only at CURVE_MIN_RATE_HZ or faster: below it, a plate of up to 30 kHz
     (raw-format v1.1) can alias below RING_LINE_MIN_HZ, where no check sees
     its ringing, and the spread check is then what stands between such a
-    plate's sensed force and a wrong ok (zoo trace 2:586: 22.6 kHz at
-    24.9 kHz, its end known but its peak 12 % low).
+    plate's sensed force and a wrong ok (its end known, its peak off).
     """
     if not contact.found or not contact.end_spread_s > SPREAD_MAX_FRACTION * contact.contact_time_s \
             or fs < CURVE_MIN_RATE_HZ:
@@ -170,8 +167,8 @@ def plateau_end_problems(x, fs, noise, contact: ContactResult, t0_s) -> list[Pro
     fall). A flat stretch at a level of PLATEAU_END_LEVEL of the peak or more that falls by less than
     PLATEAU_END_FALL of its level is not a ball's: it is what a step down in the baseline shortly after the contact
     leaves when the amplifier's decay is estimated, kappa taking the step for the undershoot and the decay
-    correction lifting the record between the contact and the step into a shelf of force (``python
-    bench/step_map.py --n 400 --seed 2`` trace 2:95: a step of -3.1 % of the peak 1.7 ms after the end, TC +42 %)."""
+    correction lifting the record between the contact and the step into a shelf of force (TC tens of per cent
+    long)."""
     peak = float(contact.peak_V)
     tc = contact.contact_time_s
     if not (peak > 0 and noise > 0 and tc > 0):
@@ -240,15 +237,14 @@ def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scal
     CURVE_LATE_FRACTION of TC later than the straight line through the last samples (``contact.line_end_s``;
     the end itself is the bent hinge's, earlier where the force's slope eases into its end): the force flattens
     into its end (a convex fade), its last part is below
-    the noise, and the line through the samples above it meets zero early (zoo trace 2:1489: TC -1.1 %, its
-    refit from higher samples ending earlier still, by less than SPREAD_MAX_FRACTION of TC); not after an end
+    the noise, and the line through the samples above it meets zero early (its refit from higher samples ending
+    earlier still, by less than SPREAD_MAX_FRACTION of TC); not after an end
     flagged as a jump (located to half a sample, there is no line through a fade there: the curve meets zero up to
     a sample after the last sample of a true jump, and after a concave fade's end taken for one). With ``curve``,
     also a foot before the start and force after the end: the corrected signal over FOOT_CHECK_S beyond either
     (less a sample) standing FOOT_CHECK_SIGMA standard errors out of the noise as a level or a ramp. After the
-    end it is the fade's rest beyond an end found early, where interference swung the fade to zero
-    (``python bench/burst_map.py --n 400 --seed 1`` trace 1:314: TC -22.5 %), or a baseline a little off there
-    (12 right traces of the zoo's seeds 0-3 excluded, their TC within 0.6 %)."""
+    end it is the fade's rest beyond an end found early, where interference swung the fade to zero (TC tens of per
+    cent short), or a baseline a little off there (right traces excluded, the price of the check)."""
     out = []
     # each end must be where force begins / ends: the samples just inside it hold force
     k_end = max(int(round(END_CHECK_S * fs)), 3)

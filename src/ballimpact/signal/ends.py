@@ -172,12 +172,10 @@ def _foot_start(xs: np.ndarray, peak_index: int, sigma: float, fs: float, split:
     quiet sample within STEP_SIGMA noise deviations of zero (nothing there
     tells a ramp from a step after it), the start is the middle of [ts, i0]
     and ``step`` receives the interval's width [samples] (a uniform's standard
-    deviation, width / sqrt(12), goes into the start's uncertainty). On
-    bench/ideal_plate_map.py (seed 1; 148 starts of 776 not flagged as jumps,
-    141 of them with a first sample above 3 % of the peak) the hinge's start
-    was early on every one, by 0.35 samples on average (up to 0.89), with a
-    hinge uncertainty under 0.05 % of TC, the truth inside [ts, i0] on every
-    one; on the 7 below 3 % it was off by 0.02 samples on average.
+    deviation, width / sqrt(12), goes into the start's uncertainty): where
+    the force stepped up, the hinge's own start is early by a third of a
+    sample or more on average, its uncertainty far smaller, while the truth
+    lies inside [ts, i0] (bench/ideal_plate_map.py measures it).
     """
     return _foot_from_hinge(xs, peak_index, sigma, _foot_hinge(xs, peak_index, sigma, fs, split), window, step)
 

@@ -160,8 +160,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
     nonlinear least squares from a grid) or, with ``resonance=False``,
     through an ideal plate. Comparing the two says whether the samples need
     the plate's ringing, and the fit says how far the ringing lifts a sample
-    above the force. Not in the paper; see docs/signal-processing.md, "Plate resonance", and
-    docs/robustness-history.md.
+    above the force. Not in the paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
     ----------
@@ -204,8 +203,7 @@ def fit_front(force, sample_rate_hz: float, first: int, last: int, start: float,
         there). A spike on the plate's ringing, which
         :func:`ballimpact.signal.spikes.remove_spikes` cannot tell from the
         ringing's own swings, otherwise raises the residual of the fit
-        through the plate as much as the ideal one's (``python
-        bench/spike_ends_map.py --n 400 --seed 2`` trace 2:349).
+        through the plate as much as the ideal one's.
     damping : (float, float), optional
         The damping ratios the plate's may take, (lowest, highest) within 0
         to 1 [-]; by default 0.005 to 0.9 (FRONT_DROP_MAX_DAMPING with ``drop``).

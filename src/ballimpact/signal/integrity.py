@@ -44,8 +44,7 @@ def baseline_bend_problems(fit: BaselineFit, peak, s_u, e_u, scale) -> list[Prob
     Under the contact the baseline (offset, drift and hum) is the fit's extrapolation from the quiet samples
     around it; the mains hum's bend over a few ms of contact is a few per cent of the hum, itself a few per cent of
     the peak at most on any rig of raw-format v1.1 (tens of mV). A bend of a tenth of the peak is a fit the quiet
-    samples did not pin: zoo trace 11:342 (a 667 Hz plate ringing through a 24 ms record, 60 Hz hum of 28 mV
-    found by the fit at 11.6 V) came out ok with TC +153 % and kCAL -99 %. peak in [V / scale] (scale [V]); s_u,
+    samples did not pin, and TC and kCAL read on it can be off by any amount. peak in [V / scale] (scale [V]); s_u,
     e_u: the contact's ends [samples].
     """
     b = fit.baseline
@@ -78,12 +77,10 @@ def edge_event_problems(x, fs, noise, peak, s_u, scale) -> list[Problem]:
     contact's start. Such an event is a pulse whose size and length the record does not show: below the contact
     threshold it is not counted as another impact, and the baseline fit leaves it out as an event. But a contact
     cut off by a late trigger (the fall of a first impact at the record's start, a second one measured in its
-    place) is exactly that, and the gates' speeds then belong to the impact not measured: zoo trace 9:476 (a
-    punctured ball's tail at 1.6 % of the peak over the record's first 0.5 ms, a second contact 15 ms later)
-    came out ok with TC +25 % and kCAL -21 %. Only the start: before the contact the decay's correction adds
+    place) is exactly that, and the gates' speeds then belong to the impact not measured (TC and kCAL off by
+    tens of per cent). Only the start: before the contact the decay's correction adds
     nothing, while after it it integrates the baseline's small errors, and a record of seconds wanders away from
-    zero by its end (zoo seeds 0-9: 9 right traces excluded when the end was looked at the same way, none at the
-    start); an impact after the measured one does not change what the gates timed, and one that reaches the
+    zero by its end (looked at the same way, the end excluded right traces); an impact after the measured one does not change what the gates timed, and one that reaches the
     contact threshold is counted by :func:`ballimpact.signal.contact.detect_contact`. At the end, only force still
     rising at the last sample is taken for another impact (:func:`end_event_problems`). x and noise in
     [V / scale] (scale [V]), peak likewise; s_u: the contact's start [samples].
@@ -113,11 +110,8 @@ def end_event_problems(x, fs, noise, peak, e_u, tc_u, scale, post_guard_s=POST_G
     is the record's last, at the contact threshold (:func:`ballimpact.signal.noise.contact_threshold`) or above: a
     contact rising when the record stops, whose height the record does not show
     (:func:`ballimpact.signal.contact.detect_contact` counts a run at the record's end from 5 % of the peak). Below the
-    contact threshold, zoo seeds 0-20 held two right traces whose end rose to 1.6 and 2 % of the peak (2:810, a
-    0.92 s record's decay-corrected end; 15:1958, a record ending 5 ms after the contact), and no faulty one. Zoo
-    trace 19:218 (a second contact starting 30.6 ms after the first, 0.1 ms before the record's end, its force at
-    6.5 % of the peak there, 4 % as the 3.3 kHz plate delays it) came out ok: a faulty trace, whose second contact
-    is below the contact threshold for the few samples it shows. x and noise in [V / scale] (scale [V]), peak
+    contact threshold, an end rising a per cent or two of the peak is a right trace's (a long record's
+    decay-corrected end, a record ending soon after the contact) as often as a faulty one's. x and noise in [V / scale] (scale [V]), peak
     likewise; e_u the contact's end and tc_u its length [samples].
     """
     thr = event_threshold(noise, peak)

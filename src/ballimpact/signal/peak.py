@@ -35,13 +35,11 @@ PEAK_RAMP_FLOOR = 0.5  # ... judged on the rises from samples above this fractio
 PEAK_JUMP_FRACTION = 0.1  # the largest sample straight after one below this fraction of it: at the jump [-]
 FRONT_DIP_JUMPED = 0.2  # once a sample of the front is above this fraction of the peak, ... [-]
 FRONT_DIP_ZERO = 0.02  # ... a sample below this fraction of it before BUCKLING_TIME_S and FRONT_DIP_AFTER_SAMPLES
-#                        more is a swing as large as the jump: no ball's force (zoo trace 33:674 with a -1.5 V
-#                        electrical spike on the jump's second sample: ok, TC -1.2 %) [-]
+#                        more is a swing as large as the jump: no ball's force [-]
 FRONT_DIP_AFTER_SAMPLES = 2  # [samples]
 PEAK_ALONE_FRACTION = 0.015  # the largest sample, risen from one below PEAK_RAMP_FLOOR of it, above every other
 #                              sample by more than this fraction of it: a single-sample top (the ball's spike or an
-#                              electrical one), not known; half the 3 % tolerance of the peak (zoo trace 33:674, a
-#                              spike on the jump's second sample, once ok at +32 %) [-]
+#                              electrical one), not known; half the 3 % tolerance of the peak [-]
 FRONT_PHASE_S = 0.2e-3  # a largest sample this soon (and a sample) after the contact start is checked ... [s]
 FRONT_MIN_SAMPLES = 8  # ... when the contact holds this many samples up to it ... [samples]
 FRONT_PRE_SAMPLES = 3  # ... by a fit from this many samples before the start to it ... [samples]
@@ -183,10 +181,8 @@ def peak_between_samples(xc, fs, noise, lifted=True):
     other sample: a single-sample top, either the ball's spike with none of
     its ramp sampled or an electrical spike riding on the force where its
     curve breaks (the jump, the drop at buckling), whose second differences
-    there do not have an isolated spike's shape (:func:`remove_spikes`). Zoo
-    trace 33:674 (50.7 kHz, ideal plate) was ok with a 1.5 V electrical spike
-    on the jump's second sample taken for the peak, +32 %; the same spike two
-    samples later, beside the drop at buckling, +45 %. Were it electrical,
+    there do not have an isolated spike's shape (:func:`remove_spikes`): taken
+    for the peak, such a spike makes it tens of per cent high. Were it electrical,
     its excess over its neighbours' mean is in the impulse as well: above
     SPIKE_END_IMPULSE of the impulse that is a problem too
     (IMPULSE_UNRESOLVED, as for a sample kept at a contact end), so that a
@@ -195,13 +191,12 @@ def peak_between_samples(xc, fs, noise, lifted=True):
     The same holds at every lower local maximum of the samples that follows
     two rises from samples above PEAK_JUMP_FRACTION of the peak (a spike's
     ramp), or the jump from zero to a sample above PEAK_RAMP_FLOOR of it and
-    one rise (the jump's sample on the ramp at low rates: zoo trace 11:617,
-    25.7 kHz, once ok at -7.9 %), judged by its expected top (half the larger
+    one rise (the jump's sample on the ramp at low rates, about 25 kHz),
+    judged by its expected top (half the larger
     rise above it) against the largest sample: a spike whose top fell
     between the samples so wholly that the largest sample is on the smooth
     part of the contact is such a
-    maximum, and its top may exceed the largest sample (zoo seed 4000,
-    "sample_rate": 23.3 kHz, spike 5.9 % above the largest sample, once ok).
+    maximum, and its top may exceed the largest sample.
     At the largest sample the rule is the one above (half a rise against half
     of PEAK_SAMPLING_FRACTION). A jump from zero (one rise from a sample near
     zero) or a swing of ringing (a fall before the rise) hides no top above
@@ -216,10 +211,8 @@ def peak_between_samples(xc, fs, noise, lifted=True):
     sample is kept (the largest one when force_top does not lift it, a lower
     maximum, an undone force: ``lifted`` False) the top may be up to a whole
     rise above it, but it is judged by half a rise, on average: judging the
-    whole rise there (bench/spike_top_map.py; zoo seed 4's ok spike top at
-    -5.4 % was of this class) excluded 168 more measurable traces of the
-    zoo's seeds 0-3, all right, and good impacts of the synthetic sessions
-    (docs/robustness-history.md, cfca54b).
+    whole rise there excluded many more right traces, and good impacts of the
+    synthetic sessions.
     """
     if xc.size < 3:
         return []
@@ -243,10 +236,9 @@ def peak_between_samples(xc, fs, noise, lifted=True):
     # from a sample already at PEAK_RAMP_FLOOR of the peak (not the jump from zero); at a lower
     # maximum, a spike's ramp starts low: a maximum after two rises, both from samples off zero
     # (PEAK_JUMP_FRACTION of the peak), or after the jump from zero to a sample already at PEAK_RAMP_FLOOR of
-    # the peak and one rise from it (at 25.7 kHz the jump's sample is on the spike's ramp, and zoo trace
-    # 11:617's top, between the next sample and the drop, came out ok at -7.9 %; a jump from zero spread over
-    # two samples, the first of them low, is no ramp: 66 right traces of zoo seeds 0-14 were excluded when any
-    # sample off zero counted); a jump from zero alone (one rise from a sample near zero) or a swing of ringing
+    # the peak and one rise from it (at about 25 kHz the jump's sample is on the spike's ramp; a jump from zero
+    # spread over two samples, the first of them low, is no ramp: counting any sample off zero excluded right
+    # traces); a jump from zero alone (one rise from a sample near zero) or a swing of ringing
     # (a fall before its rise) hides no top above it
     jump_floor = PEAK_JUMP_FRACTION * peak
     maxima = [k for k in range(2, xc.size - 1)
@@ -285,9 +277,8 @@ def peak_on_front_ringing(x, fs, noise, peak, s_u, e_u):
     the drop at buckling. A plate rings from the jump; when the spike's top
     lands on a later maximum of that ringing (the first overshoot is
     :func:`peak_on_step_response`'s too) the largest sample is lifted
-    above the ball's force with nothing in the contact to show it (zoo trace
-    3:824: a 13.7 kHz plate with damping 0.20 at 168 kHz, the peak 5.3 % high
-    and ok). So when the contact's largest sample is within FRONT_PHASE_S
+    above the ball's force with nothing in the contact to show it (the peak
+    a few per cent high and ok). So when the contact's largest sample is within FRONT_PHASE_S
     (and a sample) of its start and FRONT_MIN_SAMPLES of the contact reach
     it, the samples from FRONT_PRE_SAMPLES before the start to it are fitted
     with a jump, a ramp and a parabola (:func:`ballimpact.signal.front.fit_front`),
@@ -363,8 +354,7 @@ def peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     that passes every check, unless the plate fitted rings with fewer than
     OVERSHOOT_MIN_PERIOD samples per period: a resonance above fs / 2 is
     sampled as its alias below it, and undone as that alias its force is
-    wrong (zoo trace 2:1022: 24.9 kHz at 43.3 kHz, fitted at 19.5 kHz, the
-    undone peak -5.1 %), so the peak is then named as not resolved by the
+    wrong (the peak off by several per cent), so the peak is then named as not resolved by the
     samples (PEAK_BETWEEN_SAMPLES), which is no evidence. A ball's front
     through an ideal plate, its spike's top and its drop sampled anywhere,
     needs no plate (tests/test_conditioning.py). Not run when the checks
@@ -374,11 +364,8 @@ def peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     An electrical spike on the ringing after the largest sample (added
     after the plate; :func:`remove_spikes` cannot tell it from the
     ringing's swings) raises the plate fit's own residual, which then sets
-    the significance: on ``python bench/spike_ends_map.py --n 400 --seed 2``
-    trace 2:349 (18.5 kHz at 51.7 kHz, a 0.33 V spike of 38 noise
-    deviations on the ringing's first trough) the plate's fit left 1350
-    noise variances and the ideal one 3470, a gain of 7.8 of the plate's
-    residual variances, and the peak was ok 5.0 % high. So where the plate
+    the significance, and the plate's gain over the ideal plate, counted in
+    its own residual variances, is then too small to be evidence. So where the plate
     fits better than the ideal plate by more than FRONT_SIGNIFICANCE noise
     variances but not by its own residual, both are fitted again with a
     free spike on one sample after the largest (``fit_front``'s
@@ -386,8 +373,7 @@ def peak_on_first_overshoot(x, fs, noise, peak, s_u, e_u):
     EVENT_SIGMA noise deviations out and, with it, the plate's fit leaves
     at most FRONT_SIGNIFICANCE noise variances: the spike must explain the
     whole misfit (a free sample also absorbs the model's misfit of a
-    ball's front, -292 and -45 deviations on zoo traces 0:842 and 1:718,
-    where the fit with it still left more).
+    ball's front, where the fit with it still leaves more).
     """
     k0 = int(math.ceil(s_u))
     k1 = int(math.floor(e_u))
@@ -480,8 +466,7 @@ def front_dip(x, fs, peak, s_u, e_u):
     FRONT_DIP_AFTER_SAMPLES after it) below FRONT_DIP_ZERO of the peak after one above
     FRONT_DIP_JUMPED of it is a swing as large as the jump: a negative electrical spike where the force's curve
     breaks (which :func:`remove_spikes` cannot tell from the jump) or a plate's swing, and the samples do not say
-    which of the samples around it the force starts at. Zoo trace 33:674's rig with a -1.5 V spike on the jump's
-    second or third sample was ok with TC -1.2 and +1.0 % (tests/test_robustness.py). :func:`_start_on_fast_ringing`
+    which of the samples around it the force starts at (tests/test_robustness.py). :func:`_start_on_fast_ringing`
     names the plate's swing where it sees its ringing; this check runs where it did not.
     """
     k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))

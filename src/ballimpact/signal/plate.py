@@ -261,8 +261,8 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     and zeta: a fit in two parameters). Where
     :func:`identify_plate_resonance` finds nothing in the contact and after
     it (the force's own second difference, many times longer than a damped
-    plate's ringing, drowns the recursion: zoo trace
-    2:600, a 3.5 kHz plate damped 0.22 at 196 kHz), the ringing after the
+    plate's ringing, drowns the recursion, for a plate of a few kHz sampled
+    fast), the ringing after the
     contact alone can still show it. The fit (least squares, bounded) starts
     from the best of a grid: FREE_RING_START_FACTORS of the peak of the
     stretch's spectrum (no taper: the ringing decays from the stretch's start)

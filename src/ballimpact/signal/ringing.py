@@ -114,13 +114,12 @@ def _start_on_fast_ringing(x, fs, noise, peak, s_u, e_u):
     samples that half a sample exceeds JUMP_MAX_FRACTION of TC (the rise
     sampled through the plate is its answer to a jump, located to half a
     sample at best, as :func:`end_problems` charges a jump); otherwise the
-    start is left as found (on the ok traces of the zoo's seeds 0-3 that
-    ring so, the start was right: tests/test_conditioning.py). At
+    start is left as found (tests/test_conditioning.py). At
     OVERSHOOT_MIN_PERIOD samples per period or more it is evidence of the
     plate (PLATE_RINGING: its undoing is tried); below, or above fs / 2 seen
     through its alias, the ringing is named and the start not determined
     (CONTACT_END_UNDETERMINED, no evidence: an alias undone is wrong). Not
-    in the paper; see docs/robustness-history.md, "A contact front ringing near half the sample rate".
+    in the paper.
     """
     k0, k1 = int(math.ceil(s_u)), int(math.floor(e_u))
     a = k0 + int(math.ceil(BUCKLING_TIME_S * fs)) + FAST_RING_GAP_SAMPLES
@@ -213,8 +212,8 @@ def _ringing_line(xc, fs, noise):
     of its side lobes just above RING_LINE_MIN_HZ stands out of the quieter
     frequencies above it only. A bump that does not stand out of the median
     below it alone and is below RING_LINE_EDGE_FRACTION of the peak is not
-    taken for a line (ideal-plate zoo traces: 0.007-0.023 % of the peak at
-    3.0-3.4 kHz).
+    taken for a line (the force's own spectrum there, a few hundredths of a
+    per cent of the peak at most).
     """
     n = xc.size
     if n < MIN_CONTACT_SAMPLES:

@@ -37,7 +37,7 @@ LOWPASS_STEP_S = 10.0e-6  # ... and its largest rise in this long (the model's j
 LOWPASS_CONCENTRATION = 0.4  # ... less than this fraction of the rise, a jump spread: its front is fitted ... [-]
 LOWPASS_WINDOW_S = 0.6e-3  # ... from the contact start to this long after it ... [s]
 LOWPASS_MAX_SAMPLES = 80  # ... on every q-th sample, q the least that leaves at most this many in it (40 lost a
-#: slow low-pass's evidence: bench/lowpass_map.py traces 1:85 and 2:42) [samples]
+#: slow low-pass's evidence) [samples]
 LOWPASS_DAMPING = (0.2, 0.98)  # the low-pass fitted: a second-order response of these damping ratios (one at the
 #: lower bound is a plate that rings, for the plate's checks) ...
 LOWPASS_DELAY_FRACTION = 2.0e-3  # ... whose delay 2 zeta / wn is more than this fraction of TC ... [-]
@@ -54,8 +54,8 @@ def second_hump(xc, fs, noise, peak):
     the peak after a maximum and a rise of more than HUMP_RISE_FRACTION after it, in the
     force averaged over HUMP_SMOOTH_S (which quiets the noise and ringing of a plate
     above a few kHz, left to the other checks), is a plate resonance below the band the
-    ringing checks look at (3 kHz: zoo trace 3:1077, an 848 Hz plate with damping 0.22 at
-    50 kHz, came out ok with TC -12 % and the peak +27 %), or a second contact inside
+    ringing checks look at (3 kHz; such a plate leaves TC and the peak tens of per cent off), or a second contact
+    inside
     the first.
     """
     skip = int(round(HUMP_SKIP_S * fs))
@@ -94,8 +94,7 @@ def peak_on_step_response(xc, fs, noise, peak, lead=0.0):
     answers the jump with its step response: a rise over part of its period, an
     overshoot, then a damped oscillation. Heavily damped (zeta about 0.2), that one
     overshoot raises the peak by 5-20 % and the swings after it are too few and
-    too unequal for :func:`peak_on_ringing` (zoo traces 3:212, 3:672, 3:700:
-    plates of 6.5-9.7 kHz, damping 0.17-0.26, at 21-146 kHz, ok with the peak
+    too unequal for :func:`peak_on_ringing` (plates of several kHz, ok with the peak
     5.6-10.4 % high).
 
     So, in the force averaged over STEP_SMOOTH_S, a peak within STEP_PHASE_S of
@@ -111,7 +110,7 @@ def peak_on_step_response(xc, fs, noise, peak, lead=0.0):
     deviations of a difference) is the ball's own drop at buckling (sensed
     through a fast plate, or an undone one), whose ringing came after the peak.
     A peak on a later swing (a spike's top overshot by a plate that has rung
-    since the jump, zoo 3:824) is not judged here.
+    since the jump) is not judged here.
     """
     w = 2 * int(round(0.5 * STEP_SMOOTH_S * fs)) + 1
     if not peak > 0 or xc.size < 4 * w:
@@ -155,12 +154,10 @@ def peak_on_slow_fall(xc, fs, noise, peak, lead=0.0):
     deviations) within FALL_WINDOW_S after it, spread from 10 to 90 % of its
     depth over more than FALL_MAX_SAMPLES samples and FALL_MAX_S, is the
     sensing chain's: the overshoot of the force's jump by a plate the ringing
-    checks do not recognise (two modes, bench/two_mode_map.py: 2:371, 10.6 and
-    24.7 kHz, the largest sample 0.022 ms in and 12 % above the ball's peak;
-    2:27, 2:385, 3:301, +3.7 to +28 %, ok), or a smoothing that spreads the
-    spike. Either way the top is not the ball's. On the zoo's ok traces whose
-    peak is in that phase the fall took at most 2 samples (24.5 us at
-    40.8 kHz); on those four, 4-11 (53-73 us). Run last on the sensed
+    checks do not recognise (a plate of two modes, the largest sample a few per
+    cent to tens of per cent above the ball's peak), or a smoothing that spreads the
+    spike. Either way the top is not the ball's: the ball's drop at buckling
+    takes at most a couple of samples, such a fall several. Run last on the sensed
     force, on a trace nothing else excludes: after
     :func:`peak_on_first_overshoot` (a plate near fs / 2 it names as no
     evidence stays so) and after :func:`front_lowpass` (a low-pass slows
@@ -205,18 +202,13 @@ def front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     jump over its rise and delays the rest of the force by its group delay,
     2 zeta / wn. The contact's start is found at the foot of the spread jump,
     its end where the delayed and rounded fade meets zero, about twice the
-    delay late: TC comes out long, and nothing rings to show it (``python
-    bench/lowpass_map.py --n 400 --seed 1``: 50 of 400 ok but wrong, up to
-    TC +4.2 %, on 39210b7).
+    delay late: TC comes out long, and nothing rings to show it.
 
     So when the force's largest rise in LOWPASS_STEP_S (at least a sample)
     within LOWPASS_RISE_S of the start is less than LOWPASS_CONCENTRATION of
-    its whole rise there (a jump through an ideal plate put 0.36 or more of it
-    into that step on 120 of bench/ideal_plate_map.py's rigs at 20-60 kHz;
-    the gate only spares the fits, about 0.1 s each, on most traces, and the
-    fits decide: at 0.5 instead of 0.4 the low-pass map kept 2 and 1 fewer
-    ok-but-wrong traces on seeds 1 and 2, and the synthetic chain's front
-    with a cloth's foot, 0.45, was fitted), the samples from
+    its whole rise there (a jump through an ideal plate puts more than a
+    third of it into that step; the gate only spares the fits, about 0.1 s
+    each, on most traces, and the fits decide), the samples from
     FRONT_PRE_SAMPLES before the start to LOWPASS_WINDOW_S after it (every
     q-th, at most LOWPASS_MAX_SAMPLES) are fitted with the model's front and
     its drop at buckling (:func:`ballimpact.signal.front.fit_front` with ``drop``),
@@ -229,20 +221,19 @@ def front_lowpass(x, fs, noise, peak, s_u, e_u, tc):
     ``test_an_end_that_jumps_is_no_convex_fade``, which the low-pass fit took
     for a low-pass against the ideal plate's ramp and parabola); the
     low-pass fit gets none (there, it trades against the damping, which it
-    pressed to the bound on bench/lowpass_map.py trace 1:85). The low-pass is
+    presses to the bound). The low-pass is
     seen, and TC is not known to 1 %, when its fit
 
     * beats the ideal one by more than FRONT_SIGNIFICANCE residual variances
       (the larger of the noise's and its own, per sample),
     * explains the front: it leaves at most LOWPASS_RESIDUAL noise variances
       per sample (an ideal plate's front that the model's shape misses by
-      more than the noise is fitted better through a smoother, and left
-      11-870 variances on zoo traces 2:850, 1:1149 and 0:196),
+      more than the noise is fitted better through a smoother, and leaves
+      many more),
     * is damped: its damping ratio is off the lower bound, 0.2 (a plate
-      damped less rings, and the plate's checks see it; at 0.3 a 2.44 kHz
-      plate damped 0.285 at 51 kHz, zoo trace 6:1912, rang too little for
-      them, its low-pass fit pressed to the bound, and it was ok with TC
-      +1.08 %), and
+      damped less rings, and the plate's checks see it; a bound much higher
+      leaves a plate between them, ringing too little for those checks and
+      fitted here at the bound), and
     * delays by more than LOWPASS_DELAY_FRACTION of TC and LOWPASS_DELAY_SAMPLES.
 
     A low-pass whose delay is under a sample or two (at 20-40 kHz, near half

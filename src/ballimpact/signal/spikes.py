@@ -21,8 +21,8 @@ SPIKE_KINK_SIGMA = 5.0  # ... unless its neighbours continue one curve: their se
 SPIKE_END_SIGMA = 6.0  # within SPIKE_END_WINDOW_S of a contact end a spike on one curve needs only this many [-]
 SPIKE_END_WINDOW_S = 0.35e-3  # the samples the end's hinge is fitted to (contact.FOOT_MAX_S + FOOT_PRE_S) [s]
 SPIKE_END_IMPULSE = 0.005  # a sample kept at a contact end, were it electrical, is this fraction of the impulse at
-#                            most: half the 1 % tolerance of kCAL (the rest of the processing's kCAL error is within
-#                            0.32 % on 99 % of the ok traces of zoo seeds 0-3 at 06ea391) [-]
+#                            most: half the 1 % tolerance of kCAL (the rest of the processing's kCAL error is
+#                            within about a third of a per cent on almost every ok trace) [-]
 
 
 def remove_spikes(voltage_V, noise_rms_V: float | None = None, keep=()):
@@ -126,17 +126,14 @@ def spikes_at_ends(v_spiky, d2_spiky, spikes, kept, contact: ContactResult, x, n
     below 2 mm of compression, section 3.2.4 in Goodwill & Haake 2004), and
     the force's own samples there can have that shape: a lightly damped plate
     sampled about twice a period answers the jump with a one-sample overshoot
-    (replacing it took 1.2 % out of the impulse, kCAL +1.2 %, TC +1.2 %, on the
-    rig of ``python bench/overshoot_map.py --n 400 --seed 5`` trace 5:183,
-    tests/test_robustness.py), and at 50 kHz the ball's pre-buckling spike,
-    0.03-0.04 ms long at 12 m/s, is one sample (zoo traces 0:1635 and 1:1331,
-    2.3 and 2.7 V between 0.3-0.5 and 1.3-1.6 V).
+    (replacing it takes a per cent or so out of the impulse, and moves kCAL and
+    TC as much: tests/test_robustness.py), and at 50 kHz the ball's pre-buckling
+    spike, 0.03-0.04 ms long at 12 m/s, is one sample.
 
     They are told apart by whether the replaced sample's neighbours continue one
     curve (:func:`_spike_kink` at most SPIKE_KINK_SIGMA noise deviations of the
     second difference): an electrical spike on the force's smooth fade or on
-    the baseline leaves them so, and its replacement is right (zoo trace
-    3:1755: 1.18 V, 2.7 samples before the end, 2.1 noise deviations); at the
+    the baseline leaves them so, and its replacement is right; at the
     jump the neighbours before it continue the baseline and those after it the
     force (0:1635: 187, 1:1331: 66, 5:183: 16 noise deviations). Such samples
     are returned to be kept: the caller conditions the trace again without
@@ -227,18 +224,13 @@ def low_spikes_at_ends(v_spiky, d2_spiky, spikes, contact: ContactResult, fs, t0
     hinge, ``ballimpact.signal.contact``); an electrical spike of 6-12 noise
     deviations of the second difference among them, which
     :func:`remove_spikes` leaves (its threshold is for the whole record), tilts
-    the line: on ``python bench/spike_ends_map.py --n 400`` trace 1:238 a
-    79 mV spike (6.3 deviations) 3.4 samples before the end moved it by
-    -1.85 % of TC, and on 2:45 one of 185 mV (10.7) 4.7 samples before it by
-    -1.76 %, both ok. Within SPIKE_END_WINDOW_S of each end a sample above
+    the line, by up to 2 % of TC. Within SPIKE_END_WINDOW_S of each end a sample above
     SPIKE_END_SIGMA deviations with the spike's shape whose neighbours
     continue one curve (:func:`_spike_kink` within SPIKE_KINK_SIGMA) is
-    electrical and is replaced as the others are (2:45 is then right; 1:238's
-    neighbours, off their -h/2 by 1.0 and 2.1 deviations of their own noise,
-    miss the shape). The shape's tolerance is not widened for the noise: by 2
-    deviations it let the bend where the force meets zero (a second difference
-    at one sample, none at its neighbours) pass with the noise's help on 36 ok
-    traces of zoo seeds 0-3 (TC +0.1-0.7 %, 3:261 to +1.22 %).
+    electrical and is replaced as the others are (a spike whose neighbours
+    miss the shape by the noise is left). The shape's tolerance is not widened for the noise: that
+    lets the bend where the force meets zero (a second difference
+    at one sample, none at its neighbours) pass with the noise's help, and moves TC.
     """
     if not contact.found:
         return ()

@@ -41,8 +41,8 @@ PLATE_EXACT_END_REACH = 6  # an exact undone force's ends fitted this many sampl
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
 PLATE_END_MARGIN = 64  # ... undone again over the contact and this many samples (and 4 W) around it [samples]
-PLATE_ZETA_UNCERTAINTY = 0.25  # the identified damping ratio is off by more than this fraction on 12 % of the zoo's
-#                                undone plates (seeds 0-2, 297 of them; median 1 %, tails to 77 and 141 %) [-]
+PLATE_ZETA_UNCERTAINTY = 0.25  # the identified damping ratio is off by more than this fraction on about one undone
+#                                plate in eight (its error's median about 1 %, with long tails) [-]
 PLATE_PEAK_SPREAD = 0.015  # the undone peak moving by more than this fraction with the damping ratio that far off, or
 #                            fn PLATE_FN_UNCERTAINTY off, is not known: half the peak's 3 % tolerance [-]
 LOWPASS_SPIKE_FRACTION = 0.9  # a low-passed undone force's maximum in the spike's phase above this of its peak: the
@@ -83,7 +83,7 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     samples before it (the plate is causal: zero before the force) stand out
     of their noise by PLATE_FOOT_SIGMA standard errors as a level or a ramp
     up to it (the sensed start is read early where the plate's first
-    overshoot passes for a foot; zoo trace 2:1469). A pull is what
+    overshoot passes for a foot). A pull is what
     is left where the force departs from the first-order hold the inverse
     assumes (a jump between samples leaves an alternating tail decaying by the
     zeros of the sampled plate).
@@ -111,13 +111,13 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     sensed noise as the inverse and the kernel colour it (``undone_end``'s
     ``noise_se``, raised by the fit's residual where that is more than the
     noise leaves): that noise is correlated over several samples and moves a
-    whole stretch of an end together (python bench/overshoot_map.py --n 400
-    --seed 5 trace 5:350 came out two samples early). The start, where the
+    whole stretch of an end together (an end fitted without it came out two
+    samples early). The start, where the
     force jumps from zero (section 3.2.4: the damping term at first contact),
     is known to half a sample at best (to its noise, or the fit's residual,
     over its slope where the fit sees no jump of PLATE_END_JUMP_SIGMA
-    residuals; without that floor an aliased plate's start, zoo trace 0:434,
-    came out 0.7 samples early where the fit's noise said 0.14); the end,
+    residuals; without that floor an aliased plate's start came out 0.7
+    samples early where the fit's noise said 0.14); the end,
     where the ball's force falls to zero continuously, is located by the fit
     of the line and the parabola to it over several samples, to no interval
     between two: no half-sample floor there (which refused ends known to a
@@ -200,8 +200,8 @@ def undone_peak_spread(x, fs, contact: ContactResult, plate: PlateResonance, cut
     The inverse of the plate, ``F = x + (2 zeta / wn) x' + x'' / wn^2`` in continuous time, builds a sharp peak
     (the pre-buckling spike, section 3.2.4 in Goodwill & Haake 2004) largely from the sensed force's slope and
     curvature, so the damping ratio the ringing gave weighs on it. That ratio is the least known of the plate's
-    two numbers: zoo trace 7:265 (3.93 kHz, 0.267, identified at 3.85 kHz and 0.20) came out 9.2 % low in its
-    spike's peak, TC and kCAL right. The force is undone again from the sensed signal ``x`` [V] (low-passed at
+    two numbers: a plate of 3.93 kHz and 0.267 identified at 3.85 kHz and 0.20 gave its spike's peak 9.2 % low,
+    TC and kCAL right. The force is undone again from the sensed signal ``x`` [V] (low-passed at
     ``cutoff`` [Hz] as the force reported was) with each parameter off in turn, and the largest sample inside the
     contact compared with the one undone with the identified plate.
     """
@@ -241,16 +241,12 @@ def lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutoff
     Haake 2004; BUCKLING_TIME_S into the contact in the model), sharper than any kernel that quiets the noise the
     plate's inverse amplifies (the cutoffs run down to the resonance). The kernel lowers that top, and the exact
     undone force, noisy by construction there, cannot bound by how much (:func:`lowpass_hides_peak` reads it from
-    fits that smooth a sharp top too). Over zoo seeds 0-14, the 85 spike peaks reported from a low-passed undone
-    force came out 2.1 % low on average (standard deviation 1.3 %, none more than 0.11 % high), down to -6.3 %
-    (11:784, 13:41, 14:1538, 14:1632 ok and beyond the spike's 5 %; the undone but not low-passed ones +0.2 % on
-    average). So where the low-passed force's largest value within the spike's phase (BUCKLING_TIME_S and the
-    kernel's half-width from the start) is a maximum above LOWPASS_SPIKE_FRACTION of its peak, the peak is not
-    known: a spike lowered below a later maximum may still be the peak. Zoo trace 4:6 (a 3.7 kHz plate at 47 kHz,
-    low-passed at 11.8 kHz) had its low-passed spike at 90 % of the later maximum reported, and its true top 5.2 %
-    above that maximum: the kernel and the sampling took 14.5 % from it. The same rule excludes forces whose spike,
-    at 90-98 % of the later maximum, was not their peak (82 of the 176 traces it moved over zoo seeds 0-14; see
-    docs/robustness-history.md, the round of 8a87902).
+    fits that smooth a sharp top too): spike peaks reported from a low-passed undone force come out about 2 % low
+    on average, and several per cent low at worst. So where the low-passed force's largest value within the
+    spike's phase (BUCKLING_TIME_S and the kernel's half-width from the start) is a maximum above
+    LOWPASS_SPIKE_FRACTION of its peak, the peak is not known: a spike lowered below a later maximum may still be
+    the peak, the kernel and the sampling together taking up to about 15 % from its top. The same rule excludes
+    forces whose spike, at 90-98 % of the later maximum, was not their peak (the price of the rule).
     """
     if math.isinf(cutoff):
         return []

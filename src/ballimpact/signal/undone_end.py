@@ -242,9 +242,8 @@ def _end_noise_se(jac: np.ndarray, sse: float, autocorrelation: np.ndarray, nois
     first diagonal element the end's variance. The noise variance is raised by
     the residual sum of squares ``sse`` over what that noise alone leaves
     (``noise_rms^2 tr((I - P) R)``, P the fit's hat matrix) where larger: a
-    force the model does not fit. Zoo-like rigs: ``python
-    bench/overshoot_map.py --n 400 --seed 5`` trace 5:350, whose end the fit
-    put 2.0 samples early while its residual allowed half a sample.
+    force the model does not fit: the fit's residual alone can allow half a
+    sample for an end that is two samples off.
     """
     n = jac.shape[0]
     if autocorrelation.size < n:

@@ -19,10 +19,10 @@ CONVERGED_SAMPLES = 0.01  # window change that ends the iteration [samples]
 UNSTABLE_SAMPLES = 0.5  # still moving by more after MAX_ITERATIONS: a problem [samples]
 MAINS_AMBIGUOUS_BIC = 10.0  # 50 and 60 Hz fits closer than this in BIC are not told apart [-]
 EVENT_SIGMA = 6.0  # an event stands this many noise deviations out of the corrected record [-]
-#: ... and reaches this fraction of the main peak [-]. It was 1 % until a second contact of 1.3 % (zoo trace
-#: 25:1094), half taken up by the hum fitted over a 36 ms record, stood 0.6 % out of it and bent that hum under the
-#: contact. Not lower than about twice FLAT_FRACTION: an oscillation (ringing, hum not resolved) has its positive
-#: swings taken for events, and the quiet residual's check must still see it (0.2 % cost a suite case that).
+#: ... and reaches this fraction of the main peak [-]: low enough for a second contact of about a per cent, half
+#: taken up by the hum fitted over a short record, to stand out and be masked (left in, it bends that hum under the
+#: contact). Not lower than about twice FLAT_FRACTION: an oscillation (ringing, hum not resolved) has its positive
+#: swings taken for events, and the quiet residual's check must still see it.
 EVENT_FRACTION = 0.005
 EVENT_GUARD_BEFORE_S = 0.5e-3  # samples this long before an event are left out of the fit [s]
 EVENT_GUARD_AFTER_S = 2.0e-3  # ... and this long after it (ringing) [s]
