@@ -46,7 +46,7 @@ docs: $(VENV)/.docs-installed
 bench: setup
 	$(BIN)/python bench/run.py
 
-# Mutation testing of the physics modules (model, gates, calibration, conditioning, contact
+# Mutation testing of the physics modules (model, gates, calibration, the signal subpackage
 # and the core functions of fitting, listed by `bench/mutation_score.py --selection`) against
 # their own fast tests (mutmut 3, config in pyproject.toml [tool.mutmut]); not part of
 # `make test` or CI. By default a seeded random sample of MUTATION_SAMPLE mutants per module

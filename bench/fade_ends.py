@@ -32,7 +32,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 import zoo  # noqa: E402
 
-from ballimpact.conditioning import SPREAD_MAX_FRACTION, condition_voltage  # noqa: E402
+from ballimpact.signal.end_checks import SPREAD_MAX_FRACTION  # noqa: E402
+from ballimpact.signal.conditioning import condition_voltage  # noqa: E402
 
 
 def draws(seed: int, index: int, n: int) -> np.ndarray:

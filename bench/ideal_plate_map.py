@@ -26,7 +26,7 @@ import numpy as np  # noqa: E402
 
 import zoo  # noqa: E402
 
-from ballimpact.conditioning import condition_voltage  # noqa: E402
+from ballimpact.signal.conditioning import condition_voltage  # noqa: E402
 
 BALLS = ("pressureless", "pressurised", "punctured", "oversize")
 RATE_BANDS_KHZ = (20.0, 30.0, 40.0, 50.0, 60.0)

@@ -35,9 +35,16 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 import zoo  # noqa: E402
-from ballimpact import conditioning as C  # noqa: E402
-from ballimpact.plate import (identify_plate_resonance, lowpass_zero_phase, refine_plate_resonance,  # noqa: E402
-                              undo_plate_resonance)
+from ballimpact.signal.baseline import (MAINS_CANDIDATES_HZ, MIN_QUIET_SAMPLES, POST_GUARD_S, PRE_GUARD_S,  # noqa: E402
+                                       mains_frequencies, rough_trend)
+from ballimpact.signal.contact import detect_contact  # noqa: E402
+from ballimpact.signal.end_checks import curve_end_contact  # noqa: E402
+from ballimpact.signal.spikes import remove_spikes  # noqa: E402
+from ballimpact.signal.undone import PLATE_ID_AFTER_S, PLATE_REFINE_S, _undone_contact  # noqa: E402
+from ballimpact.signal.undone_peak import lowpass_hides_peak  # noqa: E402
+from ballimpact.signal.window import iterate  # noqa: E402
+from ballimpact.signal.plate import identify_plate_resonance, refine_plate_resonance  # noqa: E402
+from ballimpact.signal.undo import lowpass_zero_phase, undo_plate_resonance  # noqa: E402
 from ballimpact.processing import HUM_HARMONICS  # noqa: E402
 
 REFUSED = re.compile(r"not undone: the undone force is too noisy \(noise [\d.]+ % of the peak\); low-passed to")
@@ -54,19 +61,19 @@ def conditioned(trace):
     tau = rig.tau_s if (rig.tau_known and math.isfinite(rig.tau_s)) else None
     raw = trace.voltage_V
     scale = float(np.max(np.abs(raw)))
-    v, _ = C.remove_spikes(rig.polarity * raw / scale)
+    v, _ = remove_spikes(rig.polarity * raw / scale)
     if rig.mains_known:
-        candidates = {float(rig.mains_hz): C._mains_frequencies(rig.mains_hz, HUM_HARMONICS, fs)}
+        candidates = {float(rig.mains_hz): mains_frequencies(rig.mains_hz, HUM_HARMONICS, fs)}
     else:
-        candidates = {0.0: [], **{f: C._mains_frequencies(f, HUM_HARMONICS, fs) for f in C.MAINS_CANDIDATES_HZ}}
-    trend = C._rough_trend(v)
+        candidates = {0.0: [], **{f: mains_frequencies(f, HUM_HARMONICS, fs) for f in MAINS_CANDIDATES_HZ}}
+    trend = rough_trend(v)
     k_peak = int(np.argmax(v - trend))
-    if k_peak >= C.MIN_QUIET_SAMPLES:
+    if k_peak >= MIN_QUIET_SAMPLES:
         trend = np.full(v.size, float(np.median(v[:k_peak])))
-    rough = C.detect_contact(v - trend, fs)
-    it = C._iterate(v, fs, candidates, rough, C.PRE_GUARD_S * fs, C.POST_GUARD_S * fs, tau,
+    rough = detect_contact(v - trend, fs)
+    it = iterate(v, fs, candidates, rough, PRE_GUARD_S * fs, POST_GUARD_S * fs, tau,
                     None if tau is None else 1.0 / tau, scale)
-    contact = C._curve_end_contact(C.detect_contact(it.x, fs, t0_s=0.0, noise_rms_V=it.fit.noise, spread=True,
+    contact = curve_end_contact(detect_contact(it.x, fs, t0_s=0.0, noise_rms_V=it.fit.noise, spread=True,
                                                     curve=True), fs, 0.0)
     return it.x, it.fit, contact, 1.0 / (trace.truth.kcal_N_per_V * scale)
 
@@ -79,19 +86,19 @@ def limits(trace):
         warnings.simplefilter("ignore")
         x, fit, contact, unit = conditioned(trace)
     s_u, e_u = contact.start_s * fs, contact.end_s * fs
-    a, b = int(math.ceil(s_u)) + 2, min(int(math.floor(e_u)) + int(round(C.PLATE_ID_AFTER_S * fs)), x.size)
+    a, b = int(math.ceil(s_u)) + 2, min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
     plate = identify_plate_resonance(x[a:b], fs, lag=5, noise_rms=fit.noise)
     if plate is None:
         return None
-    plate = refine_plate_resonance(x[max(int(s_u - C.PLATE_REFINE_S[0] * fs), 0):
-                                     min(int(e_u + C.PLATE_REFINE_S[1] * fs), x.size)], fs, plate)
+    plate = refine_plate_resonance(x[max(int(s_u - PLATE_REFINE_S[0] * fs), 0):
+                                     min(int(e_u + PLATE_REFINE_S[1] * fs), x.size)], fs, plate)
     exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
     out, cutoff = [], 0.5 * fs
     while cutoff / math.sqrt(2.0) >= plate.frequency_hz:
         cutoff /= math.sqrt(2.0)
-        c = C._undone_contact(lowpass_zero_phase(exact, fs, cutoff), x, fs, fit, s_u, 0.0, cutoff, plate)
+        c = _undone_contact(lowpass_zero_phase(exact, fs, cutoff), x, fs, fit, s_u, 0.0, cutoff, plate)
         if not isinstance(c, str):
-            c = C._lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], 0.0) or c
+            c = lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], 0.0) or c
         if isinstance(c, str):
             if "too noisy (noise" not in c:
                 out.append(next((name for key, name in KINDS if key in c), "other"))

@@ -44,7 +44,7 @@ FITTING_CORE = (
 )
 SELECTION = (
     ["ballimpact.model.*", "ballimpact.gates.*", "ballimpact.calibration.*",
-     "ballimpact.conditioning.*", "ballimpact.plate.*", "ballimpact.contact.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
+     "ballimpact.signal.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
     + [f"ballimpact.fitting.x_{name}__mutmut_*" for name in FITTING_CORE]
 )
 
@@ -66,6 +66,16 @@ def equivalent_mutants(path: Path = EQUIVALENT) -> dict[str, str]:
     return out
 
 
+def _metas(meta_dir: Path) -> list[Path]:
+    """mutmut's .meta files of every module, the signal subpackage's (``signal/*.py.meta``) included."""
+    return sorted(meta_dir.rglob("*.py.meta"))
+
+
+def _module(meta: Path, meta_dir: Path) -> str:
+    """The module a .meta file is of, dotted under ballimpact (``signal.contact``)."""
+    return meta.relative_to(meta_dir).as_posix().removesuffix(".py.meta").replace("/", ".")
+
+
 def selected(name: str) -> bool:
     return any(fnmatch.fnmatchcase(name, pat) for pat in SELECTION)
 
@@ -73,10 +83,10 @@ def selected(name: str) -> bool:
 def sample_names(n: int, seed: int, meta_dir: Path = META_DIR) -> dict[str, list[str]]:
     """Per module, the first n of the selected mutant names (sorted) shuffled with seed."""
     out = {}
-    for meta in sorted(meta_dir.glob("*.py.meta")):
+    for meta in _metas(meta_dir):
         names = sorted(k for k in json.loads(meta.read_text())["exit_code_by_key"] if selected(k))
         random.Random(seed).shuffle(names)
-        out[meta.name.removesuffix(".py.meta")] = names[:n]
+        out[_module(meta, meta_dir)] = names[:n]
     return out
 
 
@@ -112,9 +122,9 @@ def generate(max_children: int = 2) -> None:
 def scores(meta_dir: Path = META_DIR, checked_only: bool = False, only: dict | None = None) -> dict:
     equivalent = equivalent_mutants()
     table, survivors = {}, []
-    for meta in sorted(meta_dir.glob("*.py.meta")):
+    for meta in _metas(meta_dir):
         codes = json.loads(meta.read_text())["exit_code_by_key"]
-        module = meta.name.removesuffix(".py.meta")
+        module = _module(meta, meta_dir)
         if only is not None:
             codes = {k: codes[k] for k in only.get(module, [])}
         counts = Counter()

@@ -68,8 +68,8 @@ def run_one(args):
 def margin_one(args):
     """The evidence of ``contact.detect_saturation`` on zoo trace (seed, index) over its true contact, the
     noise floored at the ADC step's error as the pipeline floors it; None for a faulty trace."""
-    from ballimpact.contact import (SATURATION_MIN_SAMPLES, detect_saturation,
-                                    quantization_step)  # here: the map itself runs on commits without the test
+    from ballimpact.signal.clipping import SATURATION_MIN_SAMPLES, detect_saturation
+    from ballimpact.signal.noise import quantization_step
 
     seed, index = args
     trace = zoo.trace_for(seed, index)
@@ -88,7 +88,7 @@ def margin_one(args):
 
 def margin(seed: int, n: int, workers: int) -> None:
     """How far the zoo's own traces (the faulty left out) stay from the saturation test's threshold."""
-    from ballimpact.contact import SATURATION_MIN_SAMPLES, SATURATION_RATIO
+    from ballimpact.signal.clipping import SATURATION_MIN_SAMPLES, SATURATION_RATIO
 
     rows = [r for r in zoo.map_rows(margin_one, [(seed, i) for i in range(n)], workers) if r]
     judged = [r for r in rows if r[2] and r[3] >= SATURATION_MIN_SAMPLES]

@@ -130,7 +130,7 @@ def _rig_chain(**kw):
 
 def step_spikes(out: Path) -> Path:
     """Single-sample spikes replaced by the mean of their neighbours."""
-    from ballimpact.conditioning import remove_spikes
+    from ballimpact.signal.spikes import remove_spikes
 
     t, v = _recorded(_rig_chain(amplifier_time_constant_s=0.8, hum_V=0.0, offset_V=0.0))
     start = int(round(0.020 * FS_HZ))
@@ -148,7 +148,7 @@ def step_spikes(out: Path) -> Path:
 
 def step_baseline(out: Path) -> Path:
     """Offset, mains hum and the charge amplifier's decay removed."""
-    from ballimpact.conditioning import condition_voltage
+    from ballimpact.signal.conditioning import condition_voltage
 
     t, v = _recorded(_rig_chain(amplifier_time_constant_s=0.05, hum_V=0.03, offset_V=0.05))
     cs = condition_voltage(v, FS_HZ, polarity=1)
@@ -166,7 +166,7 @@ def step_baseline(out: Path) -> Path:
 
 def step_plate(out: Path) -> Path:
     """A ringing plate's resonance identified and undone."""
-    from ballimpact.conditioning import condition_voltage
+    from ballimpact.signal.conditioning import condition_voltage
 
     chain = _rig_chain(plate_frequency_hz=12_000.0, plate_damping_ratio=0.05, noise_V=0.0005)
     t, v = _recorded(chain)
@@ -188,7 +188,7 @@ def step_plate(out: Path) -> Path:
 
 def step_contact(out: Path) -> Path:
     """The contact's start and end, each to a fraction of a sample."""
-    from ballimpact.conditioning import condition_voltage
+    from ballimpact.signal.conditioning import condition_voltage
 
     t, v = _recorded(_rig_chain())
     cs = condition_voltage(v, FS_HZ, polarity=1)
@@ -209,7 +209,7 @@ def step_contact(out: Path) -> Path:
 def step_calibration(out: Path) -> Path:
     """kCAL from the impulse; the force, then the ball's velocity and displacement."""
     from ballimpact.calibration import calibration_factor, integrate_motion
-    from ballimpact.conditioning import condition_voltage
+    from ballimpact.signal.conditioning import condition_voltage
 
     p, sim, _, _ = _ball_force()
     t, v = _recorded(_rig_chain())
@@ -241,7 +241,7 @@ def step_calibration(out: Path) -> Path:
 def step_peak(out: Path) -> Path:
     """The peak force: the largest sample, or the middle of the range a cut ramp leaves."""
     from ballimpact.calibration import force_top
-    from ballimpact.conditioning import condition_voltage
+    from ballimpact.signal.conditioning import condition_voltage
 
     fs_low, vin = 40_000.0, 30.0  # at 30 m/s the spike is the peak; between samples at a low rate
     _, _, force_t, force = _ball_force(vin)

@@ -25,7 +25,7 @@ log = logging.getLogger("mkdocs.hooks.ballimpact")
 
 def _inputs_digest() -> str:
     """sha256 over the files the figures are drawn from."""
-    files = sorted((REPO / "src" / "ballimpact").glob("*.py")) + [REPO / "docs" / "gen_figures.py"]
+    files = sorted((REPO / "src" / "ballimpact").rglob("*.py")) + [REPO / "docs" / "gen_figures.py"]
     files += sorted(p for p in (REPO / "raw" / "demo-2004").rglob("*") if p.is_file())
     digest = hashlib.sha256()
     for path in files:
@@ -56,15 +56,33 @@ def public_names(module_name: str) -> list[str]:
     )
 
 
+def public_modules() -> list[str]:
+    """Every public module of ``ballimpact`` as its path under the package without ``.py`` (``signal/contact``);
+    a subpackage's ``__init__`` as the subpackage (``signal``). Its API page is ``docs/api/<path>.md``
+    (``docs/api/signal/index.md`` for a subpackage)."""
+    package = REPO / "src" / "ballimpact"
+    out = []
+    for source in sorted(package.rglob("*.py")):
+        parts = source.relative_to(package).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        if parts and not any(p.startswith("_") for p in parts):
+            out.append("/".join(parts))
+    return out
+
+
+def api_page(module: str) -> str:
+    """The API page of a module of :func:`public_modules`, relative to ``docs/api/``."""
+    return f"{module}/index.md" if (REPO / "src" / "ballimpact" / module / "__init__.py").is_file() else f"{module}.md"
+
+
 def on_post_build(config, **kwargs) -> None:
     site = Path(config["site_dir"])
-    for source in sorted((REPO / "src" / "ballimpact").glob("*.py")):
-        if source.stem.startswith("_"):
-            continue
-        module_name = f"ballimpact.{source.stem}"
-        page = site / "api" / source.stem / "index.html"
+    for module in public_modules():
+        module_name = "ballimpact." + module.replace("/", ".")
+        page = site / "api" / module / "index.html"
         if not page.is_file():
-            log.warning("API reference: no page for %s (docs/api/%s.md)", module_name, source.stem)
+            log.warning("API reference: no page for %s (docs/api/%s)", module_name, api_page(module))
             continue
         html = page.read_text(encoding="utf-8")
         missing = [name for name in public_names(module_name) if f'id="{module_name}.{name}"' not in html]

@@ -15,8 +15,8 @@ from ballimpact.calibration import (
     integrate_motion,
     voltage_impulse,
 )
-from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import contact_samples
+from ballimpact.signal.conditioning import condition_voltage
+from ballimpact.signal.contact import contact_samples
 
 MASS_KG = 0.0577
 

@@ -1,4 +1,4 @@
-"""Tests for ballimpact.conditioning: offset, hum and charge-amplifier decay removal."""
+"""Tests for ballimpact.signal.conditioning: offset, hum and charge-amplifier decay removal."""
 
 import functools
 import math
@@ -14,7 +14,8 @@ from numpy.testing import assert_allclose
 from tracekit import HUM_HARMONICS, make_trace
 
 from ballimpact.calibration import voltage_impulse
-from ballimpact.conditioning import SHORT_MIN_POST_S, SHORT_POST_GUARD_S, ConditioningWarning, condition_voltage
+from ballimpact.signal.baseline import SHORT_MIN_POST_S, SHORT_POST_GUARD_S
+from ballimpact.signal.conditioning import ConditioningWarning, condition_voltage
 from ballimpact.problems import ProblemKind
 
 CHAIN = dict(cloth_s=0.1e-3, cloth_fraction=0.015, offset_V=0.08, hum_V=0.02, noise_V=0.002)
@@ -162,7 +163,7 @@ def test_warns_when_undershoot_not_measurable():
     # error could cause: a decay kappa = 1/tau left uncorrected loses about kappa T / 2 of an
     # impulse of duration T, and kappa can hide up to UNDERSHOOT_SIGNIFICANCE standard errors
     # (the undershoot's error divided by the impulse A).
-    from ballimpact.conditioning import UNDERSHOOT_SIGNIFICANCE
+    from ballimpact.signal.baseline import UNDERSHOOT_SIGNIFICANCE
 
     v, fs, truth = make_trace(peak_V=1.0, noise_V=0.02, seed=0)
     with pytest.warns(ConditioningWarning, match="undershoot not measurable") as record:
@@ -540,25 +541,25 @@ def _ball_force(fs, tc_s=3.5e-3, spike=0.6):
 
 
 def test_force_with_two_humps_is_a_problem():
-    from ballimpact.conditioning import _second_hump
+    from ballimpact.signal.shape import second_hump
 
     # a ball's force has one hump after its spike (Eq. (14): kB x + (cB + cM) x' as x rises and falls once);
     # with the ringing of a plate resonance at 848 Hz (damping 0.22) that the spike set off, it falls after
     # its first maximum and rises again (zoo trace 3:1077 came out ok with TC -12 % and the peak +27 %)
     fs = 50e3
     t, f = _ball_force(fs)
-    assert _second_hump(f, fs, 1e-3, f.max()) == []
+    assert second_hump(f, fs, 1e-3, f.max()) == []
     wn, z = 2 * np.pi * 848.0, 0.22
     sensed = f + 0.5 * np.exp(-z * wn * t) * np.sin(wn * math.sqrt(1 - z * z) * t)
-    problems = _second_hump(sensed, fs, 1e-3, sensed.max())
+    problems = second_hump(sensed, fs, 1e-3, sensed.max())
     assert [p.kind for p in problems] == [ProblemKind.PLATE_RINGING]
     assert problems[0].message.startswith("force with two humps"), problems
     # a foot that flattens into a low plateau and then drops falls without rising again
     foot = np.concatenate([f[: f.size * 9 // 10], np.full(20, 0.01), np.linspace(0.01, 0.0, 3)])
-    assert _second_hump(foot, fs, 1e-3, foot.max()) == []
+    assert second_hump(foot, fs, 1e-3, foot.max()) == []
     # a dip and rise within the noise of the average are no second hump
     noisy = f + np.random.default_rng(0).normal(0.0, 0.05, f.size)
-    assert _second_hump(noisy, fs, 0.05, noisy.max()) == []
+    assert second_hump(noisy, fs, 0.05, noisy.max()) == []
 
 
 def test_largest_sample_at_the_jump_from_zero_is_a_problem():
@@ -622,7 +623,7 @@ def test_time_constant_below_the_plausible_bound_is_not_applied(tau):
     # a charge amplifier of 3-4 ms (below TAU_BOUNDS_S[0] = 5 ms, which no plate amplifier has):
     # the time constant is estimated (it is in the message, to the truth's 3 digits within 5 %)
     # but not applied, and the impact is a problem, with the warning said once
-    from ballimpact.conditioning import TAU_BOUNDS_S
+    from ballimpact.signal.baseline import TAU_BOUNDS_S
 
     v, fs, _ = make_trace(tau_s=tau, seed=9, post_s=0.06, **CHAIN)
     with pytest.warns(ConditioningWarning, match="below the plausible") as record:
@@ -723,7 +724,7 @@ def test_jump_at_the_end_or_both_ends_is_named_with_its_uncertainty(jump_at, end
     # a force that jumps from zero (0.4 of its scale) at its end, or at both ends, at 20 kHz:
     # each jump leaves TC uncertain by half a sample (25 us), more than JUMP_MAX_FRACTION (0.7 %)
     # of the 3 ms contact
-    from ballimpact.conditioning import JUMP_MAX_FRACTION
+    from ballimpact.signal.end_checks import JUMP_MAX_FRACTION
 
     fs, duration_s = 20e3, 3.0e-3
     t = np.arange(int(round(40e-3 * fs))) / fs
@@ -788,7 +789,7 @@ def test_a_ringing_line_is_found_above_the_force_spectrum_or_large_enough(f_hz, 
     from ballimpact.balls import BALLS
     from ballimpact.model import simulate_impact
 
-    from ballimpact.conditioning import _ringing_line
+    from ballimpact.signal.ringing import _ringing_line
 
     p = BALLS["pressurised"].params
     sim = simulate_impact(20.0, p.mass_kg, p.kb0_N_m, p.ak, p.a, p.ac, record=True)
@@ -879,7 +880,7 @@ def _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball="pressureless", vin
     (60e3, 8.0e3, 0.2, "pressurised", 30.0, 0.3),
 ])
 def test_peak_on_the_plates_step_response_is_a_problem(fs, plate_hz, zeta, ball, vin, phase):
-    from ballimpact.conditioning import _peak_on_step_response
+    from ballimpact.signal.shape import peak_on_step_response
 
     # a damped plate answers the force's jump (and the spike's drop) with one overshoot and a damped swing: a fall,
     # a bump and a fall again after a peak in the spike's phase; the ball's own force after its spike rises once
@@ -889,7 +890,7 @@ def test_peak_on_the_plates_step_response_is_a_problem(fs, plate_hz, zeta, ball,
     sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
     assert sensed.max() > 1.05 * true_peak  # the overshoot is what is at stake
     sensed = sensed + rng.normal(0.0, noise, sensed.size)
-    problems = _peak_on_step_response(sensed[1:], fs, noise, sensed.max(), 1.0 - phase)
+    problems = peak_on_step_response(sensed[1:], fs, noise, sensed.max(), 1.0 - phase)
     assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], (fs, plate_hz, phase)
     assert problems[0].message.startswith("peak force on the plate's step response"), problems
     f_seen = float(re.search(r"ringing at about (\S+) kHz", problems[0].message).group(1)) * 1e3
@@ -897,14 +898,14 @@ def test_peak_on_the_plates_step_response_is_a_problem(fs, plate_hz, zeta, ball,
     # the same force on an ideal plate: its jump, spike, drop and one hump pass
     ideal, _ = _plate_sensed_ball_force(fs, None, 0.0, phase, ball, vin)
     ideal = ideal + rng.normal(0.0, noise, ideal.size)
-    assert _peak_on_step_response(ideal[1:], fs, noise, ideal.max(), 1.0 - phase) == []
+    assert peak_on_step_response(ideal[1:], fs, noise, ideal.max(), 1.0 - phase) == []
 
 
 @pytest.mark.parametrize("fs", [20e3, 23.6e3, 50e3, 100e3, 200e3])
 @pytest.mark.parametrize("ball, vin", [("pressurised", 35.0), ("punctured", 35.0), ("pressureless", 12.5),
                                        ("oversize", 25.0), ("pressurised", 10.0)])
 def test_ball_force_on_an_ideal_plate_has_no_step_response(fs, ball, vin):
-    from ballimpact.conditioning import _peak_on_slow_fall, _peak_on_step_response
+    from ballimpact.signal.shape import peak_on_slow_fall, peak_on_step_response
 
     # every ball of Table 2, slow and fast, at 20-200 kHz with noise of 0.1 % of the peak: the spike and its drop
     # (or none) and one hump are no plate's step response, wherever the jump falls between the samples; nor is the
@@ -912,8 +913,8 @@ def test_ball_force_on_an_ideal_plate_has_no_step_response(fs, ball, vin):
     for phase in (0.05, 0.35, 0.65, 0.95):
         f, peak = _plate_sensed_ball_force(fs, None, 0.0, phase, ball, vin)
         f = f + np.random.default_rng(int(fs + 100 * phase)).normal(0.0, 1e-3 * peak, f.size)
-        assert _peak_on_step_response(f[1:], fs, 1e-3 * peak, f.max(), 1.0 - phase) == [], (phase, fs)
-        assert _peak_on_slow_fall(f[1:], fs, 1e-3 * peak, f.max(), 1.0 - phase) == [], (phase, fs)
+        assert peak_on_step_response(f[1:], fs, 1e-3 * peak, f.max(), 1.0 - phase) == [], (phase, fs)
+        assert peak_on_slow_fall(f[1:], fs, 1e-3 * peak, f.max(), 1.0 - phase) == [], (phase, fs)
 
 
 @pytest.mark.parametrize("fs, plate_hz, zeta, mode, ball, vin", [
@@ -924,7 +925,7 @@ def test_ball_force_on_an_ideal_plate_has_no_step_response(fs, ball, vin):
 ])
 @pytest.mark.parametrize("phase", [0.2, 0.7])
 def test_peak_that_the_force_leaves_slowly_is_a_problem(fs, plate_hz, zeta, mode, ball, vin, phase):
-    from ballimpact.conditioning import _peak_on_slow_fall
+    from ballimpact.signal.shape import peak_on_slow_fall
 
     # a plate of two modes answers the force's jump with an overshoot the one-mode fits do not recognise; the force
     # leaves that top over several samples, where the ball's drops at once at buckling (section 3.2.4)
@@ -932,7 +933,7 @@ def test_peak_that_the_force_leaves_slowly_is_a_problem(fs, plate_hz, zeta, mode
     assert sensed.max() > 1.03 * true_peak  # the lifted peak is what is at stake
     noise = 1e-3 * true_peak
     sensed = sensed + np.random.default_rng(int(fs) + int(10 * phase)).normal(0.0, noise, sensed.size)
-    problems = _peak_on_slow_fall(sensed[1:], fs, noise, sensed.max(), 1.0 - phase)
+    problems = peak_on_slow_fall(sensed[1:], fs, noise, sensed.max(), 1.0 - phase)
     assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], (fs, plate_hz, phase)
     assert "a ball's force drops at once as its wall buckles" in problems[0].message, problems
 
@@ -961,7 +962,7 @@ def test_end_taken_from_the_curve_where_the_refit_moves_it_later():
     """A punctured ball at 50 kHz whose end, refitted from the samples above twice the noise threshold, moves
     later by more than 0.5 % of TC (the force steepens into its end): the curve pins it, the contact's end is
     the curve's and TC is within 0.3 % of the model's; no problem is left."""
-    from ballimpact.conditioning import SPREAD_MAX_FRACTION
+    from ballimpact.signal.end_checks import SPREAD_MAX_FRACTION
 
     fs = 50e3
     v, start, end = _model_trace(fs, *PUNCTURED_30, seed=2)
@@ -1005,7 +1006,7 @@ def _plate_case(fs, fn_hz, zeta, noise, seed, foot=(0, 0.0)):
     fit of that noise)."""
     from test_plate import sensed_force
 
-    from ballimpact.conditioning import _BaselineFit
+    from ballimpact.signal.baseline import BaselineFit
 
     n = int(0.03 * fs)
     ts, tc = 500.37, 4.2e-3 * fs
@@ -1018,7 +1019,7 @@ def _plate_case(fs, fn_hz, zeta, noise, seed, foot=(0, 0.0)):
         kf = np.concatenate([[0.0, foot[1]], kf[1:]])
     x = sensed_force(kt, kf, np.arange(n) / fs, fn_hz, zeta) + np.random.default_rng(seed).normal(0.0, noise, n)
     every = np.ones(n, bool)
-    return x, ts, tc + foot[0], _BaselineFit(np.zeros(n), {}, 0.0, 0.0, True, noise, (), 0.0, every, every, every)
+    return x, ts, tc + foot[0], BaselineFit(np.zeros(n), {}, 0.0, 0.0, True, noise, (), 0.0, every, every, every)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -1028,8 +1029,8 @@ def test_undone_contact_fits_the_exact_forces_ends_through_the_plate(seed):
     # Its ends fitted through the plate come back to the truth, and the sensed samples before them hold no foot
     from test_plate import _resonance
 
-    from ballimpact.conditioning import _undone_contact
-    from ballimpact.plate import undo_plate_resonance
+    from ballimpact.signal.undone import _undone_contact
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = 50e3, 12e3, 0.02
     x, ts, tc, fit = _plate_case(fs, fn, zeta, 1e-3, seed)
@@ -1049,8 +1050,8 @@ def test_undone_contact_refuses_a_foot_lost_in_the_undone_noise(seed, foot):
     # before the fitted start stand out of their noise, and the undone force is refused
     from test_plate import _resonance
 
-    from ballimpact.conditioning import _undone_contact
-    from ballimpact.plate import undo_plate_resonance
+    from ballimpact.signal.undone import _undone_contact
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = 50e3, 12e3, 0.02
     x, ts, tc, fit = _plate_case(fs, fn, zeta, 1e-3, seed, foot)
@@ -1099,8 +1100,9 @@ SPIKE_PLATE = (100e3, 12e3, 0.05)  # sample rate [Hz], plate resonance [Hz], dam
 def test_fitted_force_does_not_span_the_drop():
     """Read one-sided, the fits that reach past the pre-buckling drop do not hold: the samples after it keep
     their own value (NaN error), never a reading smoothed across the drop."""
-    from ballimpact.conditioning import _fitted_force
-    from ballimpact.plate import PlateResonance, undo_plate_resonance
+    from ballimpact.signal.undone_peak import _fitted_force
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = SPIKE_PLATE
     sensed, truth, start = _spike_through_plate(fs, fn, zeta, 17.6, 1e-3, seed=1)
@@ -1118,7 +1120,7 @@ def _fitted_reads(read, noise, draws=40):
     """Misses of ``read(exact, start) -> (reading, its standard error, sample index)`` against the true force over
     ``draws`` noise draws of the spike through SPIKE_PLATE, and their mean reported error; asserts that the reported
     error is the scatter's (0.75-1.35 times) on at least 90 % of the draws."""
-    from ballimpact.plate import undo_plate_resonance
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = SPIKE_PLATE
     miss, error = [], []
@@ -1139,8 +1141,9 @@ def test_fitted_force_reads_the_ramps_top_with_an_honest_error():
     noise): read from the ramp's fit at its last sample over 40 noise draws, its scatter is the reported standard
     error (0.75-1.35 times), which is under a third of one undone sample's noise; its mean within 1.5 % of the
     true force there (above it: the drop's transient in the plate's inverse reaches back one sample)."""
-    from ballimpact.conditioning import _fitted_force
-    from ballimpact.plate import PlateResonance, undone_noise_gain
+    from ballimpact.signal.undone_peak import _fitted_force
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import undone_noise_gain
 
     fs, fn, zeta = SPIKE_PLATE
     noise = 2e-3
@@ -1158,8 +1161,8 @@ def test_fitted_force_reads_the_ramps_top_with_an_honest_error():
 def test_fitted_force_reads_a_smooth_top_unbiased():
     """Centred fits read the smooth top after buckling (0.9 at 30 samples after the drop) without bias (within
     3 standard errors of the mean over 40 draws) and with their reported error (0.75-1.35 times)."""
-    from ballimpact.conditioning import PEAK_FIT_S, _fitted_force
-    from ballimpact.plate import PlateResonance
+    from ballimpact.signal.undone_peak import PEAK_FIT_S, _fitted_force
+    from ballimpact.signal.plate import PlateResonance
 
     fs, fn, zeta = SPIKE_PLATE
     noise = 2e-3
@@ -1179,8 +1182,9 @@ def test_fitted_force_reads_a_smooth_top_unbiased():
 def test_fit_noise_scale_finds_noise_the_stated_one_misses(seed):
     """White noise through the plate's inverse, 500 samples: stated right, the scale is about 1 (never below it);
     stated at half, the centred fits' residuals find it twice as large (1.7-2.3)."""
-    from ballimpact.conditioning import _fit_noise_scale
-    from ballimpact.plate import PlateResonance, undo_plate_resonance
+    from ballimpact.signal.undone_peak import _fit_noise_scale
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = SPIKE_PLATE
     plate = PlateResonance(fn, zeta, 0.0, 0.0)
@@ -1193,16 +1197,16 @@ def test_fit_noise_scale_finds_noise_the_stated_one_misses(seed):
 
 
 def _front_ringing_problems(fs, plate_hz, zeta, phase, ball, vin, seed):
-    """_peak_on_front_ringing on the model's force through a plate (None: ideal), 0.1 % of the peak of noise, ten
+    """peak_on_front_ringing on the model's force through a plate (None: ideal), 0.1 % of the peak of noise, ten
     quiet samples before it; the problems, the sensed trace and the true peak [N]."""
-    from ballimpact.conditioning import _peak_on_front_ringing
+    from ballimpact.signal.peak import peak_on_front_ringing
 
     sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
     noise = 1e-3 * true_peak
     x = np.concatenate([np.zeros(10), sensed]) + np.random.default_rng(seed).normal(0.0, noise, sensed.size + 10)
     start = 10 + 1.0 - phase  # the force's jump: (1 - phase) of a sample after the first sample of ``sensed``
     end = 10 + float(np.flatnonzero(sensed > 0.01 * true_peak)[-1])
-    return _peak_on_front_ringing(x, fs, noise, float(x.max()), start, end), x, true_peak
+    return peak_on_front_ringing(x, fs, noise, float(x.max()), start, end), x, true_peak
 
 
 @pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin, phase", [
@@ -1212,7 +1216,7 @@ def _front_ringing_problems(fs, plate_hz, zeta, phase, ball, vin, seed):
     (150e3, 11.0e3, 0.15, "oversize", 27.0, 0.5),
 ])
 def test_peak_lifted_by_the_ringing_from_the_jump_is_a_problem(fs, plate_hz, zeta, ball, vin, phase):
-    from ballimpact.conditioning import _peak_on_step_response
+    from ballimpact.signal.shape import peak_on_step_response
 
     # a damped plate rings from the force's jump and the pre-buckling spike's top lands on a later maximum of that
     # ringing: the largest sample is 5-14 % above the ball's peak, and the force has no bump or regular swings
@@ -1227,7 +1231,7 @@ def test_peak_lifted_by_the_ringing_from_the_jump_is_a_problem(fs, plate_hz, zet
         assert_allclose(float(re.search(r"plate of about (\S+) kHz", problems[0].message).group(1)) * 1e3, plate_hz,
                         rtol=0.03)
         k0 = int(math.ceil(11 - phase))
-        assert _peak_on_step_response(x[k0:], fs, 1e-3 * true_peak, x.max(), k0 - (11 - phase)) == []
+        assert peak_on_step_response(x[k0:], fs, 1e-3 * true_peak, x.max(), k0 - (11 - phase)) == []
 
 
 @pytest.mark.parametrize("fs", [100e3, 150e3, 200e3])
@@ -1278,18 +1282,18 @@ def test_a_foot_before_the_rise_is_measured_or_named(foot_fraction, foot_samples
 def test_foot_sigma_reads_a_level_in_standard_errors(level_sigma, n):
     """A flat level of ``level_sigma`` noise deviations over n samples before a start, no noise: level_sigma
     sqrt(n) standard errors (the level statistic's, the ramp's lower for a flat foot)."""
-    from ballimpact.conditioning import _foot_sigma
+    from ballimpact.signal.end_checks import foot_sigma
 
-    assert_allclose(_foot_sigma(np.full(n, level_sigma * 1e-3), 1e-3), level_sigma * math.sqrt(n), rtol=1e-12)
+    assert_allclose(foot_sigma(np.full(n, level_sigma * 1e-3), 1e-3), level_sigma * math.sqrt(n), rtol=1e-12)
 
 
 def test_foot_sigma_on_white_noise_stays_below_the_check():
     """On white noise (500 draws of 25-100 samples) the statistic, a maximum over lengths and two shapes, exceeds
     FOOT_CHECK_SIGMA (5) at most once: the check's false alarms are rare."""
-    from ballimpact.conditioning import FOOT_CHECK_SIGMA, _foot_sigma
+    from ballimpact.signal.end_checks import FOOT_CHECK_SIGMA, foot_sigma
 
     rng = np.random.default_rng(0)
-    values = [_foot_sigma(rng.normal(0.0, 1e-3, int(rng.integers(25, 101))), 1e-3) for _ in range(500)]
+    values = [foot_sigma(rng.normal(0.0, 1e-3, int(rng.integers(25, 101))), 1e-3) for _ in range(500)]
     assert sum(v > FOOT_CHECK_SIGMA for v in values) <= 1
     assert 1.0 < float(np.median(values)) < 3.0
 
@@ -1322,8 +1326,8 @@ def test_weighted_fit_reads_a_smooth_top_with_half_the_error():
     after the drop, SPIKE_PLATE, 0.2 % noise) without bias (within 3 standard errors of the mean over 40 draws), with
     their reported error (0.75-1.35 times the scatter), and at most 0.6 times the unweighted fits' error and 0.4
     times the sensed noise (the undone sample's own noise is about 10 times the sensed noise)."""
-    from ballimpact.conditioning import PEAK_FIT_S, _fitted_force
-    from ballimpact.plate import PlateResonance
+    from ballimpact.signal.undone_peak import PEAK_FIT_S, _fitted_force
+    from ballimpact.signal.plate import PlateResonance
 
     fs, fn, zeta = SPIKE_PLATE
     noise = 2e-3
@@ -1347,8 +1351,9 @@ def test_weighted_fit_does_not_hold_across_the_drop(seed):
     """No weighted centred fit whose window spans the pre-buckling drop (SPIKE_PLATE, 0.2 % noise) holds: its
     weighted residual sees the step, so the spike's top is never read smoothed across it; the fits well after
     the drop hold."""
-    from ballimpact.conditioning import PEAK_FIT_S, _fitted_force
-    from ballimpact.plate import PlateResonance, undo_plate_resonance
+    from ballimpact.signal.undone_peak import PEAK_FIT_S, _fitted_force
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import undo_plate_resonance
 
     fs, fn, zeta = SPIKE_PLATE
     sensed, _, start = _spike_through_plate(fs, fn, zeta, SPIKE_DROP_AT, 2e-3, seed=seed)
@@ -1369,16 +1374,17 @@ def _guarded_lowpass(force_knots, fs, fn, zeta, noise, seed):
     the low-pass guard's verdict (None: kept) and the low-passed peak over the force's [-]."""
     from test_plate import sensed_force
 
-    from ballimpact.conditioning import _lowpass_hides_peak
-    from ballimpact.contact import detect_contact
-    from ballimpact.plate import PlateResonance, lowpass_zero_phase, undo_plate_resonance
+    from ballimpact.signal.undone_peak import lowpass_hides_peak
+    from ballimpact.signal.contact import detect_contact
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import lowpass_zero_phase, undo_plate_resonance
 
     kt, kf = force_knots
     t = np.arange(int(0.030 * fs)) / fs
     sensed = sensed_force(kt, kf, t, fn, zeta) + np.random.default_rng(seed).normal(0.0, noise, t.size)
     exact = undo_plate_resonance(sensed, fs, fn, zeta)
     contact = detect_contact(lowpass_zero_phase(exact, fs, 2.0 * fn), fs)
-    return (_lowpass_hides_peak(exact, fs, noise, PlateResonance(fn, zeta, 0.0, 0.0), contact, 0.0),
+    return (lowpass_hides_peak(exact, fs, noise, PlateResonance(fn, zeta, 0.0, 0.0), contact, 0.0),
             float(contact.peak_V) / float(np.max(kf)))
 
 
@@ -1426,8 +1432,9 @@ def test_plate_cutoffs_start_where_the_undone_noise_is_quiet_and_go_down_to_the_
     through the plate's inverse and the low-pass to PLATE_LOWPASS_NOISE of the peak (measured on 20 000 seeded
     samples pushed through both), down in steps of sqrt(2), never below the resonance, at most PLATE_LOWPASS_TRIES
     of them (now six: which one passes every check depends on the force)."""
-    from ballimpact.conditioning import PLATE_LOWPASS_NOISE, PLATE_LOWPASS_TRIES, _plate_cutoffs
-    from ballimpact.plate import PlateResonance, lowpass_zero_phase, undo_plate_resonance
+    from ballimpact.signal.undone import PLATE_LOWPASS_NOISE, PLATE_LOWPASS_TRIES, _plate_cutoffs
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import lowpass_zero_phase, undo_plate_resonance
 
     zeta = 0.03
     cutoffs = _plate_cutoffs(fs, PlateResonance(fn, zeta, 0.0, 0.0), noise, 1.0)
@@ -1448,16 +1455,16 @@ def test_plate_cutoffs_start_where_the_undone_noise_is_quiet_and_go_down_to_the_
 
 
 def _first_overshoot_problems(fs, plate_hz, zeta, phase, ball, vin, seed, noise_fraction=1e-3):
-    """_peak_on_first_overshoot on the model's force through a plate (None: ideal), ``noise_fraction`` of the peak
+    """peak_on_first_overshoot on the model's force through a plate (None: ideal), ``noise_fraction`` of the peak
     of noise, ten quiet samples before it; the problems, the sensed trace and the true peak [N]."""
-    from ballimpact.conditioning import _peak_on_first_overshoot
+    from ballimpact.signal.peak import peak_on_first_overshoot
 
     sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
     noise = noise_fraction * true_peak
     x = np.concatenate([np.zeros(10), sensed]) + np.random.default_rng(seed).normal(0.0, noise, sensed.size + 10)
     start = 10 + 1.0 - phase  # the force's jump: (1 - phase) of a sample after the first sample of ``sensed``
     end = 10 + float(np.flatnonzero(sensed > 0.01 * true_peak)[-1])
-    return _peak_on_first_overshoot(x, fs, noise, float(x.max()), start, end), x, true_peak
+    return peak_on_first_overshoot(x, fs, noise, float(x.max()), start, end), x, true_peak
 
 
 @pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin, phase", [
@@ -1470,7 +1477,7 @@ def _first_overshoot_problems(fs, plate_hz, zeta, phase, ball, vin, seed, noise_
 ])
 def test_peak_on_the_plates_first_overshoot_sampled_a_few_times_a_period_is_a_problem(fs, plate_hz, zeta, ball, vin,
                                                                                        phase):
-    from ballimpact.conditioning import OVERSHOOT_MIN_PERIOD, _peak_on_front_ringing
+    from ballimpact.signal.peak import OVERSHOOT_MIN_PERIOD, peak_on_front_ringing
 
     # the plate's first overshoot of the force's jump is the largest sample, 1-2 samples into the contact, and its
     # ringing is gone a period or two later; the front through a plate, with the drop at buckling, finds the plate
@@ -1487,7 +1494,7 @@ def test_peak_on_the_plates_first_overshoot_sampled_a_few_times_a_period_is_a_pr
                     rtol=0.05)
     assert float(re.search(r"lifts the largest sample (\S+) % of the peak", problems[0].message).group(1)) > 3.0
     noise = 1e-3 * true_peak  # too few samples up to the largest for the front's own check
-    assert _peak_on_front_ringing(x, fs, noise, float(x.max()), 11 - phase, x.size - 20) == []
+    assert peak_on_front_ringing(x, fs, noise, float(x.max()), 11 - phase, x.size - 20) == []
 
 
 @pytest.mark.parametrize("fs, plate_hz, zeta, ball, vin, phase, after, spike", [
@@ -1499,7 +1506,7 @@ def test_first_overshoot_is_seen_under_an_electrical_spike_on_the_ringing(fs, pl
     # overshoot (added after the plate; remove_spikes cannot tell it from the ringing's swings): the front fits
     # neither through an ideal plate nor through a plate until the fits take a free spike (on 257a046 no problem was
     # found, as on python bench/spike_ends_map.py --n 400 --seed 2 trace 2:349, peak +5.0 % ok)
-    from ballimpact.conditioning import _peak_on_first_overshoot
+    from ballimpact.signal.peak import peak_on_first_overshoot
 
     sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
     noise = 2e-3 * true_peak  # (at 1e-3 the fit with the spike leaves 42 noise variances of the model's misfit)
@@ -1508,7 +1515,7 @@ def test_first_overshoot_is_seen_under_an_electrical_spike_on_the_ringing(fs, pl
     x[i + after] += spike * true_peak
     start = 10 + 1.0 - phase
     end = 10 + float(np.flatnonzero(sensed > 0.01 * true_peak)[-1])
-    problems = _peak_on_first_overshoot(x, fs, noise, float(x.max()), start, end)
+    problems = peak_on_first_overshoot(x, fs, noise, float(x.max()), start, end)
     assert [p.kind for p in problems] == [ProblemKind.PEAK_ON_RINGING], problems
     seen = re.search(r"plate of about (\S+) kHz.* less a single-sample spike of (\S+) noise deviations (\S+) samples "
                      r"from the start", problems[0].message)
@@ -1537,7 +1544,7 @@ def _fast_ringing_problems(fs, plate_hz, zeta, phase, ball, vin, seed, noise_fra
     """_start_on_fast_ringing on the model's force through a plate (None: ideal), ``noise_fraction`` of the peak of
     noise, ten quiet samples before it, the contact from the force's true start to its true end; the problems, the
     sensed trace, the true start [samples] and TC [samples]."""
-    from ballimpact.conditioning import _start_on_fast_ringing
+    from ballimpact.signal.ringing import _start_on_fast_ringing
 
     sensed, true_peak = _plate_sensed_ball_force(fs, plate_hz, zeta, phase, ball, vin)
     ideal, _ = _plate_sensed_ball_force(fs, None, 0.0, phase, ball, vin)
@@ -1557,7 +1564,9 @@ def _fast_ringing_problems(fs, plate_hz, zeta, phase, ball, vin, seed, noise_fra
     (55.1e3, 15.76e3, 0.106, "punctured", 11.5, 0.5, True),  # map 2:202: 3.5 samples a period, TC +1.5 %
 ])
 def test_contact_front_ringing_near_half_the_sample_rate_is_a_problem(fs, plate_hz, zeta, ball, vin, phase, dip):
-    from ballimpact.conditioning import FAST_RING_ZERO, JUMP_MAX_FRACTION, OVERSHOOT_MIN_PERIOD
+    from ballimpact.signal.ringing import FAST_RING_ZERO
+    from ballimpact.signal.end_checks import JUMP_MAX_FRACTION
+    from ballimpact.signal.peak import OVERSHOOT_MIN_PERIOD
 
     problems, x, start, tc = _fast_ringing_problems(fs, plate_hz, zeta, phase, ball, vin, seed=int(10 * phase))
     k0 = int(math.ceil(start))
@@ -1593,7 +1602,8 @@ def test_ball_force_on_an_ideal_plate_has_no_fast_front_ringing(fs, ball, vin):
 
 @pytest.mark.parametrize("phase", [0.2, 0.6])
 def test_fast_front_ringing_that_leaves_the_start_is_no_problem(phase):
-    from ballimpact.conditioning import FAST_RING_ZERO, JUMP_MAX_FRACTION
+    from ballimpact.signal.ringing import FAST_RING_ZERO
+    from ballimpact.signal.end_checks import JUMP_MAX_FRACTION
 
     # 2.6 samples a period on a contact of over 140 samples: the front rings (as on zoo trace 0:960, ok and right),
     # but never back to zero, and half a sample is well within 0.7 % of TC: the start is left as found
@@ -1620,7 +1630,7 @@ def _ramp_cut_by_a_drop(fs, rise_frac, drop_phase, noise_frac=0.0, hump=0.9, see
 
 def test_peak_between_samples_judges_the_range_of_the_lifted_top():
     from ballimpact.calibration import force_top
-    from ballimpact.conditioning import _peak_between_samples
+    from ballimpact.signal.peak import peak_between_samples
 
     # a straight ramp of 10.4 % of the top per sample cut by a drop, noise 0.35 % of the top: half a rise less
     # two noise deviations of a difference is 4.7 %, but force_top lifts the largest sample by half the last
@@ -1631,11 +1641,11 @@ def test_peak_between_samples_judges_the_range_of_the_lifted_top():
     assert_allclose(half, 0.052, rtol=1e-9)
     assert abs(top - 1.0) <= half + 1e-12  # the analytic top within the lifted top's half range
     assert top - 1.0 > 0.05  # what is at stake
-    problems = _peak_between_samples(x, fs, noise)
+    problems = peak_between_samples(x, fs, noise)
     assert [p.kind for p in problems] == [ProblemKind.PEAK_BETWEEN_SAMPLES], problems
     assert "may miss the peak by 5.2 %" in problems[0].message
     # an undone force's largest sample is not lifted: judged by half a rise, less the noise, as before
-    assert _peak_between_samples(x, fs, noise, lifted=False) == []
+    assert peak_between_samples(x, fs, noise, lifted=False) == []
 
 
 #: zoo trace 11:617's force (25.7 kHz, ideal plate, punctured ball), a fraction of its true peak, the sample before
@@ -1656,7 +1666,7 @@ def test_peak_between_samples_sees_a_spike_on_the_jumps_next_sample(jump, spike,
     zoo trace 11:617 (25.7 kHz) was ok with the peak 7.9 % low, its true top 8.6 % above the largest sample. Only
     where the jump's sample is already at half the peak: a jump the sensor chain spreads over two samples rises as
     steeply, and counted, it excluded 66 right traces of zoo seeds 0-14."""
-    from ballimpact.conditioning import _peak_between_samples
+    from ballimpact.signal.peak import peak_between_samples
 
     x = np.array(_SPIKE_AFTER_THE_JUMP)
     x[2] = spike
@@ -1664,7 +1674,7 @@ def test_peak_between_samples_sees_a_spike_on_the_jumps_next_sample(jump, spike,
         x = np.delete(x, 1)  # 0 -> 0.9066 -> 0.8525: one rise, from zero
     else:
         x[1] = jump
-    problems = _peak_between_samples(x, 25.7e3, 2.7e-4, lifted=False)
+    problems = peak_between_samples(x, 25.7e3, 2.7e-4, lifted=False)
     assert bool(problems) is flagged, problems
     if flagged:
         assert problems[0].kind is ProblemKind.PEAK_BETWEEN_SAMPLES
@@ -1675,11 +1685,11 @@ def test_peak_between_samples_sees_a_spike_on_the_jumps_next_sample(jump, spike,
     (23.9e3, None, 0.0, "pressurised", 29.3),
     (35.5e3, None, 0.0, "pressureless", 31.0),
     (35.5e3, 12.9e3, 0.29, "pressurised", 29.6),  # a swing of ringing on the ramp (bench/spike_top_map.py 1:299)
-    (40.0e3, 18.0e3, 0.3, "pressureless", 25.0),  # (a plate's first overshoot of the jump: _peak_on_first_overshoot)
+    (40.0e3, 18.0e3, 0.3, "pressureless", 25.0),  # (a plate's first overshoot of the jump: peak_on_first_overshoot)
 ])
 def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz, zeta, ball, vin):
     from ballimpact.calibration import force_top
-    from ballimpact.conditioning import _peak_between_samples
+    from ballimpact.signal.peak import peak_between_samples
 
     # the model's force (its spike the peak) through a known plate at ten sample phases, noise 0.3 % of the
     # peak: where the check passes, the top that processing reports (force_top's on the sensed force) is within
@@ -1689,7 +1699,7 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
         noise = 3e-3 * true_peak
         x = sensed + np.random.default_rng(int(100 * phase)).normal(0.0, noise, sensed.size)
         xc = x[1:int(np.flatnonzero(sensed > 0.01 * true_peak)[-1]) + 1]
-        if _peak_between_samples(xc, fs, noise) == []:
+        if peak_between_samples(xc, fs, noise) == []:
             assert abs(force_top(np.arange(xc.size) / fs, xc, noise)[0] / true_peak - 1.0) <= 0.05, phase
 
 
@@ -1705,8 +1715,8 @@ def test_peak_between_samples_passes_only_a_top_known_to_5_percent(fs, plate_hz,
 def test_hinge_problems_name_tc_not_known_to_one_percent(start_se, end_se, flags, named):
     """``_hinge_problems``: twice the root sum of squares of the ends' standard uncertainties above 1 % of TC (here
     TC is 1 s, so the uncertainties are fractions of it) names the end with the larger one."""
-    from ballimpact.conditioning import _hinge_problems
-    from ballimpact.contact import ContactResult
+    from ballimpact.signal.end_checks import _hinge_problems
+    from ballimpact.signal.contact import ContactResult
 
     c = ContactResult(found=True, start_s=1.0, end_s=2.0, edge_start_s=1.0, edge_end_s=2.0, start_index=1,
                       end_index=2, peak_index=1, peak_V=1.0, n_impacts=1, noise_rms_V=1e-3, threshold_V=8e-3,
@@ -1744,8 +1754,8 @@ def test_a_spike_on_the_smooth_force_near_a_contact_end_is_replaced_and_the_end_
 def test_hinge_problems_say_which_fit_gave_the_end(flags, curve_se, said):
     """``_hinge_problems`` names the fit that gave the end: an end from the force's curve (``end_curve``) is not "the
     line through its last samples" (TC 1 ms: an end uncertain by 6 us, +-12 us at twice it, is 1.2 % of TC)."""
-    from ballimpact.conditioning import _hinge_problems
-    from ballimpact.contact import ContactResult
+    from ballimpact.signal.end_checks import _hinge_problems
+    from ballimpact.signal.contact import ContactResult
 
     c = ContactResult(found=True, start_s=1.0, end_s=1.001, edge_start_s=1.0, edge_end_s=1.001, start_index=1,
                       end_index=2, peak_index=1, peak_V=1.0, n_impacts=1, noise_rms_V=1e-3, threshold_V=8e-3,
@@ -1787,9 +1797,9 @@ def test_jump_spread_by_a_low_pass_is_a_problem(fs, fn_hz, zeta):
     assert c.contact.contact_time_s - tc > 0.6 * delay, (c.contact.contact_time_s - tc, delay)
     assert c.problems, "a TC long by the filter's delay passed"
     # the check itself (run last, when nothing else excludes the trace; here the end's curve may already have)
-    from ballimpact.conditioning import _front_lowpass
+    from ballimpact.signal.shape import front_lowpass
 
-    found = _front_lowpass(c.voltage_V, fs, c.noise_rms_V, float(c.contact.peak_V), c.contact.start_s * fs,
+    found = front_lowpass(c.voltage_V, fs, c.noise_rms_V, float(c.contact.peak_V), c.contact.start_s * fs,
                            c.contact.end_s * fs, c.contact.contact_time_s)
     assert len(found) == 1 and found[0].kind is ProblemKind.CONTACT_END_UNDETERMINED, found
     assert "as through a low-pass" in found[0].message
@@ -1802,13 +1812,13 @@ def test_jump_spread_by_a_low_pass_is_a_problem(fs, fn_hz, zeta):
 def test_force_through_no_low_pass_shows_none(fs, jump):
     # the same force through an ideal chain, wherever its start falls between two samples, and a force that
     # starts without a jump (its rise spread by the force itself, not by a filter)
-    from ballimpact.conditioning import _front_lowpass
+    from ballimpact.signal.shape import front_lowpass
 
     for phase in (0.1, 0.5, 0.9):
         v, _ = _lowpassed_jump_trace(fs, None, jump=jump, phase=phase)
         c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
         assert not any("low-pass" in p.message for p in c.problems), (phase, [p.message for p in c.problems])
-        assert _front_lowpass(c.voltage_V, fs, c.noise_rms_V, float(c.contact.peak_V), c.contact.start_s * fs,
+        assert front_lowpass(c.voltage_V, fs, c.noise_rms_V, float(c.contact.peak_V), c.contact.start_s * fs,
                               c.contact.end_s * fs, c.contact.contact_time_s) == [], phase
 
 
@@ -1862,12 +1872,12 @@ def _staircase_trace(fs, bits, noise_V, seed, tail_s, level_V=5e-3):
 
 
 def _staircase_check(v, fs):
-    from ballimpact.conditioning import _adc_step_problems
-    from ballimpact.contact import quantization_step
+    from ballimpact.signal.end_checks import adc_step_problems
+    from ballimpact.signal.noise import quantization_step
 
     c = condition_voltage(v, fs, mains_hz=None, tau_s=math.inf)
     scale = float(np.max(np.abs(v)))
-    return c, _adc_step_problems(c.voltage_V / scale, fs, c.noise_rms_V / scale, quantization_step(v) / scale,
+    return c, adc_step_problems(c.voltage_V / scale, fs, c.noise_rms_V / scale, quantization_step(v) / scale,
                                  c.contact, 0.0, scale)
 
 
@@ -1989,7 +1999,7 @@ def test_a_contact_found_only_after_a_baseline_through_it_is_unchecked_and_a_pro
 def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(seed):
     """The residual's first and second derivatives in kappa (Newton's refinement of the decay rate) against central
     differences of the residual itself, and the refined kappa against a fine scan of the residual."""
-    from ballimpact.conditioning import _normal_equations, _refine_kappa, _rss_slope, _solve_kappa
+    from ballimpact.signal.baseline import _normal_equations, _refine_kappa, _rss_slope, _solve_kappa
 
     rng = np.random.default_rng(seed)
     n, p = 400, 4
@@ -2018,7 +2028,7 @@ def test_kappa_refinement_slope_and_least_match_finite_differences_and_a_scan(se
 def test_correlation_factor_is_one_for_white_residuals_and_large_for_unmodelled_hum(seed):
     """kappa's standard error is widened by the scores' long-run variance over their white variance: about 1 for
     white residuals (never below), near the window's length for a hum the model left out (correlated over it)."""
-    from ballimpact.conditioning import _correlation_factor
+    from ballimpact.signal.baseline import _correlation_factor
 
     rng = np.random.default_rng(seed)
     fs, n, lag = 66964.3, 4000, 134
@@ -2037,7 +2047,7 @@ def test_correlation_factor_is_one_for_white_residuals_and_large_for_unmodelled_
 def test_baseline_fit_cache_returns_the_fit_of_the_same_quiet_samples(tau_s, mains):
     """The iteration's fit cache: a window moved by a fraction of a sample keeps its quiet samples and gets the
     same fit back; one moved by samples gets a new fit; each is the fit made without the cache."""
-    from ballimpact.conditioning import _fit_baseline
+    from ballimpact.signal.baseline import fit_baseline
 
     v, fs, truth = make_trace(tau_s=2.0, hum_V=0.01, noise_V=0.001, offset_V=0.02, seed=7)
     s_u, e_u = truth.start_s * fs, truth.end_s * fs
@@ -2046,7 +2056,7 @@ def test_baseline_fit_cache_returns_the_fit_of_the_same_quiet_samples(tau_s, mai
     cache: dict = {}
 
     def fit(a, b, use_cache=True):
-        return _fit_baseline(v, fs, mains, a, b, *guards, None, True, kappa, cache=cache if use_cache else None)
+        return fit_baseline(v, fs, mains, a, b, *guards, None, True, kappa, cache=cache if use_cache else None)
 
     first = fit(s_u, e_u)
     # the quiet stretches start and end at whole samples: a move of 0.02 samples that crosses none of the
@@ -2077,9 +2087,9 @@ def test_undone_peak_spread_flags_a_spike_built_by_the_damping_term(spike, flagg
     """The undone peak's dependence on the plate's damping ratio: a smooth half-sine's top (slope zero there) barely
     moves with it; a narrow spike's peak, undone from a heavily damped 4 kHz plate, is built by the damping term
     (2 zeta / wn) x' and moves by several per cent with the ratio 25 % off (zoo trace 7:265: -9.2 %)."""
-    from ballimpact.conditioning import PLATE_PEAK_SPREAD, _undone_peak_spread
-    from ballimpact.contact import ContactResult
-    from ballimpact.plate import PlateResonance
+    from ballimpact.signal.undone import PLATE_PEAK_SPREAD, undone_peak_spread
+    from ballimpact.signal.contact import ContactResult
+    from ballimpact.signal.plate import PlateResonance
 
     fs_fine, fs, fn, zeta = 2.0e6, 50.0e3, 4000.0, 0.25
     t = np.arange(int(0.012 * fs_fine)) / fs_fine
@@ -2094,7 +2104,7 @@ def test_undone_peak_spread_flags_a_spike_built_by_the_damping_term(spike, flagg
     contact = ContactResult(found=True, start_s=t0, end_s=t0 + tc, edge_start_s=t0, edge_end_s=t0 + tc,
                             start_index=int(t0 * fs), end_index=int((t0 + tc) * fs), peak_index=0, peak_V=1.0,
                             n_impacts=1, noise_rms_V=1e-4, threshold_V=1e-3, clipped=False, flags=())
-    problems = _undone_peak_spread(x, fs, contact, plate, math.inf, 0.0)
+    problems = undone_peak_spread(x, fs, contact, plate, math.inf, 0.0)
     assert bool(problems) is flagged
     if flagged:
         assert problems[0].kind is ProblemKind.PEAK_ON_RINGING
@@ -2124,9 +2134,10 @@ def test_lowpassed_spike_is_not_a_known_peak(spike_top, hump_top, cutoff_hz, fla
     """A low-passed undone force whose maximum in the spike's phase is near its peak does not report that peak:
     the kernel lowers a ramp cut by a drop by an amount the samples cannot bound (zoo traces 11:784, 13:41,
     14:1538, 14:1632: 5.2-6.3 % low)."""
-    from ballimpact.conditioning import LOWPASS_SPIKE_FRACTION, _lowpassed_spike
-    from ballimpact.contact import ContactResult
-    from ballimpact.plate import PlateResonance, lowpass_zero_phase
+    from ballimpact.signal.undone import LOWPASS_SPIKE_FRACTION, lowpassed_spike
+    from ballimpact.signal.contact import ContactResult
+    from ballimpact.signal.plate import PlateResonance
+    from ballimpact.signal.undo import lowpass_zero_phase
 
     fs = 100e3
     force, t0, tc = _spike_then_hump(fs, spike_top, hump_top)
@@ -2137,7 +2148,7 @@ def test_lowpassed_spike_is_not_a_known_peak(spike_top, hump_top, cutoff_hz, fla
                             start_index=int(t0 * fs), end_index=int((t0 + tc) * fs), peak_index=0,
                             peak_V=float(np.max(y)), n_impacts=1, noise_rms_V=1e-4, threshold_V=1e-3, clipped=False,
                             flags=())
-    problems = _lowpassed_spike(y, fs, contact, PlateResonance(8000.0, 0.05, 0.0, 0.0), cutoff_hz, 0.0)
+    problems = lowpassed_spike(y, fs, contact, PlateResonance(8000.0, 0.05, 0.0, 0.0), cutoff_hz, 0.0)
     assert bool(problems) is flagged
     if flagged:
         assert problems[0].kind is ProblemKind.PEAK_ON_RINGING
@@ -2152,7 +2163,7 @@ def test_lowpassed_spike_is_not_a_known_peak(spike_top, hump_top, cutoff_hz, fla
     (0.5e-3, "end", False),     # after the contact the decay's correction wanders: not looked at
 ])
 def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flagged):
-    from ballimpact.conditioning import _edge_event_problems
+    from ballimpact.signal.integrity import edge_event_problems
 
     fs, noise, peak = 50e3, 1e-3, 1.0
     rng = np.random.default_rng(3)
@@ -2166,7 +2177,7 @@ def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flag
         x[:n_tail] += fall
     else:
         x[x.size - n_tail:] += fall[::-1]
-    problems = _edge_event_problems(x, fs, noise, peak, s_u, 1.0)
+    problems = edge_event_problems(x, fs, noise, peak, s_u, 1.0)
     assert bool(problems) is flagged
     if flagged:
         assert problems[0].kind is ProblemKind.MULTIPLE_IMPACTS
@@ -2184,7 +2195,7 @@ def test_edge_event_at_the_record_start_is_an_impact_cut_off(tail_s, where, flag
 def test_end_event_rising_at_the_record_end_is_an_impact_cut_off(shape, flagged):
     """Force rising to the record's last sample, after a quiet stretch, no longer than the contact: another impact
     the record cut off (zoo trace 19:218, a faulty trace ok)."""
-    from ballimpact.conditioning import _end_event_problems
+    from ballimpact.signal.integrity import end_event_problems
 
     fs, noise, peak = 50e3, 1e-3, 1.0
     x = np.random.default_rng(3).normal(0.0, noise, int(0.03 * fs))
@@ -2197,7 +2208,7 @@ def test_end_event_rising_at_the_record_end_is_an_impact_cut_off(shape, flagged)
         ramp = ramp[::-1]
     if n:
         x[x.size - n:] += ramp
-    problems = _end_event_problems(x, fs, noise, peak, e_u, e_u - s_u, 1.0)
+    problems = end_event_problems(x, fs, noise, peak, e_u, e_u - s_u, 1.0)
     assert bool(problems) is flagged, problems
     if flagged:
         assert problems[0].kind is ProblemKind.MULTIPLE_IMPACTS
@@ -2211,12 +2222,12 @@ def test_baseline_bend_under_the_contact_beyond_a_tenth_of_the_peak(hum_V, flagg
     unpinned fit, zoo trace 11:342) by more than a tenth of a 1 V peak."""
     from types import SimpleNamespace
 
-    from ballimpact.conditioning import _baseline_bend_problems
+    from ballimpact.signal.integrity import baseline_bend_problems
 
     fs = 50e3
     t = np.arange(int(0.03 * fs)) / fs
     fit = SimpleNamespace(baseline=hum_V * np.sin(2 * np.pi * 60.0 * t + 0.3), hum_amplitudes=(hum_V,))
-    problems = _baseline_bend_problems(fit, 1.0, 0.010 * fs, 0.014 * fs, 1.0)
+    problems = baseline_bend_problems(fit, 1.0, 0.010 * fs, 0.014 * fs, 1.0)
     assert bool(problems) is flagged
     if flagged:
         assert problems[0].kind is ProblemKind.MAINS_UNRESOLVED
@@ -2228,9 +2239,8 @@ def test_event_mask_takes_a_second_contact_with_its_shoulders(height, masked):
     """A second contact standing out as an event is left out of the baseline fit from where it rises out of the
     noise to where it falls back, with the guards beyond: its shoulders, left in the fit of a short record with
     hum, bent the hum under the contact (zoo trace 25:1094, 1.3 % of the peak, kCAL +1.2 %)."""
-    from ballimpact.conditioning import (EVENT_GUARD_AFTER_S, EVENT_GUARD_BEFORE_S, EVENT_SHOULDER_SIGMA,
-                                         _event_mask)
-    from ballimpact.contact import ContactResult
+    from ballimpact.signal.window import EVENT_GUARD_AFTER_S, EVENT_GUARD_BEFORE_S, EVENT_SHOULDER_SIGMA, _event_mask
+    from ballimpact.signal.contact import ContactResult
 
     fs, noise, peak = 100e3, 1e-4, 1.0
     t = np.arange(int(0.04 * fs)) / fs
@@ -2267,13 +2277,14 @@ def test_peak_between_samples_sees_a_single_sample_top_on_the_jump(second, n_fal
     top: the ball's spike with its ramp unsampled or an electrical spike riding on the jump (whose second differences
     there have no isolated spike's shape, so remove_spikes leaves it). Zoo trace 33:674 (50.7 kHz, ideal plate) was
     ok with such a spike taken for the peak, +32 %. Were it electrical, its excess is in the impulse as well."""
-    from ballimpact.conditioning import PEAK_ALONE_FRACTION, SPIKE_END_IMPULSE, _peak_between_samples
+    from ballimpact.signal.peak import PEAK_ALONE_FRACTION, peak_between_samples
+    from ballimpact.signal.spikes import SPIKE_END_IMPULSE
 
     # 33:674's front [V]: the sample before the contact, the jump's first sample (part-way), its second, and the
     # oversize ball's force after it: a jump to 1.43 V and a ramp to its top of 2.09 V at 1.05 ms, then the fall
     fs = 50.65e3
     x = np.concatenate([[0.005, 0.97, second], np.linspace(1.43, 2.09, 53), np.linspace(2.09, 0.05, n_fall)[1:]])
-    problems = _peak_between_samples(x, fs, 4.6e-3)
+    problems = peak_between_samples(x, fs, 4.6e-3)
     assert [p.kind for p in problems] == kinds, problems
     if kinds:
         assert "the largest sample stands alone" in problems[0].message
@@ -2306,10 +2317,10 @@ def test_front_dip_names_a_sample_back_at_zero_after_the_jump(second, start_u, f
     """No ball's force returns to zero after its jump before it leaves (section 3.2.4 in Goodwill & Haake 2004):
     a sample of the front back near zero is a negative electrical spike or a plate's swing, and the start is not
     known (zoo trace 33:674's rig with a -1.5 V spike there: ok, TC -1.2 %)."""
-    from ballimpact.conditioning import _front_dip
+    from ballimpact.signal.peak import front_dip
 
     x = _front_33_674(second=second)
-    problems = _front_dip(x, 50.65e3, 2.09, start_u, x.size - 2.0)
+    problems = front_dip(x, 50.65e3, 2.09, start_u, x.size - 2.0)
     assert [p.kind for p in problems] == ([ProblemKind.CONTACT_END_UNDETERMINED] if flagged else []), problems
     if flagged:
         assert problems[0].message.startswith("contact start not determined")

@@ -1,5 +1,5 @@
 """Tests of conditioning's integrity checks that the sampled mutation run asked for: the 50/60 Hz hum checks
-(`_mains_problems`, the problem each branch exists for), the level before the contact, spikes in short records.
+(`mains_problems`, the problem each branch exists for), the level before the contact, spikes in short records.
 
 The rest of conditioning's tests are in tests/test_conditioning.py.
 """
@@ -15,8 +15,10 @@ import pytest
 from numpy.testing import assert_allclose
 from tracekit import make_trace
 
-from ballimpact.conditioning import (MAINS_AMBIGUOUS_FRACTION, _BaselineFit, _mains_problems, condition_voltage,
-                                     remove_spikes)
+from ballimpact.signal.integrity import MAINS_AMBIGUOUS_FRACTION, mains_problems
+from ballimpact.signal.baseline import BaselineFit
+from ballimpact.signal.conditioning import condition_voltage
+from ballimpact.signal.spikes import remove_spikes
 from ballimpact.problems import ProblemKind
 
 FS = 10_000.0  # [Hz]
@@ -26,15 +28,15 @@ N = 200
 def _fit(baseline, hum_amplitudes=(0.004, 0.001), quiet=slice(10, 150)):
     q = np.zeros(N, dtype=bool)
     q[quiet] = True
-    return _BaselineFit(baseline=np.asarray(baseline, dtype=float), coef={}, kappa=0.0, kappa_se=0.0, has_post=False,
+    return BaselineFit(baseline=np.asarray(baseline, dtype=float), coef={}, kappa=0.0, kappa_se=0.0, has_post=False,
                         noise=1e-4, hum_amplitudes=hum_amplitudes, bic=0.0, quiet=q, pre=q, post=np.zeros(N, bool))
 
 
 def _problems(fit, peak, ambiguous, start_u=0.0, end_u=49.5, scale=2.0):
-    return _mains_problems(np.zeros(N), FS, fit, peak, scale, ambiguous, start_u, end_u)
+    return mains_problems(np.zeros(N), FS, fit, peak, scale, ambiguous, start_u, end_u)
 
 
-# --- _mains_problems on hand-built baselines (scaled units; scale = 2 V per unit) ------------
+# --- mains_problems on hand-built baselines (scaled units; scale = 2 V per unit) ------------
 
 
 @pytest.mark.parametrize("peak", [1.0, 0.5])
@@ -217,15 +219,15 @@ def test_negative_outliers_in_the_quiet_baseline_are_clipped_like_positive_ones(
 def test_level_off_zero_message_gives_the_level_in_mV(level_mV, printed):
     """The last 2 ms before the contact at a known level (scale 2 V per unit, peak 1 unit = 2 V): the message
     gives it in mV to 3 digits and as a percentage of the peak."""
-    from ballimpact.conditioning import _level_problems
+    from ballimpact.signal.integrity import level_problems
 
     fs, n = 10_000.0, 400
     x = np.zeros(n)
     x[:200] = level_mV / 2.0e3
     pre = np.arange(n) < 200
-    fit = _BaselineFit(baseline=np.zeros(n), coef={}, kappa=0.0, kappa_se=0.0, has_post=False, noise=1e-5,
+    fit = BaselineFit(baseline=np.zeros(n), coef={}, kappa=0.0, kappa_se=0.0, has_post=False, noise=1e-5,
                        hum_amplitudes=(), bic=0.0, quiet=pre, pre=pre, post=np.zeros(n, dtype=bool))
-    out = _level_problems(x, fs, fit, 1.0, 2.0, n - 1.0)
+    out = level_problems(x, fs, fit, 1.0, 2.0, n - 1.0)
     pct = 100 * abs(level_mV) / 2.0e3
     assert [(p.kind, p.message) for p in out] == [(
         ProblemKind.BASELINE_OFF_ZERO,

@@ -1,4 +1,4 @@
-"""Tests for ballimpact.contact: sub-sample contact start/end, impact counting, clipping."""
+"""Tests for ballimpact.signal.contact: sub-sample contact start/end, impact counting, clipping."""
 
 import functools
 import math
@@ -12,9 +12,10 @@ from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 from tracekit import DIRTY, make_trace
 
-from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import (ContactSearch, contact_samples, detect_clipping, detect_contact, detect_saturation,
-                               finite_median, quantization_step, robust_noise)
+from ballimpact.signal.conditioning import condition_voltage
+from ballimpact.signal.contact import ContactSearch, contact_samples, detect_contact
+from ballimpact.signal.clipping import detect_clipping, detect_saturation
+from ballimpact.signal.noise import finite_median, quantization_step, robust_noise
 
 RATES_HZ = [66964.3, 50000.0]
 
@@ -482,7 +483,8 @@ def _clean_pulse(fs=100e3, pre_s=20e-3, noise_V=2e-3, seed=0):
 def test_given_noise_used_and_threshold_reported_in_volts():
     # noise_rms_V given: the thresholds use it (in volts, like the trace), THRESHOLD_SIGMA of it
     # above THRESHOLD_FRACTION of the 5 V peak; not given: estimated from the pre-trigger (2 mV)
-    from ballimpact.contact import THRESHOLD_FRACTION, THRESHOLD_SIGMA, detect_contact
+    from ballimpact.signal.noise import THRESHOLD_FRACTION, THRESHOLD_SIGMA
+    from ballimpact.signal.contact import detect_contact
 
     v, _ = _clean_pulse()
     c = detect_contact(v, 100e3, noise_rms_V=0.05)
@@ -496,7 +498,7 @@ def test_given_noise_used_and_threshold_reported_in_volts():
 
 def test_short_pretrigger_flagged():
     # 0.1 ms of baseline before the contact: too few samples to measure the noise before it
-    from ballimpact.contact import detect_contact
+    from ballimpact.signal.contact import detect_contact
 
     v, _ = _clean_pulse(pre_s=0.1e-3)
     assert "short_pretrigger" in detect_contact(v, 100e3).flags
@@ -597,7 +599,7 @@ def test_end_from_curve_is_unbiased_with_an_honest_uncertainty(shape, fs):
     """Over 40 noise draws the curve's end is known to a sample, within 3 of its standard uncertainties of the
     model's end in each draw and within 2 in at least 85 % of them (a normal error: 95 %); its mean error is
     within 3 standard errors of zero."""
-    from ballimpact.contact import end_from_curve
+    from ballimpact.signal.curve_end import end_from_curve
 
     errors, z = [], []
     for seed in range(40):
@@ -663,7 +665,7 @@ def test_end_from_curve_where_the_line_is_early():
     """A convex fade (zoo trace 2:1489: the force flattens into its end, TC -1.1 % from the hinge): noise-free
     samples with a noise level given, the hinge's line meets zero more than half a sample early, the curve's end
     is within a tenth of a sample."""
-    from ballimpact.contact import end_from_curve
+    from ballimpact.signal.curve_end import end_from_curve
 
     fs = 50e3
     end_s = 1000.6 / fs
@@ -690,7 +692,7 @@ def test_detect_contact_reports_the_curve_end_when_asked():
     (dict(sample_rate_hz=-1.0), "sample_rate_hz must be positive"),
 ])
 def test_end_from_curve_rejects_bad_arguments(kwargs, match):
-    from ballimpact.contact import end_from_curve
+    from ballimpact.signal.curve_end import end_from_curve
 
     args = dict(force=np.zeros(1000), sample_rate_hz=50e3, start_s=0.001, end_s=0.004, noise_rms=1e-3)
     args.update(kwargs)
@@ -706,7 +708,7 @@ def test_end_from_curve_pins_a_fast_rigs_faint_fade(fs):
     (its three-sigma interval, CURVE_CHI2, inside the search), within 0.25 % of TC in two thirds of the draws, and the
     end is within 3 of its standard uncertainties of the model's end (within 2 in at least 85 % of draws), within
     0.5 % of TC wherever twice the uncertainty is within it."""
-    from ballimpact.contact import CURVE_MIN_SLOPE, end_from_curve
+    from ballimpact.signal.curve_end import CURVE_MIN_SLOPE, end_from_curve
 
     noise = 1.0e-3
     tc = float(_model_knots(*CURVES["concave"])[0][-1])
@@ -751,7 +753,7 @@ def test_end_from_curve_uncertainty_sees_a_second_end_in_the_noise():
     class): in some draws a low sample on the fall makes the residual no parabola in the end, with a second end
     within a few noise variances; the one-sigma interval is narrow there while the end is not known. Over 300 seeded
     draws the model's end is within 3 standard uncertainties (the three-sigma interval over three) in every one."""
-    from ballimpact.contact import end_from_curve
+    from ballimpact.signal.curve_end import end_from_curve
 
     fs, noise = 50e3, 2.0e-3
     ball = ("punctured", (1.0, 1.0, 1.0, 1.0, 1.0), 20.0)
@@ -934,7 +936,7 @@ def _brute_hinge(u, y, lower, upper, step=1e-3):
 def test_hinge_fits_of_every_window_match_a_scan_of_the_corner(seed):
     """_hinge_fits solves every window's hinge at once; each must be the least squares a fine scan of the corner finds:
     no larger residual, and the same corner and slope to the scan's step."""
-    from ballimpact.contact import _hinge_fits
+    from ballimpact.signal.ends import _hinge_fits
 
     rng = np.random.default_rng(seed)
     wl, i0, last = 100, 112, 130
@@ -954,7 +956,7 @@ def test_hinge_fits_of_every_window_match_a_scan_of_the_corner(seed):
 
 
 def test_hinge_fits_needs_every_corner_candidate_in_its_first_window():
-    from ballimpact.contact import _hinge_fits
+    from ballimpact.signal.ends import _hinge_fits
 
     u = np.arange(10.0)
     with pytest.raises(ValueError, match="first window must hold every sample before the upper bound"):
@@ -973,7 +975,7 @@ def test_hinge_fits_needs_every_corner_candidate_in_its_first_window():
 def test_hinge_fits_property_no_corner_fits_better(n_pre, n_rise, slope, corner, noise, seed):
     """Whatever the samples (flat, falling, noiseless, a corner on a sample or between two), no corner of a fine scan
     fits any window better than _hinge_fits's hinge, whose residual is its own."""
-    from ballimpact.contact import _hinge_fits
+    from ballimpact.signal.ends import _hinge_fits
 
     rng = np.random.default_rng(seed)
     wl = 40

@@ -1,4 +1,4 @@
-"""Tests for ballimpact.plate: a plate resonance identified from its ringing and undone.
+"""Tests for ballimpact.signal.plate: a plate resonance identified from its ringing and undone.
 
 The truth is independent of the code under test: the plate's response to a
 piecewise-linear force is the sum of the analytic ramp responses of the
@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from ballimpact.conditioning import condition_voltage
-from ballimpact.plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, lowpass_spread_samples,
-                              lowpass_zero_phase, refine_plate_resonance, undo_plate_resonance, undone_noise_gain)
+from ballimpact.signal.conditioning import condition_voltage
+from ballimpact.signal.plate import (PlateResonance, identify_free_ringing, identify_plate_resonance,
+                                     refine_plate_resonance)
+from ballimpact.signal.undo import lowpass_spread_samples, lowpass_zero_phase, undo_plate_resonance, undone_noise_gain
 from ballimpact.problems import ProblemKind
 
 
@@ -295,7 +296,7 @@ def test_peak_loss_to_the_lowpass_is_read_from_the_curvature(width_over_sigma):
     # (numerical quadrature); the kernel's deviation is W sqrt(1/3 - 2/pi^2)
     from scipy.integrate import quad
 
-    from ballimpact.conditioning import _smoothed_peak_loss
+    from ballimpact.signal.undone import _smoothed_peak_loss
 
     fs, w_half = 1e5, 8.0  # [Hz], [samples]
     sigma = w_half * math.sqrt(1 / 3 - 2 / math.pi ** 2)
@@ -337,7 +338,7 @@ def test_lowpass_lengthens_a_contact_by_less_than_its_support(jump_start, jump_e
     # the truth: a half-sine of 4 ms on a pedestal that jumps from zero at the start and/or the end. Through
     # the low-pass of half-width W samples, the contact found (where its ends pass the spread check, as
     # conditioning demands) is longer by less than 2 W: the budget the plate's low-pass is charged
-    from ballimpact.contact import detect_contact
+    from ballimpact.signal.contact import detect_contact
 
     fs, tc = 5.0e4, 4.0e-3
     rng = np.random.default_rng(17)
@@ -411,7 +412,7 @@ def test_closed_form_hold_is_scipys(fn_hz, zeta, fs):
     # the first-order-hold discretisation in closed form equals scipy's matrix-exponential one
     from scipy import signal
 
-    from ballimpact.plate import plate_discretisation
+    from ballimpact.signal.undo import plate_discretisation
 
     wn = 2 * math.pi * fn_hz
     b0, a0, _ = signal.cont2discrete(([wn * wn], [1.0, 2 * zeta * wn, wn * wn]), 1.0 / fs, method="foh")
@@ -429,8 +430,8 @@ def test_undone_end_is_the_forces_end_through_the_plate_and_the_lowpass(fn_hz, z
     """A force that jumps (or not) from zero at ts, rises as a line, and falls to zero at te as a parabola, sensed
     through the continuous plate (the analytic truth above), undone and low-passed: its ends come back to the
     fitting grid (0.05 sample), where the low-passed contact is up to a kernel half-width longer."""
-    from ballimpact.contact import detect_contact
-    from ballimpact.plate import undone_end
+    from ballimpact.signal.contact import detect_contact
+    from ballimpact.signal.undone_end import undone_end
 
     fs = 50e3
     ts, te = (400 + ts_frac) / fs, (600 + te_frac) / fs
@@ -460,7 +461,7 @@ def test_undone_end_is_the_forces_end_through_the_plate_and_the_lowpass(fn_hz, z
     ({"frequency_hz": 0.0}, "frequency_hz"), ({"damping_ratio": 1.5}, "damping_ratio"),
     ({"side": "middle"}, "side"), ({"inside_samples": 1}, "inside_samples")])
 def test_undone_end_rejects_bad_arguments(kwargs, match):
-    from ballimpact.plate import undone_end
+    from ballimpact.signal.undone_end import undone_end
 
     args = {"force": np.zeros(100), "sample_rate_hz": 5e4, "frequency_hz": 5e3, "damping_ratio": 0.05,
             "cutoff_hz": 1e4, "index": 50.0, "side": "start", "inside_samples": 4}
@@ -497,7 +498,7 @@ def test_undone_end_reaches_an_end_found_samples_off(fn_hz, zeta, off):
     plate (the analytic truth above) with noise: an end found several samples off (a foot lost in its amplified
     noise, or a sensed start read early) is out of the default candidates' reach (None), and within reach of
     wider ones, which fit it to the truth."""
-    from ballimpact.plate import undone_end
+    from ballimpact.signal.undone_end import undone_end
 
     fs = 50e3
     ts, te = 400.37 / fs, 600.81 / fs
@@ -536,7 +537,7 @@ def _front_knots(fs, start, jump, rise, slope, curvature, length):
 @pytest.mark.parametrize("fn_hz, zeta, fs, rise", [(13.7e3, 0.2, 168e3, 1.8), (5.0e3, 0.03, 50e3, 0.0),
                                                    (30.0e3, 0.5, 200e3, 3.0), (8.5e3, 0.11, 120e3, 1.2)])
 def test_front_responses_are_the_plates_output(fn_hz, zeta, fs, rise):
-    from ballimpact.plate import front_responses
+    from ballimpact.signal.front import front_responses
 
     # the textbook ramp responses of a piecewise-linear force (this file's sensed_force), independent of the
     # closed forms of the jump, ramp and parabola responses
@@ -555,7 +556,7 @@ def test_front_responses_are_the_plates_output(fn_hz, zeta, fs, rise):
 @pytest.mark.parametrize("fn_hz, zeta, fs, seed", [(13.7e3, 0.2, 168e3, 0), (13.7e3, 0.2, 168e3, 1),
                                                    (20.0e3, 0.25, 190e3, 2), (9.0e3, 0.05, 120e3, 3)])
 def test_fit_front_finds_the_plate_and_the_force_under_its_ringing(fn_hz, zeta, fs, seed):
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     # the model's front (section 3.2.4: a jump at 2 mm of compression, then kCONST): 40 % of the peak in a jump over
     # 10 us, a ramp bending over, 1e-3 of the peak of noise; sensed through a known plate
@@ -578,7 +579,7 @@ def test_fit_front_finds_the_plate_and_the_force_under_its_ringing(fn_hz, zeta, 
 @pytest.mark.parametrize("fn_hz, zeta, fs", [(13.7e3, 0.2, 168e3), (5.0e3, 0.03, 50e3), (12.0e3, 0.71, 150e3),
                                          (30.0e3, 0.95, 200e3)])
 def test_front_responses_cubic_is_the_plates_output(fn_hz, zeta, fs):
-    from ballimpact.plate import front_responses
+    from ballimpact.signal.front import front_responses
 
     # the textbook ramp responses of the cubic u^3 as a piecewise-linear force (knots every 0.01 sample: its error
     # on the cubic is at most 3 u * 1.25e-5 per unit), independent of the closed form
@@ -600,7 +601,7 @@ def test_fit_front_with_a_cubic_follows_a_smooth_start(seed):
     parabola miss its curve (more than 20 noise variances a sample left; its cubic term is 0.12 V at the window's
     end), with a cubic the ideal plate fits it to its noise (its quintic term, 4 mV at the end, mostly taken up by
     the lower terms), and the cubic found is the sine's, -4 (pi / 200)^3 / 6, to 10 %."""
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     fs, start = 50e3, 3.3
     n = np.arange(0, 60)
@@ -616,7 +617,7 @@ def test_fit_front_with_a_cubic_follows_a_smooth_start(seed):
 
 
 def test_fit_front_with_the_drop_and_a_cubic_fits_its_change_at_the_drop():
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     # the model's front and drop (_drop_knots) and a cubic from the drop on, through an ideal plate and a low-pass
     fs, start, drop_at = 100e3, 3.6, 4.3
@@ -636,7 +637,7 @@ def test_fit_front_with_the_drop_and_a_cubic_fits_its_change_at_the_drop():
 
 @pytest.mark.parametrize("fn_hz, zeta, seed", [(8.0e3, 0.95, 0), (12.0e3, 0.71, 1)])
 def test_fit_front_with_a_damping_range_finds_a_low_pass(fn_hz, zeta, seed):
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     # the model's front through a heavily damped response (an amplifier's filter: no ringing), at 150 kHz
     fs, start, jump, slope, curvature, rise = 150e3, 3.37, 400.0, 35.0, -0.6, 1.5
@@ -654,7 +655,7 @@ def test_fit_front_with_a_damping_range_finds_a_low_pass(fn_hz, zeta, seed):
 
 
 def test_fit_front_through_an_ideal_plate_fits_the_force_to_its_noise():
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     fs, start = 150e3, 3.6
     kt, kf = _front_knots(fs, start, 300.0, 1.5, 30.0, -0.4, 40.0)
@@ -673,7 +674,7 @@ def test_fit_front_through_an_ideal_plate_fits_the_force_to_its_noise():
     (dict(damping=(0.2, 1.0)), "damping must be"),
 ])
 def test_fit_front_rejects_bad_arguments(kwargs, match):
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     args = {"force": np.zeros(40), "sample_rate_hz": 1e5, "first": 0, "last": 30, "start": 5.0}
     args.update(kwargs)
@@ -682,7 +683,7 @@ def test_fit_front_rejects_bad_arguments(kwargs, match):
 
 
 def test_fit_front_gives_none_for_a_window_it_cannot_fit():
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     assert fit_front(np.zeros(40), 1e5, 0, 5, 2.0) is None  # fewer than 8 samples
     assert fit_front(np.zeros(40), 1e5, 30, 45, 33.0) is None  # past the record's end
@@ -693,7 +694,7 @@ def test_fit_front_gives_none_for_a_window_it_cannot_fit():
 def test_undone_impulse_response_has_unit_static_gain(fs, fn, zeta, cutoff):
     """The plate's inverse (and the low-pass, unit sum) keeps a constant force: its impulse response sums to 1
     (to 1e-6 over 200 lags each side), and its samples at lags beyond 150 have decayed below 1e-6 of its largest."""
-    from ballimpact.plate import undone_impulse_response
+    from ballimpact.signal.undo import undone_impulse_response
 
     h = undone_impulse_response(fs, fn, zeta, 200, cutoff)
     assert h.shape == (401,)
@@ -715,7 +716,7 @@ def _drop_knots(fs, start, jump, slope, drop_at, drop, slope_after, curvature_af
 @pytest.mark.parametrize("fn_hz, zeta, fs, seed", [(8.5e3, 0.11, 25.5e3, 0), (8.5e3, 0.11, 25.5e3, 1),
                                                    (24.4e3, 0.04, 65.0e3, 2), (12.9e3, 0.08, 30.0e3, 3)])
 def test_fit_front_with_the_drop_finds_a_plate_sampled_a_few_times_a_period(fn_hz, zeta, fs, seed):
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     # the model's front (section 3.2.4): a jump of 60 % of the peak, a ramp to the pre-buckling spike 2.7 samples
     # later, the drop at buckling, a slower ramp bending over after it; through a plate of 2.3-3 samples a period,
@@ -736,7 +737,7 @@ def test_fit_front_with_the_drop_finds_a_plate_sampled_a_few_times_a_period(fn_h
 
 
 def test_fit_front_with_the_drop_through_an_ideal_plate_fits_the_force_to_its_noise():
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     fs, start = 25.0e3, 3.6
     kt, kf = _drop_knots(fs, start, 600.0, 60.0, 2.3, -150.0, -20.0, -0.8, 20.0)
@@ -757,7 +758,7 @@ def test_fit_front_with_a_spike_finds_the_plate_under_an_electrical_spike_on_its
     of 38 deviations three samples after the contact start): fitted with a free spike on any sample after the
     largest, the fit finds the spike's sample and value and the plate's resonance as without the spike; without the
     free spike its residual is many times the noise's."""
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     start, jump, slope, drop_at, drop = 3.37, 600.0, 60.0, 2.7, -150.0
     kt, kf = _drop_knots(fs, start, jump, slope, drop_at, drop, -20.0, -0.8, 20.0)
@@ -778,7 +779,7 @@ def test_fit_front_with_a_spike_finds_the_plate_under_an_electrical_spike_on_its
 
 
 def test_fit_front_rejects_a_negative_rise_max():
-    from ballimpact.plate import fit_front
+    from ballimpact.signal.front import fit_front
 
     with pytest.raises(ValueError, match="rise_max must be finite and non-negative"):
         fit_front(np.zeros(40), 1e5, 0, 30, 5.0, rise_max=-1.0)
@@ -793,7 +794,7 @@ def test_undone_end_noise_se_is_the_spread_of_the_end_over_noise_draws(fn_hz, ze
     above) with white noise of 0.35 % of the peak, undone (and low-passed): over 80 noise draws, the fitted ends
     scatter about the truth as their ``noise_se`` says: its mean within 25 % of their rms error (0.66 against 0.67,
     0.44 against 0.50 and 0.24 against 0.24 samples when written), unbiased."""
-    from ballimpact.plate import undone_end
+    from ballimpact.signal.undone_end import undone_end
 
     fs, sigma = 52.1e3, 0.0035
     ts, te = 400.37 / fs, 650.81 / fs

@@ -23,8 +23,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from ballimpact.balls import BALLS
-from ballimpact.conditioning import condition_voltage
-from ballimpact.contact import detect_contact
+from ballimpact.signal.conditioning import condition_voltage
+from ballimpact.signal.contact import detect_contact
 from ballimpact.problems import TRACE_FILE_KINDS, has_kind
 from ballimpact.processing import ImpactResult, process_impact
 from ballimpact.session import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Session, SessionError, read_session

@@ -700,7 +700,7 @@ def test_zoo_peak_on_the_plates_step_response(name, seed, index, what, tmp_path)
 #: Traces of the benchmark excluded on main at commit 10b1d50 for "contact end not determined to 1 %: fitted again
 #: from the samples above twice the noise threshold it moves by ..." although measurable: the force steepens into
 #: its end (a punctured ball's), the refit moves the end later, and the force's curve before the end pins it
-#: (``ballimpact.contact.end_from_curve``); ok and right now (name, seed, index, what).
+#: (``ballimpact.signal.curve_end.end_from_curve``); ok and right now (name, seed, index, what).
 ZOO_END_CURVE = [
     ("punctured-end-curve-50kHz", 0, 1463, "punctured ball at 50 kHz, 3.5 V peak: the end refitted 0.56 % later"),
     ("punctured-end-curve-86kHz", 0, 726, "punctured ball at 86 kHz, 0.9 V peak, 0.27 mV noise: refitted 0.76 % later"),

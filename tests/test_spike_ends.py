@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from ballimpact.conditioning import _spike_kink, condition_voltage, remove_spikes
+from ballimpact.signal.spikes import _spike_kink, remove_spikes
+from ballimpact.signal.conditioning import condition_voltage
 from ballimpact.problems import ProblemKind
 
 FS = 50e3  # sample rate [Hz]
@@ -132,8 +133,8 @@ def test_a_kept_sample_that_is_the_contacts_first_leaves_the_start_undetermined(
     # the judgement alone, on a force of 1 V (100 samples, 1 mV noise) from sample 10 whose sample 11 stands 0.4 V
     # (0.4 % of the impulse) above its neighbours: with sample 10 at zero the start rests on sample 11, which may be
     # electrical; with sample 10 at 0.5 V the start rests on sample 10, and the excess is within the impulse's share
-    from ballimpact.conditioning import _second_differences, _spikes_at_ends
-    from ballimpact.contact import ContactResult
+    from ballimpact.signal.spikes import second_differences, spikes_at_ends
+    from ballimpact.signal.contact import ContactResult
 
     x = np.zeros(200)
     x[10:110] = 1.0
@@ -142,7 +143,7 @@ def test_a_kept_sample_that_is_the_contacts_first_leaves_the_start_undetermined(
     contact = ContactResult(found=True, start_s=9.5 / FS, end_s=109.5 / FS, edge_start_s=9.5 / FS,
                             edge_end_s=109.5 / FS, start_index=10, end_index=109, peak_index=11, peak_V=1.4,
                             n_impacts=1, noise_rms_V=1e-3, threshold_V=8e-3, clipped=False, flags=())
-    problems, keep = _spikes_at_ends(x, _second_differences(x), (), (11,), contact, x, 1e-3, FS, 0.0, 1.0)
+    problems, keep = spikes_at_ends(x, second_differences(x), (), (11,), contact, x, 1e-3, FS, 0.0, 1.0)
     assert keep == ()
     if said is None:
         assert problems == []

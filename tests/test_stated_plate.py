@@ -8,7 +8,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import zoo
-from ballimpact.plate import stated_resonance
+from ballimpact.signal.plate import stated_resonance
 from ballimpact.session import SessionError, read_session
 
 

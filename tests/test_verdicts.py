@@ -1,4 +1,4 @@
-"""Per-quantity verdicts (ballimpact.verdicts), the effects of a plate line (ballimpact.effects) and the registry."""
+"""Per-quantity verdicts (ballimpact.verdicts), the effects of a plate line (ballimpact.signal.effects) and the registry."""
 
 import math
 import subprocess
@@ -10,7 +10,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.checks import CHECKS, QUANTITIES, TOLERANCES, check_of, get_check
-from ballimpact.effects import end_slopes, line_amplitude_after, ringing_effects
+from ballimpact.signal.effects import end_slopes, line_amplitude_after, ringing_effects
 from ballimpact.problems import Problem, ProblemKind
 from ballimpact.session_checks import apply_session_flags
 from ballimpact.verdicts import COVERAGE, gate_uncertainties, judge_quantities, random_uncertainties
@@ -40,11 +40,11 @@ def test_the_issue_s_faults_are_faults_and_nothing_else_is():
 
 
 def test_thresholds_resolve_to_the_constants_the_code_uses():
-    from ballimpact import conditioning
+    from ballimpact.signal import ringing
 
     ring = get_check("plate_ringing")
     values = {t.name: t.value for t in ring.thresholds}
-    assert values["RING_LINE_PROMINENCE"] == conditioning.RING_LINE_PROMINENCE
+    assert values["RING_LINE_PROMINENCE"] == ringing.RING_LINE_PROMINENCE
     for check in CHECKS.values():
         for t in check.thresholds:
             assert t.value is not None, (check.code, t.name)
@@ -282,7 +282,7 @@ def test_departure_before_start_bounds_a_foot_hidden_by_an_antialias_filter():
     foot, and the departure's span covers it."""
     from scipy.signal import firwin, lfilter
 
-    from ballimpact.effects import departure_before_start
+    from ballimpact.signal.effects import departure_before_start
 
     fs = 70_000.0
     t, force = _foot_and_jump(fs)

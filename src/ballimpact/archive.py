@@ -124,7 +124,7 @@ _PER_IMPACT_SCALARS = [
     ("sample_rate_hz", "sample_rate_hz"),
     ("vin_gate_m_s", "vin_gate_m_s"),
     ("vout_gate_m_s", "vout_gate_m_s"),
-    # how the trace was conditioned (ballimpact.conditioning): what a lab checks an exclusion against
+    # how the trace was conditioned (ballimpact.signal.conditioning): what a lab checks an exclusion against
     ("noise_rms_V", "noise_rms_V"),
     ("hum_amplitude_V", "hum_amplitude_V"),
     ("mains_frequency_hz", "mains_hz"),

@@ -9,7 +9,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from ._checks import positive_scalar
-from .contact import contact_samples
+from .signal.contact import contact_samples
 
 __all__ = [
     "ContactSummary",
@@ -55,7 +55,7 @@ def voltage_impulse(time_s, voltage_V, start_s: float, end_s: float, *, start_ju
     The pieces between the sub-sample start (end) and the neighbouring sample
     use the linearly interpolated voltage at the start (end); after a jump at
     the start, the first sample's voltage held back to it
-    (:func:`ballimpact.contact.contact_samples`). The paper's integral of V dt
+    (:func:`ballimpact.signal.contact.contact_samples`). The paper's integral of V dt
     from 0 to TC (section 2 in Goodwill & Haake 2004).
 
     Parameters
@@ -293,7 +293,7 @@ def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float, *,
     ----------
     time_s : array_like
         Sample times from the contact start (e.g. from
-        :func:`ballimpact.contact.contact_samples`) [s].
+        :func:`ballimpact.signal.contact.contact_samples`) [s].
     force_N : array_like
         Force on the ball [N].
     mass_kg : float

@@ -49,7 +49,7 @@ class ProblemKind(enum.Enum):
     NO_CONTACT = "no_contact"
     MULTIPLE_IMPACTS = "multiple_impacts"
     CONTACT_TRUNCATED = "contact_truncated"
-    # integrity checks of the conditioning (ballimpact.conditioning)
+    # integrity checks of the conditioning (ballimpact.signal.conditioning)
     CONTACT_UNSTABLE = "contact_unstable"
     DECAY_NOT_CORRECTED = "decay_not_corrected"
     UNDERSHOOT_NOT_MEASURABLE = "undershoot_not_measurable"

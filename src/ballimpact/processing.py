@@ -21,16 +21,16 @@ import numpy as np
 
 from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
-from .conditioning import condition_voltage
-from .contact import (SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, contact_samples, detect_clipping,
-                      detect_saturation, end_standard_uncertainties)
+from .signal.conditioning import condition_voltage
+from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect_clipping, detect_saturation
+from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
 from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .effects import departure_before_start, end_slopes, finding_effects
+from .signal.effects import departure_before_start, end_slopes, finding_effects
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
@@ -576,7 +576,7 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
 
 def _departure_problem(res: ImpactResult, cond, t0_s: float) -> None:
     """A finding, with its effect on TC, where the signal departs from its noise before the contact's start
-    (:func:`ballimpact.effects.departure_before_start`)."""
+    (:func:`ballimpact.signal.effects.departure_before_start`)."""
     c = cond.contact
     span, noise = departure_before_start(cond.voltage_V, res.sample_rate_hz, (c.start_s - t0_s) * res.sample_rate_hz)
     if not (math.isfinite(span) and span > 0 and c.contact_time_s > 0):
@@ -589,7 +589,7 @@ def _departure_problem(res: ImpactResult, cond, t0_s: float) -> None:
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:
-    """A conditioning finding with its effects estimated where its check can (ballimpact.effects)."""
+    """A conditioning finding with its effects estimated where its check can (ballimpact.signal.effects)."""
     c = cond.contact
     if not (c.found and math.isfinite(fs)):
         return problem

@@ -7,12 +7,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from .conditioning import PLATE_SLOPE_S
-from .problems import ProblemKind
+from ..problems import ProblemKind
+from .end_checks import PLATE_SLOPE_S
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
-           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after", "ringing_effects",
-           "ringing_after", "finding_effects", "departure_before_start"]
+           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
+           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
