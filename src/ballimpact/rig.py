@@ -13,8 +13,8 @@ __all__ = [
     "RING_GAP_S", "RING_GAP_FRACTION", "RING_WINDOW_S", "RING_MIN_SAMPLES", "RING_POLY_DEGREE", "RING_MIN_HZ",
     "RING_MAX_FRACTION", "DAMPING_BOUNDS", "DETECT_Z", "MIN_IMPACTS", "COVERAGE", "STATED_DISAGREE_Z",
     "RIG_QUANTITIES", "RigWarning", "RingingSegment", "PlateFit", "RigEstimate", "Rig",
-    "ringing_segments", "fit_free_ringing", "pooled_ringing", "ringing_response", "pooled_time_constant", "pooled_median",
-    "identify_rig",
+    "ringing_segments", "fit_free_ringing", "pooled_ringing", "ringing_response", "pooled_time_constant",
+    "pooled_median", "identify_rig",
 ]
 
 RING_GAP_S = 0.1e-3  # the free ringing is read from this long after the contact's end ... [s]
