@@ -285,9 +285,8 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
     compression), so that the start is read at the jump, late by up to the foot's length. The start is then known
     only to within the span from the earliest departure to the start found: a bound on its shift, whatever made
     the departure. The departure is walked back from DEPARTURE_SKIP samples before the start through samples
-    beyond ``chain_sigma`` noise deviations, none more than ``gap_s`` apart; it counts when one of them stands beyond ``sigma``. The noise is
-    the quiet signal's before the window (its median absolute deviation), so an undone plate's amplified noise is
-    its own.
+    beyond ``chain_sigma`` noise deviations, none more than ``gap_s`` apart; it counts when one of them stands
+    beyond ``sigma``. The noise is the quiet signal's before the window (its median absolute deviation).
 
     Parameters
     ----------
