@@ -113,7 +113,7 @@ def _texts(ds, name: str) -> np.ndarray:
 def _session_line(ax, est, scale: float, unit: str, fmt: str) -> None:
     """The session's value as a line, its 95 % interval as a band, or a note of why there is none."""
     if est is None:
-        ax.text(0.02, 0.03, NO_RIG, transform=ax.transAxes, fontsize=7, color="0.35", va="bottom")
+        ax.set_title("\n".join(textwrap.wrap(f"session: none ({NO_RIG})", 50)))
         return
     if not math.isfinite(est.value):
         ax.set_title("\n".join(textwrap.wrap(f"session: none ({est.note})" if est.note else "session: none", 50)))
@@ -159,7 +159,7 @@ def _per_impact_panel(ax, x, value, u, used, kept, excluded, est, scale, unit, f
                 drawn.add("off scale")
     _session_line(ax, est, scale, unit, fmt)
     if not (finite & (used | kept | excluded)).any():
-        ax.text(0.5, 0.8, "\n".join(textwrap.wrap(other or "no impact has a value", 45)), transform=ax.transAxes,
+        ax.text(0.5, 0.8, "\n".join(textwrap.wrap(other or "no impact has a value", 38)), transform=ax.transAxes,
                 ha="center", va="center", fontsize=8, color="0.35")
     ax.set_xlim(0.3, max(len(x), 1) + 0.7)
     ax.set_xlabel("Impact (raw order)")
