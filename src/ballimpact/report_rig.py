@@ -1,5 +1,4 @@
-"""The rig page of the PDF report: the session's rig with its 95 % intervals and sources, its warnings, and its
-two figures (the plate's pooled free ringing; the time constant and kCAL of every impact)."""
+"""The rig page of the PDF report: the session's rig with 95 % intervals and sources, its warnings and figures."""
 
 from __future__ import annotations
 
