@@ -512,3 +512,36 @@ def test_an_archive_of_version_1_1_still_reads(written, tmp_path):
     ball = archive_read.balls(new)[0]
     assert list(archive_read.impacts(old, ball, "ok")) == list(archive_read.impacts(new, ball, "ok"))
     assert "ball_type" in archive.open_dataset(tmp_path / "old.nc")
+
+
+def test_the_rig_survives_assembly_and_writing(tmp_path):
+    """The rig variables work/impacts.nc carries (ballimpact.rig_archive) reach the written archive: values, sources,
+    notes, the plate fit's attributes and the warnings, each variable with units and a long name."""
+    from archive_fixture import _ball_fit
+    from ballimpact.rig import RIG_QUANTITIES
+    from ballimpact.rig_archive import plate_impacts, read_rig, rig_variables, rig_warnings
+
+    from rigkit import estimates, rig_dataset
+
+    results = make_results()
+    ids = [r.impact_id for r in results]
+    truth = estimates(plate="stated", n=len(ids))
+    warning = "session.yaml states plate.resonance_hz = 3.5 kHz, but the session's 11 impacts give 3 kHz"
+    rig = rig_dataset(ids, truth, fitted_ids=ids[:4], warnings=[warning])
+    impacts = impacts_dataset(results).merge(rig)
+    n_ok = {b: sum(r.ball == b and r.status == "ok" for r in results) for b in ("pressurised", "punctured")}
+    ds = archive.assemble_archive(impacts, [_ball_fit(b, n) for b, n in n_ok.items()])
+    write_dataset(ds, tmp_path / "s.nc")
+    back = open_dataset(tmp_path / "s.nc")
+    assert [str(q) for q in back.rig_quantity.values] == list(RIG_QUANTITIES)
+    for name in rig.data_vars:
+        assert back[name].attrs.get("long_name") and back[name].attrs.get("units"), name
+    assert back["rig_value"].attrs["long_name"] == "session rig value"
+    got = read_rig(back)
+    for name, est in truth.items():
+        assert (got[name].source, got[name].note, got[name].n_impacts) == (est.source, est.note, est.n_impacts), name
+        np.testing.assert_array_equal([got[name].value, got[name].low, got[name].high], [est.value, est.low, est.high])
+    assert plate_impacts(back) == ids[:4]
+    assert rig_warnings(back) == [warning]
+    assert back["rig_value"].attrs["plate_detection_z"] == pytest.approx(50.0)
+    assert back["rig_source"].attrs["coverage_content_type"] == "qualityInformation"

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import importlib
+
 import pytest
 from numpy.testing import assert_allclose
 
-from ballimpact import figure_registry, figures
+from ballimpact import figure_registry
 from ballimpact.figure_registry import REPORT_FIGURES, ReportFigure, report_figure, rows_height_in
 
 from workflow_helpers import REPO
@@ -20,7 +22,7 @@ def test_stems_and_draw_functions_are_unique():
 
 @pytest.mark.parametrize("spec", REPORT_FIGURES, ids=lambda f: f.stem)
 def test_every_figure_has_a_draw_function_and_a_report_caption(spec):
-    assert spec.draw is getattr(figures, spec.draw_name)
+    assert spec.draw is getattr(importlib.import_module(f"ballimpact.{spec.module}"), spec.draw_name)
     assert callable(spec.draw)
     assert (REPO / "workflow" / "report" / f"{spec.stem}.rst").is_file()
     assert spec.title and spec.caption and spec.category and spec.report_label and spec.shows
@@ -49,3 +51,11 @@ def test_bad_layout_and_unknown_figure_are_named():
         ReportFigure("x", "draw_kcal", "t", "c", "grid", 2.0, "cat", "lab", "shows")
     with pytest.raises(KeyError, match="no report figure 'fig99'"):
         report_figure("fig99")
+    with pytest.raises(ValueError, match="figure x: page must be one of own, rig, got 'appendix'"):
+        ReportFigure("x", "draw_kcal", "t", "c", "fixed", 2.0, "cat", "lab", "shows", page="appendix")
+
+
+def test_the_rig_s_figures_stand_on_the_rig_page_and_the_others_on_their_own():
+    pages = {f.stem: f.page for f in REPORT_FIGURES}
+    assert [s for s, p in pages.items() if p == "rig"] == ["rig_ringing", "rig_per_impact"]
+    assert all(p == "own" for s, p in pages.items() if not s.startswith("rig_"))

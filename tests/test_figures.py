@@ -27,6 +27,8 @@ EXPECTED_FILES = [
     "fig10_components.png",
     "fig2b_kelvin_voigt.png",
     "kcal.png",
+    "rig_ringing.png",  # the rig's, placed on the report's rig page (tests/test_figures_rig.py)
+    "rig_per_impact.png",
 ]
 
 

@@ -13,6 +13,7 @@ from ballimpact import archive_read, figures, report
 from archive_fixture import make_archive
 
 N_FIGURES = 7  # Figs 7, COR 3-40 m/s with the ITF drop test, 8, 9, 10, 2b and kCAL
+RIG_PAGES = 1  # the rig page (ballimpact.report_rig), after the figures
 A4_POINTS = (595.44, 841.68)  # 8.27 x 11.69 in at 72 pt/in
 
 
@@ -35,9 +36,9 @@ def pdf(ds, tmp_path_factory):
 def test_page_count(ds, pdf):
     n_excluded = int((ds["status"].values == "excluded").sum())
     assert n_excluded == 3
-    # summary + figures + one exclusion-list page + one QC page per excluded impact
-    assert _page_count(pdf.read_bytes()) == 1 + N_FIGURES + 1 + n_excluded
-    assert report.report_page_count(ds) == 1 + N_FIGURES + 1 + n_excluded
+    # summary + figures + the rig page + one exclusion-list page + one QC page per excluded impact
+    assert _page_count(pdf.read_bytes()) == 1 + N_FIGURES + RIG_PAGES + 1 + n_excluded
+    assert report.report_page_count(ds) == 1 + N_FIGURES + RIG_PAGES + 1 + n_excluded
 
 
 
@@ -73,7 +74,7 @@ def test_first_page_text(pdf, ds):
     assert "Fixture Operator" in text
     assert "paper Table 2" in text
     exclusions = subprocess.run(
-        ["pdftotext", "-f", "8", "-l", "8", str(pdf), "-"], capture_output=True, text=True, check=True
+        ["pdftotext", "-f", "10", "-l", "10", str(pdf), "-"], capture_output=True, text=True, check=True
     ).stdout
     assert "Excluded impacts" in exclusions
     for impact_id in ("clip01", "gate01", "trace01"):
@@ -134,13 +135,13 @@ def test_long_exclusion_list_paginates(ds):
     assert len(pages) >= 2
     for page in pages:
         assert _text_inside_page(page) == []
-    assert report.report_page_count(many) == 1 + N_FIGURES + len(pages) + many.sizes["impact"]
+    assert report.report_page_count(many) == 1 + N_FIGURES + RIG_PAGES + len(pages) + many.sizes["impact"]
 
 
 def test_report_from_figure_files(ds, tmp_path):
     figures.save_all(ds, tmp_path / "figures")
     out = report.write_report(ds, tmp_path / "report.pdf", figures_dir=tmp_path / "figures")
-    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + 1 + 3
+    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + RIG_PAGES + 1 + 3
     assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
 
 
@@ -149,7 +150,7 @@ def test_no_exclusions_and_real_session(tmp_path):
     info = report._session_info(ds)
     assert info["synthetic"] is False
     out = report.write_report(ds, tmp_path / "r.pdf")
-    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + 1
+    assert _page_count(out.read_bytes()) == 1 + N_FIGURES + RIG_PAGES + 1
     if shutil.which("pdftotext"):
         text = subprocess.run(["pdftotext", "-f", "1", "-l", "1", str(out), "-"], capture_output=True,
                               text=True, check=True).stdout

@@ -164,6 +164,37 @@ def test_archive_round_trip_equals_csv(demo_run):
     assert_allclose(v0, ds.vin_m_s.values[ok], rtol=1e-9)
 
 
+def test_the_archive_carries_the_session_s_rig(demo_run):
+    """The archive the workflow writes holds the rig on its rig_quantity dimension, with units and long names, and
+    its values against the demo's sensor chain (raw/demo-2004.truth.yaml): the time constant, noise, hum and kCAL
+    identified; the plate (25 kHz, zeta 0.3, at 67 kHz) not, with the note saying why."""
+    import yaml
+
+    from ballimpact.rig import RIG_QUANTITIES
+    from ballimpact.rig_archive import plate_impacts, read_rig, rig_warnings
+
+    _, out, _ = demo_run
+    chain = yaml.safe_load((REPO / "raw" / "demo-2004.truth.yaml").read_text(encoding="utf-8"))["sensor_chain"]
+    with xr.open_dataset(out / "demo-2004.nc") as ds:
+        ds = ds.load()
+    assert [str(q) for q in ds.rig_quantity.values] == list(RIG_QUANTITIES)
+    for name in ("rig_value", "rig_low", "rig_high", "rig_source", "rig_n_impacts", "rig_unit", "rig_note"):
+        assert ds[name].dims == ("rig_quantity",) and ds[name].attrs.get("long_name") and "units" in ds[name].attrs
+    assert [str(u) for u in ds.rig_unit.values] == [unit for unit, _ in RIG_QUANTITIES.values()]
+    rig = read_rig(ds)
+    tau = rig["time_constant_s"]
+    assert tau.source == "identified" and tau.low <= chain["amplifier_time_constant_s"] <= tau.high, tau
+    assert rig["noise_rms_V"].value == pytest.approx(chain["noise_V"], rel=0.03)
+    assert rig["hum_amplitude_V"].value == pytest.approx(chain["hum_V"], rel=0.02)
+    assert rig["kcal_N_per_V"].low <= chain["kcal_N_per_V"] <= rig["kcal_N_per_V"].high
+    assert rig["kcal_spread"].value == pytest.approx(chain["kcal_spread"], rel=0.35)
+    assert rig["mains_hz"].source == "stated" and rig["mains_hz"].value == chain["mains_hz"]
+    for name in ("plate_resonance_hz", "plate_damping_ratio"):
+        assert rig[name].source == "none" and np.isnan(rig[name].value) and "no free ringing" in rig[name].note
+    assert len(plate_impacts(ds)) == rig["plate_resonance_hz"].n_impacts == 40
+    assert rig_warnings(ds) == []
+
+
 def test_demo_csv_numbers_are_short(demo_run):
     """Issue 49: impacts.csv carried 30.0030003 and 0.518916394208; no number has more than 6 significant digits."""
     _, out, _ = demo_run
@@ -182,8 +213,9 @@ def test_report_pages(demo_run):
     assert pdf.startswith(b"%PDF")
     n_pages = len(__import__("re").findall(rb"/Type\s*/Page\b", pdf))
     n_excluded = (pd.read_csv(out / "impacts.csv", keep_default_na=False).status == "excluded").sum()
-    assert n_pages >= 1 + 6 + 1 + n_excluded  # summary, figures, exclusion list, one QC page each
+    assert n_pages >= 1 + 6 + 1 + 1 + n_excluded  # summary, figures, rig, exclusion list, one QC page each
     assert len(list((out / "figures" / "qc").glob("*.png"))) == n_excluded
+    assert (out / "figures" / "rig_ringing.png").is_file() and (out / "figures" / "rig_per_impact.png").is_file()
 
 
 # Loaded by every Python process of the interrupted run (PYTHONPATH): the first os.replace

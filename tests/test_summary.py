@@ -250,3 +250,28 @@ def test_half_sine_pulses_are_flagged_in_parameters_and_the_run_summary(tmp_path
     assert text.startswith("model force unlike the measured force"), text
     assert any(line.startswith("    fit yellow: WARNING: model force unlike the measured force")
                for line in session_summary(out)), session_summary(out)
+
+
+def test_the_rig_is_one_line_and_its_warnings_one_each():
+    from ballimpact.summary import rig_summary
+
+    from rigkit import ringing_archive
+
+    assert rig_summary(ringing_archive(6)) == ["    rig: plate 3 kHz, zeta 0.05 (identified); time constant 0.8 s "
+                                               "(identified)"]
+    assert rig_summary(ringing_archive(6, plate="stated", warnings=["plate.resonance_hz disagrees"])) == [
+        "    rig: plate 3 kHz, zeta 0.05 (stated); time constant 0.8 s (identified)",
+        "    rig warning: plate.resonance_hz disagrees"]
+    assert rig_summary(ringing_archive(6, plate="none"))[0].startswith("    rig: plate not identified; ")
+    assert rig_summary(xr.Dataset()) == []
+
+
+def test_session_summary_reads_the_rig_from_the_archive(tmp_path):
+    from rigkit import ringing_archive
+
+    folder = _results(tmp_path)
+    ringing_archive(6).to_netcdf(folder / "s1.nc")
+    lines = session_summary(folder)
+    rig = lines.index("    rig: plate 3 kHz, zeta 0.05 (identified); time constant 0.8 s (identified)")
+    assert lines[rig - 1].startswith("    fit b1:") and lines[rig + 1].startswith("    validate warning:")
+    assert not any(line.startswith("    rig") for line in session_summary(_results(tmp_path / "old")))  # no rig

@@ -99,12 +99,13 @@ _AK_COMMENT = (
 _CONTENT_TYPES = (
     (("status", "reason", "peak_note", "withheld_note", "reason_code", "finding_", "contact_time_status", "kcal_status",
       "peak_status", "cor_status", "contact_time_u", "kcal_u", "peak_force_u", "cor_u", "fit_message", "interval_method", "kb0_source", "model_agreement", "model_rms",
-      "contact_time_rmse", "cor_rmse", "n_impacts", "fit_"), "qualityInformation"),
+      "contact_time_rmse", "cor_rmse", "n_impacts", "fit_", "rig_source", "rig_n_impacts", "rig_note"),
+     "qualityInformation"),
     (("paper_",), "referenceInformation"),
     (("model_", "comp_", "kv_force", "kb0", "ak", "a", "ac", "kb_", "itf_rebound_pred", "itf_model", "itf_impact_speed"),
      "modelResult"),
     (("ball_type", "trace_", "ball_label", "sample_rate", "impact_mass", "mass_kg", "used_in_fit", "mains_source",
-      "amplifier_time_constant_source"),
+      "amplifier_time_constant_source", "rig_unit"),
      "auxiliaryInformation"),
 )
 _PER_IMPACT_SCALARS = [

@@ -72,7 +72,10 @@ VARIABLE_ATTRS: dict[str, tuple[str, str]] = {
     "plate_damping_ratio": ("1", "damping ratio of the plate resonance undone (NaN when none was)"),
     # v1.2: the session's rig (ballimpact.rig), one value per quantity of ballimpact.rig.RIG_QUANTITIES
     "rig_quantity": ("1", "a quantity of the session's rig (ballimpact.rig.RIG_QUANTITIES)"),
-    "rig_value": ("1", "the rig quantity's value for the whole session, in rig_unit (NaN: not known)"),
+    "rig_value": ("1", "the rig quantity's value for the whole session, in rig_unit (NaN: not known); its "
+                       "attributes: plate_detection_z and plate_ringing_fraction of the plate's pooled fit, "
+                       "plate_impacts (the impacts whose free ringing it pooled, comma-separated) and rig_warnings "
+                       "(JSON list: stated keys the traces disagree with)"),
     "rig_low": ("1", "lower end of its 95 % interval, in rig_unit (the value itself when stated)"),
     "rig_high": ("1", "upper end of its 95 % interval, in rig_unit (the value itself when stated)"),
     "rig_source": ("1", "stated (session.yaml), identified (pooled over the session's impacts) or none"),

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "QC_DIR_NAME",
+    "PAGES",
     "ReportFigure",
     "REPORT_FIGURES",
     "FIGURE_STEMS",
@@ -15,6 +16,9 @@ __all__ = [
 
 #: Sub-folder of the figures folder with one QC page (PNG) per excluded impact.
 QC_DIR_NAME = "qc"
+#: Where a figure stands in the PDF report: ``own`` (a page of its own, with its caption) or ``rig`` (on the
+#: rig page, :mod:`ballimpact.report_rig`, beside the table of the session's rig).
+PAGES = ("own", "rig")
 
 
 def rows_height_in(n_rows: int, per_row_in: float, extra_in: float = 0.7, cap_in: float = 10.0) -> float:
@@ -45,6 +49,11 @@ class ReportFigure:
         figure (``fixed``) [in].
     category, report_label, shows : str
         Category and labels of its entry in the Snakemake report.
+    page : str
+        Where it stands in the PDF report: ``own`` (a page of its own) or ``rig`` (on the rig page), one of
+        :data:`PAGES`.
+    module : str
+        Module of ``ballimpact`` that defines ``draw_name`` (``figures``, or ``figures_rig`` for the rig's).
     """
 
     stem: str
@@ -56,10 +65,14 @@ class ReportFigure:
     category: str
     report_label: str
     shows: str
+    page: str = "own"
+    module: str = "figures"
 
     def __post_init__(self):
         if self.layout not in ("per_ball", "two_columns", "fixed"):
             raise ValueError(f"figure {self.stem}: layout must be per_ball, two_columns or fixed, got {self.layout!r}")
+        if self.page not in PAGES:
+            raise ValueError(f"figure {self.stem}: page must be one of {', '.join(PAGES)}, got {self.page!r}")
 
     @property
     def file_name(self) -> str:
@@ -76,10 +89,11 @@ class ReportFigure:
 
     @property
     def draw(self):
-        """The draw function ``draw(fig, ds)`` of :mod:`ballimpact.figures` (imported on first use)."""
-        from . import figures
+        """The draw function ``draw(fig, ds)`` of its module (:mod:`ballimpact.figures` unless ``module`` says
+        otherwise; imported on first use)."""
+        import importlib
 
-        return getattr(figures, self.draw_name)
+        return getattr(importlib.import_module(f"{__package__}.{self.module}"), self.draw_name)
 
 
 _MODEL_FIT = "Model fit"
@@ -210,6 +224,45 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category="Calibration",
         report_label="kCAL",
         shows="calibration factor per impact",
+    ),
+    ReportFigure(
+        stem="rig_ringing",
+        draw_name="draw_rig_ringing",
+        title="The plate's free ringing after every contact, pooled",
+        caption=(
+            "After the ball leaves, the plate rings freely at its first resonance. Grey: the ringing after each "
+            "contact whose ringing was fitted (plate_impacts), its baseline (a cubic and the mains harmonics, "
+            "fitted jointly) removed, divided by its fitted amplitude and shifted by its fitted phase, so that "
+            "every impact falls on one curve; black: the damped response of the session's resonance "
+            "exp(-zeta wn t) cos(wd t), dashed its envelope. Grey that leaves the black curve means a resonance "
+            "that is not the session's. Without an identified or stated plate the panel says why."
+        ),
+        layout="fixed",
+        height_in=3.0,
+        category="Rig",
+        report_label="Plate ringing",
+        shows="pooled free ringing and the session's plate resonance",
+        page="rig",
+        module="figures_rig",
+    ),
+    ReportFigure(
+        stem="rig_per_impact",
+        draw_name="draw_rig_per_impact",
+        title="Amplifier time constant and kCAL of every impact against the session's",
+        caption=(
+            "Left: the charge amplifier's time constant estimated from each impact's trace, with its 95 % bar "
+            "(2 standard errors); right: each impact's kCAL with its 95 % bar (2 standard uncertainties), both "
+            "against the impact's place in the raw impacts.csv. The line is the session's value (rig_value: "
+            "identified from all impacts, or stated in session.yaml), the band its 95 % interval. Impacts "
+            "excluded are red crosses; impacts kept but not pooled (kCAL withheld) are open circles."
+        ),
+        layout="fixed",
+        height_in=3.0,
+        category="Rig",
+        report_label="Rig per impact",
+        shows="time constant and kCAL per impact vs the session's values",
+        page="rig",
+        module="figures_rig",
     ),
 )
 

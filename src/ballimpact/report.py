@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from . import archive_read as ar
 from . import figures as _fig
+from . import report_rig
 from . import summary as _summary
 from .atomic import atomic_path
 from .figure_registry import QC_DIR_NAME, REPORT_FIGURES, report_figure
@@ -29,9 +30,9 @@ A4_PORTRAIT_IN = (8.27, 11.69)
 _MARGIN_IN = 0.6  # page margin [in]
 _SOURCE_SHORT = {"extrapolated": "extrap.", "fitted": "fitted"}
 
-#: Title and caption of each report figure by PNG file name, in report order
-#: (from :data:`ballimpact.figure_registry.REPORT_FIGURES`).
-FIGURE_CAPTIONS = {f.file_name: (f.title, f.caption) for f in REPORT_FIGURES}
+#: Title and caption of each report figure with a page of its own by PNG file name, in report order
+#: (from :data:`ballimpact.figure_registry.REPORT_FIGURES`; the rig's are on the rig page, :mod:`.report_rig`).
+FIGURE_CAPTIONS = {f.file_name: (f.title, f.caption) for f in REPORT_FIGURES if f.page == "own"}
 
 
 MAX_SHOWN_CHARS = 400  # longest text taken from the data onto a page (file names, reasons) [characters]
@@ -926,10 +927,10 @@ def _qc_page(ds, info, impact_id, number, n_total, figures_dir, images=None) -> 
 def report_page_count(ds) -> int:
     """Number of pages :func:`write_report` produces for this archive.
 
-    1 summary page + one page per figure + the exclusion list (at least one page)
+    1 summary page + one page per figure + the rig page + the exclusion list (at least one page)
     + one QC page per excluded impact.
     """
-    return 1 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(ar.excluded_impacts(ds))
+    return 2 + len(FIGURE_CAPTIONS) + len(_excluded_pages(ds, _session_info(ds))) + len(ar.excluded_impacts(ds))
 
 
 def write_report(ds, out_pdf, figures_dir=None, images=None) -> Path:
@@ -937,8 +938,8 @@ def write_report(ds, out_pdf, figures_dir=None, images=None) -> Path:
 
     Pages: (1) title, session metadata (with a red warning for synthetic data),
     impact counts and the fitted parameters with 95 % intervals beside Table 2 of
-    Goodwill & Haake 2004; (2-7) one page per figure with a caption (Figs 7, 8, 9,
-    10, 2b and kCAL); then the list of excluded impacts with their reasons, opened
+    Goodwill & Haake 2004; (2-8) one page per figure with a caption (Figs 7, COR 3-40 m/s, 8, 9,
+    10, 2b and kCAL); (9) the rig page (:func:`ballimpact.report_rig.rig_page`); then the list of excluded impacts with their reasons, opened
     by the session's warnings (:func:`session_warnings`); then the QC appendix, one
     page per excluded impact with its raw trace.
 
@@ -991,7 +992,7 @@ def report_pages(ds, figures_dir=None, images=None) -> Iterator[Figure]:
     """The pages of the session report, one A4 matplotlib figure each, in order.
 
     The pages :func:`write_report` writes to the PDF (the documentation site shows
-    them as images): the summary page, one page per figure, the list of excluded
+    them as images): the summary page, one page per figure, the rig page, the list of excluded
     impacts and one QC page per excluded impact. Each page is made when the
     iteration reaches it.
 
@@ -1013,6 +1014,7 @@ def report_pages(ds, figures_dir=None, images=None) -> Iterator[Figure]:
     yield _summary_page(ds, info)
     for number, name in enumerate(FIGURE_CAPTIONS, 1):
         yield _figure_page(ds, info, name, number, figures_dir, images)
+    yield report_rig.rig_page(ds, info, figures_dir, images)
     yield from _excluded_pages(ds, info)
     excluded = ar.excluded_impacts(ds)
     for k, (impact_id, _, _) in enumerate(excluded, 1):

@@ -8,9 +8,13 @@ import math
 import numpy as np
 import xarray as xr
 
-from .rig import RIG_QUANTITIES, Rig, RigEstimate, identify_rig
+from typing import NamedTuple
 
-__all__ = ["RIG_DIM", "session_rig", "rig_variables", "read_rig", "rig_warnings"]
+from .rig import (RIG_QUANTITIES, PlateFit, Rig, RigEstimate, identify_rig, pooled_ringing, ringing_response,
+                  ringing_segments)
+
+__all__ = ["RIG_DIM", "RingingOverlay", "session_rig", "rig_variables", "read_rig", "rig_warnings", "plate_impacts",
+           "ringing_overlay"]
 
 RIG_DIM = "rig_quantity"  #: the archive's dimension of the rig's quantities (RIG_QUANTITIES, in order)
 
@@ -117,3 +121,82 @@ def rig_warnings(ds: xr.Dataset) -> list[str]:
     if "rig_value" not in ds:
         return []
     return list(json.loads(ds["rig_value"].attrs.get("rig_warnings", "[]")))
+
+
+def plate_impacts(ds: xr.Dataset) -> list[str]:
+    """The impacts whose free ringing the plate's fit pooled (``rig_value``'s attribute ``plate_impacts``)."""
+    if "rig_value" not in ds:
+        return []
+    text = str(ds["rig_value"].attrs.get("plate_impacts", "") or "")
+    return [i for i in text.split(",") if i]
+
+
+class RingingOverlay(NamedTuple):
+    """The pooled free ringing of an archive, each impact's on one curve (:func:`ringing_overlay`)."""
+
+    frequency_hz: float  #: fn the curves are drawn for [Hz]
+    damping_ratio: float  #: zeta [-]
+    source: str  #: "identified" or "stated"
+    impact_ids: tuple  #: the impact of each curve
+    curves: list  #: per impact (time [s], ringing / its amplitude [-]); each lies on exp(-zeta wn t) cos(wd t)
+
+
+def ringing_overlay(ds: xr.Dataset) -> RingingOverlay | None:
+    """The free ringing after every contact the plate's fit pooled, rebuilt from the archive for a figure.
+
+    Each impact's ringing segment is read again from its raw trace (:func:`ballimpact.rig.ringing_segments`, for
+    the impacts of :func:`plate_impacts`). At the session's resonance (fn, zeta: ``rig_value``, identified or
+    stated) the segment's amplitudes (a, b) and baseline (a cubic and the mains harmonics of
+    :func:`ballimpact.rig.pooled_ringing`) are its least-squares fit, as in the pooled fit; the baseline is taken
+    off. ``a cos(wd t) + b sin(wd t) = A cos(wd t - phi)``, ``A = hypot(a, b)``; with ``t' = t - phi / wd`` the
+    ringing is ``A e^(-zeta wn phi / wd) e^(-zeta wn t') cos(wd t')``, so dividing by that amplitude puts every
+    impact on one curve ``e^(-zeta wn t') cos(wd t')``, which the curves are against.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Session archive (or ``work/impacts.nc``) with the rig variables and the raw traces.
+
+    Returns
+    -------
+    RingingOverlay or None
+        None when the archive has no rig, no plate resonance (source "none") or no impact whose ringing was fitted.
+    """
+    rig = read_rig(ds)
+    fn_est, zeta_est = rig.get("plate_resonance_hz"), rig.get("plate_damping_ratio")
+    if fn_est is None or zeta_est is None or fn_est.source == "none" or "raw_time_s" not in ds:
+        return None
+    fn, zeta = fn_est.value, zeta_est.value
+    if not (math.isfinite(fn) and fn > 0 and math.isfinite(zeta) and 0 <= zeta < 1):
+        return None
+    wanted = set(plate_impacts(ds))
+    ids = [str(v) for v in ds["impact_id"].values]
+    use = np.array([i in wanted for i in ids])
+    segments = ringing_segments(ids, np.asarray(ds["raw_time_s"].values, dtype=float),
+                                np.asarray(ds["raw_voltage_V"].values, dtype=float), _floats(ds, "contact_time_ms"),
+                                _floats(ds, "noise_rms_V"), use)
+    if not segments:
+        return None
+    mains = rig["mains_hz"].value if "mains_hz" in rig else math.nan
+    mains = mains if math.isfinite(mains) and mains > 0 else None
+    n = len(segments)
+    unit = PlateFit(fn, zeta, math.nan, math.nan, math.nan, n, math.nan, np.tile([1.0, 0.0], (n, 1)),
+                    tuple(s.impact_id for s in segments), None)
+    cos_cols = pooled_ringing(segments, unit, mains_hz=mains)  # each segment's cos column less its baseline part
+    sin_cols = pooled_ringing(segments, unit._replace(amplitudes=np.tile([0.0, 1.0], (n, 1))), mains_hz=mains)
+    wn = 2.0 * math.pi * fn
+    wd = wn * math.sqrt(1.0 - zeta * zeta)
+    curves, used = [], []
+    for seg, (t, observed, pc), (_, _, ps) in zip(segments, cos_cols, sin_cols):
+        (a, b), *_ = np.linalg.lstsq(np.column_stack([pc, ps]), observed, rcond=None)
+        amplitude = math.hypot(a, b)
+        if not amplitude > 0:
+            continue
+        # observed - its baseline fitted jointly with the ringing = its projection + the ringing's baseline part
+        ringing = observed - (a * pc + b * ps) + ringing_response(t, fn, zeta, (a, b))
+        shift = math.atan2(b, a) / wd
+        curves.append((t - shift, ringing / (amplitude * math.exp(-zeta * wn * shift))))
+        used.append(seg.impact_id)
+    if not curves:
+        return None
+    return RingingOverlay(fn, zeta, fn_est.source, tuple(used), curves)

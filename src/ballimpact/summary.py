@@ -22,6 +22,7 @@ __all__ = [
     "mark_stale",
     "clear_stale",
     "session_summary",
+    "rig_summary",
     "run_summary",
 ]
 
@@ -386,10 +387,51 @@ def _session_fault(folder: Path) -> str:
     return "\n".join(line for line in lines if line)
 
 
+def rig_summary(ds) -> list[str]:
+    """Lines of the session's rig (:mod:`ballimpact.rig_archive`) for the run summary: the plate and the time
+    constant with their source, then each warning (a stated key the traces disagree with); none for an archive
+    without the rig.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The session archive (or ``work/impacts.nc``).
+
+    Returns
+    -------
+    list of str
+        Indented by 4 spaces, as :func:`session_summary`'s.
+    """
+    from .rig_archive import read_rig, rig_warnings
+
+    rig = read_rig(ds)
+    if not rig:
+        return []
+    fn, zeta, tau = rig["plate_resonance_hz"], rig["plate_damping_ratio"], rig["time_constant_s"]
+    parts = [f"plate {fn.value / 1e3:.4g} kHz, zeta {zeta.value:.3g} ({fn.source})"
+             if fn.source != "none" and math.isfinite(fn.value) else "plate not identified"]
+    parts.append(f"time constant {tau.value:.4g} s ({tau.source})" if math.isfinite(tau.value)
+                 else "time constant not identified")
+    return [f"    rig: {'; '.join(parts)}"] + [f"    rig warning: {w}" for w in rig_warnings(ds)]
+
+
+def _archive_rig_lines(archive: Path) -> list[str]:
+    """:func:`rig_summary` of a session archive on disk; none when it is missing or cannot be read."""
+    if not archive.is_file():
+        return []
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(archive) as ds:
+            return rig_summary(ds)
+    except (OSError, ValueError, KeyError):  # a damaged archive: the summary goes on without the rig
+        return []
+
+
 def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
     """
     Summary lines of one session's results: impacts ok / excluded by reason, fit
-    warnings, validate warnings, session-level errors and stale results.
+    warnings, the rig (:func:`rig_summary`), validate warnings, session-level errors and stale results.
 
     Parameters
     ----------
@@ -432,6 +474,7 @@ def session_summary(results_session_dir, *, fault: str = "") -> list[str]:
             lines.append(f"    fit {row['ball']}: " + (f"WARNING: {text}" if text else "ok"))
     else:
         lines.append(f"    fit: parameters.csv was not written (see the logs in {folder / 'logs'})")
+    lines += _archive_rig_lines(folder / f"{name}.nc")
     for warning in snapshot.get("warnings", []):
         lines.append(f"    validate warning: {warning}")
     missing = [n for n in ("report.pdf", f"{name}.nc") if not (folder / n).is_file()]
