@@ -62,3 +62,44 @@ def test_no_plate_no_rig_no_overlay():
     assert "no free ringing" in read_rig(none)["plate_resonance_hz"].note
     old = ringing_archive(6).drop_vars([v for v in ringing_archive(6).variables if str(v).startswith("rig_")])
     assert ringing_overlay(old) is None and plate_impacts(old) == [] and read_rig(old) == {} and rig_warnings(old) == []
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_a_stated_plate_and_the_identified_one_agree_within_the_interval(tmp_path):
+    """One rig of the session zoo (bench/rig_zoo.py: a 3.2 kHz plate at 174 kHz) written twice, its plate stated
+    by the keys in one session and left to the traces in the other: the rig each workflow stores gives the stated
+    values in the first, and in the second an identified interval that holds them, with no warning either way."""
+    import dataclasses
+    import importlib
+    import sys
+    import warnings
+    from pathlib import Path
+
+    from ballimpact import archive, pipeline
+
+    bench = Path(__file__).resolve().parents[1] / "bench"
+    sys.path.insert(0, str(bench))
+    try:
+        rig_zoo = importlib.import_module("rig_zoo")
+    finally:
+        sys.path.remove(str(bench))
+    base = rig_zoo.draw_rig(1000, 14, (8, 8))
+    found = {}
+    others = tuple(k for k in base.stated if k != "resonance")
+    for stated in (True, False):
+        rig = dataclasses.replace(base, stated=others + (("resonance",) if stated else ()))
+        raw, out = tmp_path / str(stated) / "raw", tmp_path / str(stated) / "out"
+        rig_zoo.write_session(rig, raw)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            pipeline.session_impacts(raw / rig.session_id, out / "session.json", out / "impacts.csv",
+                                     out / "impacts.nc")
+        with archive.open_dataset(out / "impacts.nc") as ds:
+            found[stated] = (read_rig(ds), rig_warnings(ds))
+        assert not [w for w in caught if "session.yaml states" in str(w.message)]
+    (given, warned_given), (own, warned_own) = found[True], found[False]
+    assert warned_given == warned_own == []
+    for name in ("plate_resonance_hz", "plate_damping_ratio"):
+        assert given[name].source == "stated" and own[name].source == "identified"
+        assert own[name].low <= given[name].value <= own[name].high, (name, given[name], own[name])
+        assert "the session's traces give" in given[name].note
