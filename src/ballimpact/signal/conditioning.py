@@ -281,7 +281,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(found)
         undone, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
-            problems.append(Problem(ProblemKind.PLATE_RINGING, undone, data={"undo_refused": 1.0}))
+            hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
+            refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
+            problems.append(Problem(ProblemKind.PLATE_RINGING, str(undone), data={"undo_refused": 1.0, **refused}))
         elif undone is not None:
             return _undone_result(it, fs, undone, stated, messages, at_ends + staircase, t0_s, scale, spikes,
                                   mains_source)

@@ -36,6 +36,8 @@ DEPARTURE_CHAIN_SIGMA = 3.0
 #: place, and the transient an undone plate leaves in the sample interval of a jump) [samples]
 DEPARTURE_GAP_S = 0.05e-3
 DEPARTURE_SKIP = 2
+#: An identified resonance is the line's when their frequencies agree to this fraction [-]
+EXCITED_MATCH = 0.1
 #: damping rates tried for the sinusoid [1/s]
 _DECAY_RATES = (0.0, 250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0)
 
@@ -220,8 +222,10 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
 
     A spectral line of the plate (a PLATE_RINGING finding with ``line_hz`` and ``amplitude_fraction`` in its
     data) gets :func:`ringing_effects`; so does signal standing after the contact's end (a CONTACT_END_UNDETERMINED
-    finding ``beyond`` the end) where :func:`ringing_after` shows it is a damped line, not force. A plate identified but not undone (``undo_refused``) gets the effects of
-    the line among ``siblings`` when that line is all the evidence of ringing (no ringing after the contact, no
+    finding ``beyond`` the end) where :func:`ringing_after` shows it is a damped line, not force. A plate
+    identified but not undone (``undo_refused``) gets the effects of the line among ``siblings`` (on the peak
+    widened by :func:`_excited_peak_factor` where the resonance is the line's) when that line is all the evidence
+    of ringing (no ringing after the contact, no
     force below zero, no peak on ringing): what was not undone is then the line itself. Any other finding is
     returned as it is.
 
@@ -268,10 +272,30 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
                                                      ProblemKind.PEAK_ON_RINGING) and p is not problem]
         lines = [p for p in ringing if "line_hz" in p.data]
         if lines and len(lines) == len(ringing):
-            effects = [line_effects(p) for p in lines]
-            return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in effects]))
+            tc_s = (end_u - start_u) / fs
+            each = []
+            for p in lines:
+                e = dict(line_effects(p))
+                e["peak"] = e.get("peak", math.nan) * _excited_peak_factor(problem.data, float(p.data["line_hz"]), tc_s)
+                each.append(e)
+            return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in each]))
                                              for q in ("contact_time", "kcal", "peak")})
     return problem
+
+
+def _excited_peak_factor(data: dict, line_hz: float, contact_time_s: float) -> float:
+    """How much more a resonance the force excites may ring at the peak than its line's amplitude over the contact.
+
+    An identified resonance (``refused_hz`` [Hz], ``refused_zeta`` [-]) is excited by the force's jump and spike, near
+    where the peak stands, and decays as exp(-zeta wn t): averaged over TC, its amplitude is about A0 / (zeta wn TC)
+    of its amplitude A0 there. The line's effect on the peak is taken twice that ratio, at least 2; NaN (not known)
+    without a damping ratio. 1 where no resonance was identified at the line (``line_hz`` [Hz], within
+    EXCITED_MATCH of it): a line alone.
+    """
+    if "refused_hz" not in data or not abs(float(data["refused_hz"]) / line_hz - 1.0) <= EXCITED_MATCH:
+        return 1.0
+    decay = float(data.get("refused_zeta", math.nan)) * 2.0 * math.pi * float(data["refused_hz"]) * contact_time_s
+    return 2.0 * max(decay, 1.0) if math.isfinite(decay) else math.nan
 
 
 def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DEPARTURE_WINDOW_S,

@@ -19,7 +19,21 @@ from .undo import lowpass_spread_samples, lowpass_zero_phase, undo_plate_resonan
 from .undone_end import undone_end
 from .undone_peak import PLATE_LOWPASS_PEAK, lowpass_hides_peak
 
-__all__ = ["plate_undone", "stated_plate_undone", "undone_peak_spread", "lowpassed_spike"]
+__all__ = ["Refusal", "plate_undone", "stated_plate_undone", "undone_peak_spread", "lowpassed_spike"]
+
+
+class Refusal(str):
+    """Why a plate's resonance was not undone, in words, with the resonance refused [Hz] and its damping ratio [-]
+    (NaN: none identified)."""
+
+    resonance_hz: float = math.nan
+    damping_ratio: float = math.nan
+
+
+def _refused(message: str, resonance_hz: float, damping_ratio: float) -> Refusal:
+    out = Refusal(message)
+    out.resonance_hz, out.damping_ratio = float(resonance_hz), float(damping_ratio)
+    return out
 
 PLATE_ID_AFTER_S = 2.0e-3  # the plate's ringing is identified from the contact and this long after it [s]
 PLATE_ID_LAGS = (5, 8)  # two identifications, instruments this many samples back [samples]
@@ -153,15 +167,16 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
             plate = refine_plate_resonance(x[ra:rb], fs, plate)
             hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
         if isinstance(hit, str):
-            return (f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio {plate.damping_ratio:.2g}) "
-                    f"not undone: {hit}")
+            return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
+                            f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
         found.append(hit)
     (y, c, plate, cutoff), (_, c2, _, _) = found
     if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
             or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
-        return (f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: two identifications of it "
-                f"disagree by {100 * abs(c.contact_time_s / c2.contact_time_s - 1):.2g} % on TC and "
-                f"{100 * abs(c.peak_V / c2.peak_V - 1):.2g} % on the peak")
+        return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: two identifications of "
+                        f"it disagree by {100 * abs(c.contact_time_s / c2.contact_time_s - 1):.2g} % on TC and "
+                        f"{100 * abs(c.peak_V / c2.peak_V - 1):.2g} % on the peak", plate.frequency_hz,
+                        plate.damping_ratio)
     return y, c, plate, cutoff
 
 
@@ -188,8 +203,8 @@ def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, p
     peak_problems = []
     hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, resonance, peak_problems=peak_problems)
     if isinstance(hit, str):
-        return (f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
-                f"plate.resonance_hz and plate.damping_ratio) not undone: {hit}"), []
+        return _refused(f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
+                        f"plate.resonance_hz and plate.damping_ratio) not undone: {hit}", plate[0], plate[1]), []
     return hit, peak_problems
 
 
