@@ -174,3 +174,16 @@ def test_pooled_median_interval():
     assert est.low < 10.0 < est.high
     assert_allclose(est.high - est.low, 2 * COVERAGE * 1.2533 / 20.0, rtol=0.15)
     assert_allclose(pooled_median(x, relative_spread=True).value, 0.1, rtol=0.15)
+
+
+def test_a_line_that_does_not_decay_is_not_the_plate():
+    """A steady tone after every contact (interference) stands far out of the noise but does not decay: no plate."""
+    segments = _free_segments(np.random.default_rng(9), 12, 6000.0, 0.0, amplitude=0.01)
+    fit = fit_free_ringing(segments, FS)
+    assert fit.detection_z > DETECT_Z and not fit.detected
+    impacts = _plate_session(np.random.default_rng(10), 8, 3000.0, 0.05)
+    ideal = dict(impacts, raw_voltage_V=[np.random.default_rng(i).normal(0, 1e-3, t.size) + 0.01 * np.cos(
+        2 * math.pi * 6000.0 * t) for i, t in enumerate(impacts["raw_time_s"])])
+    r = identify_rig(ideal, FS)
+    assert r["plate_resonance_hz"].source == "none"
+    assert "does not decay" in r["plate_resonance_hz"].note

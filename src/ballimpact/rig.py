@@ -11,7 +11,7 @@ import numpy as np
 
 __all__ = [
     "RING_GAP_S", "RING_GAP_FRACTION", "RING_WINDOW_S", "RING_MIN_SAMPLES", "RING_POLY_DEGREE", "RING_MIN_HZ",
-    "RING_MAX_FRACTION", "DAMPING_BOUNDS", "DETECT_Z", "MIN_IMPACTS", "COVERAGE", "STATED_DISAGREE_Z",
+    "RING_MAX_FRACTION", "DAMPING_BOUNDS", "UNDAMPED_FACTOR", "DETECT_Z", "MIN_IMPACTS", "COVERAGE", "STATED_DISAGREE_Z",
     "RIG_QUANTITIES", "RigWarning", "RingingSegment", "PlateFit", "RigEstimate", "Rig",
     "ringing_segments", "fit_free_ringing", "pooled_ringing", "ringing_response", "pooled_time_constant",
     "pooled_median", "identify_rig",
@@ -25,6 +25,7 @@ RING_POLY_DEGREE = 3  # the baseline under the ringing (undershoot, drift, slow 
 RING_MIN_HZ = 500.0  # resonances looked for from this frequency ... [Hz]
 RING_MAX_FRACTION = 0.45  # ... to this fraction of the sample rate (or the stated bandwidth, the lower) [-]
 DAMPING_BOUNDS = (1.0e-3, 0.7)  # damping ratios fitted within these [-]
+UNDAMPED_FACTOR = 2.0  # a damping ratio within this factor of its lower bound: a line that does not decay [-]
 DETECT_Z = 8.0  # the pooled ringing's chi-square gain stands this many of its deviations above chance: a plate [-]
 MIN_IMPACTS = 5  # fewer impacts with a free ringing: the session is too small to identify its plate [-]
 COVERAGE = 2.0  # intervals are the estimate +- this many standard uncertainties (about 95 %) [-]
@@ -74,8 +75,9 @@ class PlateFit(NamedTuple):
 
     @property
     def detected(self) -> bool:
-        """Whether the ringing stands DETECT_Z deviations above chance."""
-        return bool(self.detection_z > DETECT_Z)
+        """Whether the ringing stands DETECT_Z deviations above chance and decays (a damping ratio off the fit's
+        lower bound: a line that does not decay after the contact is interference, not the plate's free ringing)."""
+        return bool(self.detection_z > DETECT_Z and self.damping_ratio > UNDAMPED_FACTOR * DAMPING_BOUNDS[0])
 
 
 @dataclass(frozen=True)
@@ -422,6 +424,10 @@ def _plate_estimates(segments, fs, stated, mains_hz, bandwidth_hz, warn):
                          fit.frequency_hz + COVERAGE * fit.frequency_u_hz, "identified", fit.n_impacts)
         zeta = RigEstimate(fit.damping_ratio, max(fit.damping_ratio - COVERAGE * fit.damping_u, 0.0),
                            fit.damping_ratio + COVERAGE * fit.damping_u, "identified", fit.n_impacts)
+    elif fit is not None and fit.detection_z > DETECT_Z:
+        note = (f"a line at {fit.frequency_hz / 1e3:.3g} kHz after {fit.n_impacts} contacts that does not decay "
+                f"(damping ratio {fit.damping_ratio:.2g}): interference, not a plate's free ringing")
+        fn = zeta = RigEstimate(math.nan, n_impacts=fit.n_impacts, note=note)
     elif fit is not None:
         note = (f"no free ringing above the noise after {fit.n_impacts} contacts (z = {fit.detection_z:.1f}, "
                 f"{DETECT_Z:g} needed): an ideal plate, or one resonating above the band")
