@@ -9,6 +9,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .model import CLOTH_DISPLACEMENT_M
+
 __all__ = [
     "RING_GAP_S", "RING_GAP_FRACTION", "RING_WINDOW_S", "RING_MIN_SAMPLES", "RING_POLY_DEGREE", "RING_MIN_HZ",
     "RING_MAX_FRACTION", "DAMPING_BOUNDS", "UNDAMPED_FACTOR", "DETECT_Z", "MIN_IMPACTS", "COVERAGE", "STATED_DISAGREE_Z",
@@ -75,9 +77,11 @@ class PlateFit(NamedTuple):
 
     @property
     def detected(self) -> bool:
-        """Whether the ringing stands DETECT_Z deviations above chance and decays (a damping ratio off the fit's
-        lower bound: a line that does not decay after the contact is interference, not the plate's free ringing)."""
-        return bool(self.detection_z > DETECT_Z and self.damping_ratio > UNDAMPED_FACTOR * DAMPING_BOUNDS[0])
+        """Whether the ringing stands DETECT_Z deviations above chance and decays: a damping ratio off the fit's
+        lower bound, its interval clear of zero (a line that may not decay after the contact is interference, or
+        the force's own tail, not the plate's free ringing)."""
+        return bool(self.detection_z > DETECT_Z and self.damping_ratio > UNDAMPED_FACTOR * DAMPING_BOUNDS[0]
+                    and self.damping_ratio - COVERAGE * self.damping_u > 0)
 
 
 @dataclass(frozen=True)
@@ -106,8 +110,13 @@ class Rig:
         return self.estimates[name]
 
 
-def ringing_segments(impact_ids, raw_time_s, raw_voltage_V, contact_time_ms, noise_rms_V, use) -> list:
+def ringing_segments(impact_ids, raw_time_s, raw_voltage_V, contact_time_ms, noise_rms_V, use, *,
+                     vout_m_s=None) -> list:
     """The free ringing after each contact: the raw trace from a gap after the end, RING_WINDOW_S long.
+
+    The gap is RING_GAP_S, or RING_GAP_FRACTION of TC, or with the rebound speed the time the ball takes to leave
+    the cloth's 2 mm (:data:`ballimpact.model.CLOTH_DISPLACEMENT_M`), whose light load an end read in the noise
+    may have left out: the longest.
 
     Parameters
     ----------
@@ -121,6 +130,8 @@ def ringing_segments(impact_ids, raw_time_s, raw_voltage_V, contact_time_ms, noi
         Each trace's white noise [V].
     use : array_like of bool
         Impacts to read (one contact, found, not a fault).
+    vout_m_s : array_like, optional
+        Each rebound speed [m/s].
 
     Returns
     -------
@@ -135,7 +146,9 @@ def ringing_segments(impact_ids, raw_time_s, raw_voltage_V, contact_time_ms, noi
         t, v = np.asarray(raw_time_s[i], dtype=float), np.asarray(raw_voltage_V[i], dtype=float)
         good = np.isfinite(t) & np.isfinite(v)
         t, v = t[good], v[good]
-        start = tc + max(RING_GAP_S, RING_GAP_FRACTION * tc)
+        vout = float(vout_m_s[i]) if vout_m_s is not None else math.nan
+        cloth = CLOTH_DISPLACEMENT_M / vout if math.isfinite(vout) and vout > 0 else 0.0
+        start = tc + max(RING_GAP_S, RING_GAP_FRACTION * tc, cloth)
         inside = (t >= start) & (t < start + RING_WINDOW_S)
         contact = (t >= 0.0) & (t <= tc)
         if inside.sum() < RING_MIN_SAMPLES or not contact.any():
@@ -425,8 +438,9 @@ def _plate_estimates(segments, fs, stated, mains_hz, bandwidth_hz, warn):
         zeta = RigEstimate(fit.damping_ratio, max(fit.damping_ratio - COVERAGE * fit.damping_u, 0.0),
                            fit.damping_ratio + COVERAGE * fit.damping_u, "identified", fit.n_impacts)
     elif fit is not None and fit.detection_z > DETECT_Z:
-        note = (f"a line at {fit.frequency_hz / 1e3:.3g} kHz after {fit.n_impacts} contacts that does not decay "
-                f"(damping ratio {fit.damping_ratio:.2g}): interference, not a plate's free ringing")
+        note = (f"a line at {fit.frequency_hz / 1e3:.3g} kHz after {fit.n_impacts} contacts that may not decay "
+                f"(damping ratio {fit.damping_ratio:.2g} +- {COVERAGE * fit.damping_u:.2g}): interference or the "
+                "force's own tail, not a plate's free ringing")
         fn = zeta = RigEstimate(math.nan, n_impacts=fit.n_impacts, note=note)
     elif fit is not None:
         note = (f"no free ringing above the noise after {fit.n_impacts} contacts (z = {fit.detection_z:.1f}, "
@@ -486,7 +500,8 @@ def identify_rig(impacts: dict, sample_rate_hz: float, *, stated_plate=None, sta
         Per impact, sequences of equal length: ``impact_id``, ``raw_time_s`` and ``raw_voltage_V`` (each a 1-D
         array [s], [V], polarity applied), ``contact_time_ms`` [ms], ``noise_rms_V`` [V], ``hum_amplitude_V``
         [V], ``mains_hz`` [Hz], ``mains_source``, ``tau_s``, ``tau_se_s`` [s], ``tau_source``, ``kcal_N_per_V``
-        [N/V], ``sample_rate_hz`` [Hz], ``usable`` (bool: one contact found, no fault) and ``kcal_ok`` (bool).
+        [N/V], ``sample_rate_hz`` [Hz], ``usable`` (bool: one contact found, no fault) and ``kcal_ok`` (bool);
+        optionally ``vout_m_s`` [m/s] (:func:`ringing_segments`' gap).
     sample_rate_hz : float
         The session's sample rate [Hz].
     stated_plate : tuple of float, optional
@@ -511,7 +526,8 @@ def identify_rig(impacts: dict, sample_rate_hz: float, *, stated_plate=None, sta
     same_rate = np.isclose(np.asarray(impacts["sample_rate_hz"], dtype=float), fs, rtol=1e-6)
     use = np.asarray(impacts["usable"], dtype=bool) & same_rate
     segments = ringing_segments(impacts["impact_id"], impacts["raw_time_s"], impacts["raw_voltage_V"],
-                                impacts["contact_time_ms"], impacts["noise_rms_V"], use)
+                                impacts["contact_time_ms"], impacts["noise_rms_V"], use,
+                                vout_m_s=impacts.get("vout_m_s"))
     mains = _mains_estimate(stated_mains_hz, impacts["mains_hz"], impacts["mains_source"])
     fn, zeta, fit = _plate_estimates(segments, fs, stated_plate, mains.value or None, bandwidth_hz, warn)
     estimated = np.array([s == "estimated" for s in impacts["tau_source"]]) & use

@@ -62,6 +62,7 @@ def session_rig(ds: xr.Dataset, meta) -> Rig:
         "tau_se_s": _floats(ds, "amplifier_time_constant_se_s"),
         "tau_source": _texts(ds, "amplifier_time_constant_source"),
         "kcal_N_per_V": _floats(ds, "kcal_N_per_V"), "sample_rate_hz": _floats(ds, "sample_rate_hz"),
+        "vout_m_s": _floats(ds, "vout_m_s"),
         "usable": usable,
         "kcal_ok": np.array([s == "ok" for s in _texts(ds, "kcal_status")]),
     }
@@ -174,7 +175,7 @@ def ringing_overlay(ds: xr.Dataset) -> RingingOverlay | None:
     use = np.array([i in wanted for i in ids])
     segments = ringing_segments(ids, np.asarray(ds["raw_time_s"].values, dtype=float),
                                 np.asarray(ds["raw_voltage_V"].values, dtype=float), _floats(ds, "contact_time_ms"),
-                                _floats(ds, "noise_rms_V"), use)
+                                _floats(ds, "noise_rms_V"), use, vout_m_s=_floats(ds, "vout_m_s"))
     if not segments:
         return None
     mains = rig["mains_hz"].value if "mains_hz" in rig else math.nan
