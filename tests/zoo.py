@@ -1041,3 +1041,18 @@ def judge(result, truth: ZooTruth) -> Judgement:
                          outcomes)
     cat = "ok_wrong" if wrong else "ok_right" if result.status == "ok" else "excluded_measurable"
     return Judgement(cat, result.reason, errors, wrong, outcomes)
+
+
+def withheld_for_the_cloth_alone(result) -> bool:
+    """Whether TC is withheld by the finding that an undone plate's start may miss the cloth's phase and by nothing
+    else: judged again without it (ballimpact.verdicts.judge_quantities), TC would be ok. The zoo's balls carry no
+    load over their first 2 mm (the paper's model), so their TC from the steep edge is its truth; a real ball's
+    cloth carries a light load there, which an undone plate's noise hides (docs/rigs.md, "Held-out rigs")."""
+    from ballimpact.verdicts import judge_quantities
+
+    cloth = [p for p in result.problems if "may miss the cloth's phase" in p.message]
+    if result.contact_time_status != "withheld" or not cloth:
+        return False
+    rest = judge_quantities([p for p in result.problems if p not in cloth], result.u_random,
+                            peak_is_spike=result.peak_is_spike)
+    return rest.status["contact_time"] == "ok"

@@ -211,7 +211,9 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                       _t("signal.effects", "DEPARTURE_SIGMA", "noise deviations", "signal before the start")),
           test="tests/test_conditioning.py -k end",
           effect="signal departing from its noise before the start (ballimpact.signal.effects.departure_before_start): "
-                 "the span from the earliest departure to the start bounds the start's shift (TC)"),
+                 "the span from the earliest departure to the start bounds the start's shift (TC); a start read on a "
+                 "plate-undone force (ballimpact.signal.effects.hidden_cloth_phase): the cloth's 2 mm at the "
+                 "inbound speed"),
     Check(ProblemKind.CONTACT_JUMP_UNRESOLVED, "contact jump unresolved",
           "half a sample at an end where the force jumps, against TC", (_TC,),
           thresholds=(_t("signal.end_checks", "JUMP_MAX_FRACTION", "of TC", "half a sample at most this"),),

@@ -26,11 +26,11 @@ from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect
 from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
-from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
+from .model import BUCKLING_TIME_S, CLOTH_DISPLACEMENT_M, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .signal.effects import departure_before_start, end_slopes, finding_effects
+from .signal.effects import departure_before_start, end_slopes, finding_effects, hidden_cloth_phase
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
@@ -566,6 +566,8 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
     if cond.plate is None:  # an undone plate's start is fitted through its chain, the low-pass's spread included
         _departure_problem(res, cond, float(t[0]))
+    if cond.plate is not None:
+        _cloth_problem(res, cond)
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
@@ -586,6 +588,18 @@ def _departure_problem(res: ImpactResult, cond, t0_s: float) -> None:
                      f"noise ({noise * 1e3:.2g} mV) that long before the start found (an anti-aliasing filter's "
                      "ringing ahead of a jump, or a foot of the force)",
                      data={"departure_s": span}, effects={"contact_time": span / c.contact_time_s}))
+
+
+def _cloth_problem(res: ImpactResult, cond) -> None:
+    """A finding, with its effect on TC, where an undone plate's start may miss the cloth's phase
+    (:func:`ballimpact.signal.effects.hidden_cloth_phase`)."""
+    c = cond.contact
+    effect = hidden_cloth_phase(res.vin_m_s, c.contact_time_s)
+    res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
+                     "contact start may miss the cloth's phase: read on a plate-undone force, whose noise hides "
+                     "the cloth's light load over the ball's first 2 mm of compression "
+                     f"({1e3 * CLOTH_DISPLACEMENT_M / res.vin_m_s:.2g} ms at {res.vin_m_s:.1f} m/s)",
+                     data={"cloth_phase_s": CLOTH_DISPLACEMENT_M / res.vin_m_s}, effects={"contact_time": effect}))
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:

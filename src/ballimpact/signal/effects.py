@@ -12,7 +12,7 @@ from .end_checks import PLATE_SLOPE_S
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
-           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start"]
+           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start", "hidden_cloth_phase"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -348,3 +348,28 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
     if earliest is None or not strong:
         return 0.0, noise
     return (start_u - (last - n + 1 + earliest)) / fs, noise
+
+
+def hidden_cloth_phase(vin_m_s: float, contact_time_s: float) -> float:
+    """The relative shift of TC a cloth phase hidden by an undone plate may make: its length over TC [-].
+
+    A ball's first 2 mm of compression load only its cloth, lightly (section 3.2.4 and Fig. 9 of Goodwill & Haake
+    2004: the model's force is zero there, and its TC counts them), and TC runs from the first rise of that load.
+    Undoing a plate amplifies the noise by far more than that load, so that the start read on the undone force may
+    be late by up to the cloth's phase, 2 mm at the inbound speed (``ballimpact.model.CLOTH_DISPLACEMENT_M`` / vin):
+    read at the steep edge, or on the part of the foot that stands out of the amplified noise (a ``cloth_foot``
+    flag is no proof that the foot was seen from its start: 1.7-2.4 % short with it on rig 1000:18 of
+    bench/rigs.py, its exact plate stated). NaN where the speed or TC is not known.
+
+    Parameters
+    ----------
+    vin_m_s : float
+        Inbound speed at the plate [m/s].
+    contact_time_s : float
+        TC [s].
+    """
+    from ..model import CLOTH_DISPLACEMENT_M
+
+    if not (vin_m_s > 0 and contact_time_s > 0):
+        return math.nan
+    return CLOTH_DISPLACEMENT_M / vin_m_s / contact_time_s
