@@ -118,7 +118,6 @@ def rig_page(ds, info, figures_dir=None, images=None) -> Figure:
     """
     from . import report as _r
 
-    w, h = _r.A4_PORTRAIT_IN
     margin = _r._MARGIN_IN
     pngs = [_r._figure_file(figures_dir, spec.file_name, images) for spec in RIG_PAGE_FIGURES]
     if all(p is not None for p in pngs):
@@ -134,38 +133,68 @@ def rig_page(ds, info, figures_dir=None, images=None) -> Figure:
              "holds them as rig_value, rig_low, rig_high, rig_source on its rig_quantity dimension.")
     cur.text(margin, "\n".join(textwrap.wrap(intro, 120)), size=8.5)
     cur.skip(0.08)
+    _rig_table(fig, cur, ds)
+    _rig_warnings(cur, ds)
+    cur.skip(0.12)
+    _rig_figures(fig, cur, ds, pngs)
+    _r._footer(fig, info, "Rig")
+    return fig
+
+
+def _rig_table(fig, cur, ds) -> None:
+    """The rig's table, its numbered notes and the plate fit's line, at the cursor; or why there is none."""
+    from . import report as _r
+
+    w, h = _r.A4_PORTRAIT_IN
+    margin = _r._MARGIN_IN
     rows, notes = rig_table_rows(ds)
-    if rows:
-        head = ["Quantity", "Value", "95 % interval", "Unit", "Source", "Impacts", "Note"]
-        row_h = 0.2
-        table_h = row_h * (len(rows) + 1)
-        ax = fig.add_axes([margin / w, 1 - (cur.y + table_h) / h, (w - 2 * margin) / w, table_h / h])
-        table = _r._table(ax, [head] + rows, [0.3, 0.12, 0.2, 0.07, 0.11, 0.09, 0.06], font_size=8)
-        _r._fit_columns(fig, ax, table, 8.0)
-        cur.skip(table_h + 0.1)
-        note_lines = []
-        for k, note in enumerate(notes, 1):
-            note_lines += textwrap.wrap(f"({k}) {_r._text(note)}", 112, subsequent_indent="     ")
-        if note_lines:
-            cur.text(margin, "\n".join(note_lines[:8]), size=7.8, color="0.25")
-        cur.text(margin, "\n".join(textwrap.wrap(_plate_line(ds), 112)), size=7.8, color="0.25")
-    else:
+    if not rows:
         cur.text(margin, "This archive has no rig variables: it was written before ballimpact identified the rig "
                          "(re-run the session).", size=9)
+        return
+    head = ["Quantity", "Value", "95 % interval", "Unit", "Source", "Impacts", "Note"]
+    row_h = 0.2
+    table_h = row_h * (len(rows) + 1)
+    ax = fig.add_axes([margin / w, 1 - (cur.y + table_h) / h, (w - 2 * margin) / w, table_h / h])
+    table = _r._table(ax, [head] + rows, [0.3, 0.12, 0.2, 0.07, 0.11, 0.09, 0.06], font_size=8)
+    _r._fit_columns(fig, ax, table, 8.0)
+    cur.skip(table_h + 0.1)
+    note_lines = []
+    for k, note in enumerate(notes, 1):
+        note_lines += textwrap.wrap(f"({k}) {_r._text(note)}", 112, subsequent_indent="     ")
+    if note_lines:
+        cur.text(margin, "\n".join(note_lines[:8]), size=7.8, color="0.25")
+    cur.text(margin, "\n".join(textwrap.wrap(_plate_line(ds), 112)), size=7.8, color="0.25")
+
+
+def _rig_warnings(cur, ds) -> None:
+    """The warnings of the rig's identification (stated keys the traces disagree with), at most
+    MAX_RIG_WARNING_LINES lines."""
+    from . import report as _r
+
     warned = rig_warnings(ds)
-    if warned:
-        cur.skip(0.05)
-        cur.text(margin, f"Warnings: {len(warned)} stated key(s) the traces disagree with", size=9, weight="bold",
-                 color="#8a4b00")
-        lines: list[str] = []
-        for k, warning in enumerate(warned):
-            wrapped = textwrap.wrap("- " + _r._text(warning), 120, subsequent_indent="  ")
-            if len(lines) + len(wrapped) > MAX_RIG_WARNING_LINES:
-                lines.append(f"- and {len(warned) - k} more (the archive's rig_value attribute rig_warnings).")
-                break
-            lines.extend(wrapped)
-        cur.text(margin, "\n".join(lines), size=8, color="#8a4b00")
-    cur.skip(0.12)
+    if not warned:
+        return
+    margin = _r._MARGIN_IN
+    cur.skip(0.05)
+    cur.text(margin, f"Warnings: {len(warned)} stated key(s) the traces disagree with", size=9, weight="bold",
+             color="#8a4b00")
+    lines: list[str] = []
+    for k, warning in enumerate(warned):
+        wrapped = textwrap.wrap("- " + _r._text(warning), 120, subsequent_indent="  ")
+        if len(lines) + len(wrapped) > MAX_RIG_WARNING_LINES:
+            lines.append(f"- and {len(warned) - k} more (the archive's rig_value attribute rig_warnings).")
+            break
+        lines.extend(wrapped)
+    cur.text(margin, "\n".join(lines), size=8, color="#8a4b00")
+
+
+def _rig_figures(fig, cur, ds, pngs) -> None:
+    """The figures of RIG_PAGE_FIGURES with their captions, shrunk to the room left on the page."""
+    from . import report as _r
+
+    h = _r.A4_PORTRAIT_IN[1]
+    margin = _r._MARGIN_IN
     captions = ["\n".join(textwrap.wrap(f"{spec.title}. {spec.caption}", _CAPTION_CHARS))
                 for spec in RIG_PAGE_FIGURES]
     caption_h = [(c.count("\n") + 1) * _CAPTION_PT * 1.45 / 72 + 0.12 for c in captions]
@@ -182,5 +211,3 @@ def rig_page(ds, info, figures_dir=None, images=None) -> Figure:
         cur.skip(used + 0.05)
         cur.text(margin, caption, size=_CAPTION_PT, color="0.2")
         cur.skip(0.07)
-    _r._footer(fig, info, "Rig")
-    return fig
