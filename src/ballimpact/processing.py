@@ -26,7 +26,7 @@ from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect
 from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
-from .model import BUCKLING_TIME_S, CLOTH_DISPLACEMENT_M, kelvin_voigt_parameters
+from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
@@ -595,11 +595,12 @@ def _cloth_problem(res: ImpactResult, cond) -> None:
     (:func:`ballimpact.signal.effects.hidden_cloth_phase`)."""
     c = cond.contact
     effect = hidden_cloth_phase(res.vin_m_s, c.contact_time_s)
+    phase = effect * c.contact_time_s  # [s]; NaN where the speed is not known
     res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                      "contact start may miss the cloth's phase: read on a plate-undone force, whose noise hides "
                      "the cloth's light load over the ball's first 2 mm of compression "
-                     f"({1e3 * CLOTH_DISPLACEMENT_M / res.vin_m_s:.2g} ms at {res.vin_m_s:.1f} m/s)",
-                     data={"cloth_phase_s": CLOTH_DISPLACEMENT_M / res.vin_m_s}, effects={"contact_time": effect}))
+                     f"({1e3 * phase:.2g} ms at {res.vin_m_s:.1f} m/s)",
+                     data={"cloth_phase_s": phase}, effects={"contact_time": effect}))
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:

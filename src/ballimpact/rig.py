@@ -10,10 +10,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .model import CLOTH_DISPLACEMENT_M
+from .signal.noise import robust_noise
 
 __all__ = [
     "RING_GAP_S", "RING_GAP_FRACTION", "RING_WINDOW_S", "RING_MIN_SAMPLES", "RING_POLY_DEGREE", "RING_MIN_HZ",
-    "RING_MAX_FRACTION", "DAMPING_BOUNDS", "UNDAMPED_FACTOR", "DETECT_Z", "MIN_IMPACTS", "COVERAGE", "STATED_DISAGREE_Z",
+    "RING_MAX_FRACTION", "DAMPING_BOUNDS", "UNDAMPED_FACTOR", "DETECT_Z", "MIN_IMPACTS", "COVERAGE",
+    "STATED_DISAGREE_Z",
     "RIG_QUANTITIES", "RigWarning", "RingingSegment", "PlateFit", "RigEstimate", "Rig",
     "ringing_segments", "fit_free_ringing", "pooled_ringing", "ringing_response", "pooled_time_constant",
     "pooled_median", "identify_rig",
@@ -270,7 +272,7 @@ def fit_free_ringing(segments, sample_rate_hz: float, *, mains_hz: float | None 
     bounds = ([math.log(f_lo), math.log(DAMPING_BOUNDS[0])], [math.log(f_hi), math.log(DAMPING_BOUNDS[1])])
 
     def residuals(p, rows=slice(None)):
-        r, _ = _Pooled.solve(pooled, math.exp(p[0]), math.exp(p[1]))
+        r, _ = pooled.solve(math.exp(p[0]), math.exp(p[1]))
         return r[rows][pooled.mask[rows]]
 
     f0 = _spectral_start(pooled, fs, f_lo, f_hi)
@@ -404,7 +406,7 @@ def pooled_median(values, *, relative_spread: bool = False) -> RigEstimate:
     if x.size < MIN_IMPACTS:
         return RigEstimate(math.nan, note=f"{x.size} impacts: too few")
     med = float(np.median(x))
-    sigma = 1.4826 * float(np.median(np.abs(x - med)))
+    sigma = robust_noise(x)
     if relative_spread:
         return RigEstimate(sigma / med if med else math.nan, source="identified", n_impacts=int(x.size))
     half = COVERAGE * 1.2533 * sigma / math.sqrt(x.size)

@@ -54,8 +54,7 @@ def session_rig(ds: xr.Dataset, meta) -> Rig:
     usable = np.asarray(usable) & np.isfinite(_floats(ds, "contact_time_ms"))
     impacts = {
         "impact_id": [str(v) for v in ds["impact_id"].values],
-        "raw_time_s": list(np.asarray(ds["raw_time_s"].values, dtype=float)),
-        "raw_voltage_V": list(np.asarray(ds["raw_voltage_V"].values, dtype=float)),
+        "raw_time_s": ds["raw_time_s"].values, "raw_voltage_V": ds["raw_voltage_V"].values,
         "contact_time_ms": _floats(ds, "contact_time_ms"), "noise_rms_V": _floats(ds, "noise_rms_V"),
         "hum_amplitude_V": _floats(ds, "hum_amplitude_V"), "mains_hz": _floats(ds, "mains_frequency_hz"),
         "mains_source": _texts(ds, "mains_source"), "tau_s": _floats(ds, "amplifier_time_constant_s"),
@@ -173,9 +172,9 @@ def ringing_overlay(ds: xr.Dataset) -> RingingOverlay | None:
     wanted = set(plate_impacts(ds))
     ids = [str(v) for v in ds["impact_id"].values]
     use = np.array([i in wanted for i in ids])
-    segments = ringing_segments(ids, np.asarray(ds["raw_time_s"].values, dtype=float),
-                                np.asarray(ds["raw_voltage_V"].values, dtype=float), _floats(ds, "contact_time_ms"),
-                                _floats(ds, "noise_rms_V"), use, vout_m_s=_floats(ds, "vout_m_s"))
+    segments = ringing_segments(ids, ds["raw_time_s"].values, ds["raw_voltage_V"].values,
+                                _floats(ds, "contact_time_ms"), _floats(ds, "noise_rms_V"), use,
+                                vout_m_s=_floats(ds, "vout_m_s"))
     if not segments:
         return None
     mains = rig["mains_hz"].value if "mains_hz" in rig else math.nan

@@ -8,6 +8,7 @@ import numpy as np
 
 from .checks import QUANTITIES
 from .problems import Problem, ProblemKind
+from .signal.noise import robust_noise
 from .verdicts import judge_quantities
 
 __all__ = [
@@ -64,7 +65,7 @@ def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_
     if ok.sum() < 3:
         return reasons, math.nan, math.nan
     med = float(np.median(k[ok]))
-    spread = float(1.4826 * np.median(np.abs(k[ok] - med)))
+    spread = robust_noise(k[ok])
     for i in np.flatnonzero(ok):
         rel = abs(k[i] - med) / med
         z = abs(k[i] - med) / spread if spread > 0 else math.inf
@@ -214,7 +215,7 @@ def flag_time_constant_outliers(tau_s, tau_se_s, contact_time_ms, ok, *, max_z=T
     kappa = np.where(use, 1.0 / np.where(use, tau, 1.0), np.nan)
     kappa_se = np.where(use, se / np.where(use, tau, 1.0) ** 2, np.nan)  # d(1/tau) = dtau / tau^2
     med = float(np.median(kappa[use]))
-    med_se = 1.2533 * float(1.4826 * np.median(np.abs(kappa[use] - med))) / math.sqrt(use.sum())
+    med_se = 1.2533 * robust_noise(kappa[use]) / math.sqrt(use.sum())
     for i in np.flatnonzero(use):
         diff = abs(kappa[i] - med)
         z = diff / math.hypot(kappa_se[i], med_se)

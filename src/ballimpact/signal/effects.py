@@ -8,7 +8,9 @@ from dataclasses import replace
 import numpy as np
 
 from ..problems import ProblemKind
+from ..model import CLOTH_DISPLACEMENT_M
 from .end_checks import PLATE_SLOPE_S
+from .noise import robust_noise
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
@@ -333,7 +335,7 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
     quiet = x[:max(last - n, 0)]
     if quiet.size < 20 or last < 0:
         return math.nan, math.nan
-    noise = 1.4826 * float(np.median(np.abs(quiet - np.median(quiet))))
+    noise = robust_noise(quiet)
     if not noise > 0:
         return math.nan, math.nan
     z = np.abs(x[last - n + 1:last + 1]) / noise  # z[-1] is the last sample before the start
@@ -368,8 +370,6 @@ def hidden_cloth_phase(vin_m_s: float, contact_time_s: float) -> float:
     contact_time_s : float
         TC [s].
     """
-    from ..model import CLOTH_DISPLACEMENT_M
-
     if not (vin_m_s > 0 and contact_time_s > 0):
         return math.nan
     return CLOTH_DISPLACEMENT_M / vin_m_s / contact_time_s
