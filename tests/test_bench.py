@@ -314,26 +314,29 @@ def test_rigs_runs_a_tiny_ideal_plate_session_through_the_workflow(capsys):
 
 
 @pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
-@pytest.mark.parametrize("vin", [23.0, 28.0, 33.8])
-def test_a_start_read_behind_an_antialias_filter_s_ringing_is_not_ok_and_wrong(tmp_path, vin):
+def test_a_start_read_behind_an_antialias_filter_s_ringing_is_completed_and_right(tmp_path):
     """Rig 1000:8 (an ideal plate behind a linear-phase anti-aliasing filter at 26 kHz): the filter rings ahead of
-    the force's jump and hid the cloth's foot before it, and TC came out ok and 1.5-1.7 % short on e47051e. Its
-    start is now known only to the span where the signal departs from its noise before it: TC withheld, or right."""
+    the force's jump and hid the cloth's foot before it, and TC came out ok and 1.5-1.7 % short on e47051e, then
+    withheld (41d1c01). Its start is now the jump less the cloth's 2 mm at the inbound speed (signal.cloth): every
+    clean impact's TC within half its tolerance of the truth (the model's, from the first contact), and all but one
+    ok at most."""
     import dataclasses
 
     from ballimpact import processing
+    from ballimpact.problems import ProblemKind
     from ballimpact.session import read_session
 
     _, rig_zoo = _rigs()
-    rig = dataclasses.replace(rig_zoo.draw_rig(1000, 8, (3, 3)), spikes=False)
-    rig_zoo.write_session(rig, tmp_path)
+    rig = dataclasses.replace(rig_zoo.draw_rig(1000, 8, (8, 8)), spikes=False)
+    truths = rig_zoo.write_session(rig, tmp_path)
     session = read_session(tmp_path / rig.session_id)
-    ball = rig.balls[0]
-    volts, truth = rig_zoo.render_impact(rig, ball, vin, "", "x-1", np.random.default_rng(11))
-    row = session.impacts[0]
-    rig_zoo._write_tdms(session.trace_path(row), volts, rig.sample_rate_hz)
-    result = processing.process_impact(dataclasses.replace(row, ball=ball.key), session)
-    error = result.contact_time_ms / (1e3 * truth.contact_time_s) - 1.0
-    assert result.contact_time_status == "withheld" or abs(error) < 0.01, (error, result.reason_code)
-    if result.contact_time_status == "withheld":
-        assert "contact_end_undetermined" in result.reason_code
+    clean = [(row, t) for row, t in zip(session.impacts, truths) if not t.fault]
+    assert len(clean) >= 5
+    kept = 0
+    for row, truth in clean:
+        result = processing.process_impact(row, session)
+        error = result.contact_time_ms / (1e3 * truth.contact_time_s) - 1.0
+        assert abs(error) < 0.005, (row.impact_id, error)  # ok or withheld, TC is right
+        assert any(p.kind is ProblemKind.CLOTH_PHASE_COMPLETED for p in result.problems), row.impact_id
+        kept += result.contact_time_status == "ok"
+    assert kept >= len(clean) - 1, kept  # (the filter's ringing may stand above the noise before the first contact)

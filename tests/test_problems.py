@@ -114,6 +114,8 @@ MESSAGES = {
                                       "before the largest sample and may go on rising before it drops",
     ProblemKind.IMPULSE_UNRESOLVED: "impulse not known to 0.5 %: were the largest sample an electrical spike, the "
                                     "impulse would be 0.68 % off",
+    ProblemKind.CLOTH_PHASE_COMPLETED: "contact start completed from the force's jump by the cloth's phase: 0.1 ms "
+                                       "(2 mm at 20.0 m/s) before it, 0.08 ms before the start read on its foot",
     ProblemKind.ALIASING: "signal bandwidth 25 kHz (daq.bandwidth_hz) above half the sample rate (10 kHz): the "
                           "plate's ringing is sampled through its alias",
     ProblemKind.SPEED_OUT_OF_BOUNDS: "inbound speed 1.20 m/s outside physical bounds (2.0, 80.0)",

@@ -30,11 +30,15 @@ The sensor chain, in the order a rig applies it
 
 Truth and judgement calls
 -------------------------
-* TC is the first to the last instant of non-zero force of the MAIN contact:
-  from the model's last zero step before the force (the paper's force jumps
-  from zero at 2 mm compression; between steps it is linear) to the model's
-  interpolated end of contact. The model's own TC (from x = 0) is longer by the
-  cloth phase, which no sensor can see; it is kept as ``model_tc_s``.
+* ``tc_s`` is the first to the last instant of non-zero force of the MAIN
+  contact: from the model's last zero step before the force (the paper's force
+  jumps from zero at 2 mm compression; between steps it is linear) to the
+  model's interpolated end of contact; the contact detection is judged by it.
+  The model's own TC (from x = 0, the first contact) is longer by the cloth's
+  phase, 2 mm at the inbound speed, which no sensor sees on these balls; it is
+  kept as ``model_tc_s``, and an impact's TC is judged by it: the processing
+  counts the cloth's phase from the force's jump, as the model does
+  (``ballimpact.signal.cloth``).
 * The rebound speed is the one that makes the impulse exact:
   vout = integral(F dt) / m - vin (it differs from the model's by < 1e-5). So
   the true kCAL is exactly the drawn one.
@@ -1025,7 +1029,7 @@ def judge(result, truth: ZooTruth) -> Judgement:
         wrong, else ``ok_right`` when the impact is used in the fit, else ``excluded_measurable``.
     """
     errors = {
-        "tc": _rel(result.contact_time_ms * 1e-3, truth.tc_s),
+        "tc": _rel(result.contact_time_ms * 1e-3, truth.model_tc_s),
         "kcal": _rel(result.kcal_N_per_V, truth.kcal_N_per_V),
         "peak": _rel(result.peak_force_N, truth.peak_N),
     }

@@ -211,9 +211,10 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                       _t("signal.effects", "DEPARTURE_SIGMA", "noise deviations", "signal before the start")),
           test="tests/test_conditioning.py -k end",
           effect="signal departing from its noise before the start (ballimpact.signal.effects.departure_before_start): "
-                 "the span from the earliest departure to the start bounds the start's shift (TC); a start read on a "
-                 "plate-undone force (ballimpact.signal.effects.hidden_cloth_phase): the cloth's 2 mm at the "
-                 "inbound speed"),
+                 "the span from the earliest departure to the start as completed bounds the start's shift (TC); a "
+                 "start read on a plate-undone force with no jump to complete it from (ballimpact.signal.cloth."
+                 "hidden_cloth_phase): the cloth's 2 mm at the inbound speed; a finding about the start's foot where "
+                 "the start is completed from the force's jump (ballimpact.signal.cloth.first_contact): none"),
     Check(ProblemKind.CONTACT_JUMP_UNRESOLVED, "contact jump unresolved",
           "half a sample at an end where the force jumps, against TC", (_TC,),
           thresholds=(_t("signal.end_checks", "JUMP_MAX_FRACTION", "of TC", "half a sample at most this"),),
@@ -233,6 +234,16 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           thresholds=(_t("signal.ringing", "NEGATIVE_FRACTION", "of the peak", "depth"),
                       _t("signal.ringing", "NEGATIVE_SIGMA", "standard errors", "significance")),
           test="tests/test_conditioning.py -k negative"),
+    Check(ProblemKind.CLOTH_PHASE_COMPLETED, "cloth's phase completed",
+          "the force's steep edge (its jump) against the start read on its foot", (_TC, _K),
+          thresholds=(_t("signal.cloth", "STEEP_MIN_RISE", "of the peak", "a jump's rise, and the foot's most"),
+                      _t("signal.cloth", "STEEP_MAX_WIDTH", "of TC", "a jump's longest"),
+                      _t("signal.cloth", "STEEP_MIN_SIGMA", "noise deviations", "a jump's least rise")),
+          test="tests/test_cloth.py",
+          effect="the start is the jump less the cloth's 2 mm at the inbound speed (ballimpact.signal.cloth."
+                 "first_contact; section 3.2.4), uncertain by the jump's location (TC's random uncertainty): none "
+                 "on TC beyond it; what the signal holds between that start and the start read, over the "
+                 "contact's integral, bounds kCAL"),
     Check(ProblemKind.IMPULSE_UNRESOLVED, "impulse unresolved",
           "single samples that may be electrical spikes at the contact's ends or top", (_K, _P),
           thresholds=(_t("signal.spikes", "SPIKE_END_IMPULSE", "of the impulse", "a kept sample's share"),),

@@ -66,6 +66,7 @@ class ProblemKind(enum.Enum):
     PEAK_BETWEEN_SAMPLES = "peak_between_samples"  # the force may rise above the largest sample by > 10 %
     ALIASING = "aliasing"  # daq.bandwidth_hz above half the sample rate: ringing sampled through its alias
     IMPULSE_UNRESOLVED = "impulse_unresolved"  # a single sample that may be an electrical spike moves the impulse
+    CLOTH_PHASE_COMPLETED = "cloth_phase_completed"  # the start put the cloth's 2 mm before the force's jump
     # physical bounds and calibration (ballimpact.processing)
     SPEED_OUT_OF_BOUNDS = "speed_out_of_bounds"
     COR_OUT_OF_BOUNDS = "cor_out_of_bounds"
@@ -155,6 +156,7 @@ _MESSAGE_STARTS = {
     ProblemKind.PEAK_BETWEEN_SAMPLES: r"peak force between samples",
     ProblemKind.ALIASING: r"signal bandwidth .* above half the sample rate",
     ProblemKind.IMPULSE_UNRESOLVED: r"impulse not known",
+    ProblemKind.CLOTH_PHASE_COMPLETED: r"contact start completed",
     ProblemKind.SPEED_OUT_OF_BOUNDS: r"inbound speed \S+ m/s outside physical bounds",
     ProblemKind.COR_OUT_OF_BOUNDS: r"COR \S+ outside physical bounds",
     ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS: r"contact time \S+ ms outside physical bounds",

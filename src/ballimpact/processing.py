@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Iterator
 
 import numpy as np
@@ -26,11 +26,12 @@ from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect
 from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
-from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
+from .model import BUCKLING_TIME_S, CLOTH_DISPLACEMENT_M, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .signal.effects import departure_before_start, end_slopes, finding_effects, hidden_cloth_phase
+from .signal.cloth import first_contact, hidden_cloth_phase, steep_edge
+from .signal.effects import departure_before_start, end_slopes, finding_effects
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
@@ -263,6 +264,7 @@ def process_impact(row: ImpactRow, session: Session) -> ImpactResult:
     _aliasing_problem(res, meta)
     contact = _contact(res, t, raw, cond, meta)
     if contact is not None:
+        cond = replace(cond, contact=contact)  # its start completed by the cloth's phase, where it was
         _calibrated(res, row, t, cond, contact, meta)
     return res.settle(_random_uncertainties(res, row, meta, cond, float(t[0])))
 
@@ -444,7 +446,7 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
             cond = condition_voltage(raw, fs, polarity=meta.polarity,
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s,
-                                     plate=meta.plate_resonance)
+                                     plate=meta.plate_resonance, cloth_phase_s=_cloth_phase(res.vin_m_s))
         except ValueError as exc:
             res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None
@@ -454,6 +456,11 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
         res.find(Problem(ProblemKind.CLIPPING,
                             "clipping at the ADC rails (a sample at a rail that is not a single-sample spike)"))
     return t, raw, cond
+
+
+def _cloth_phase(vin_m_s: float) -> float:
+    """The cloth's phase at the inbound speed, 2 mm / vin [s] (section 3.2.4); 0 where the speed is not known."""
+    return CLOTH_DISPLACEMENT_M / vin_m_s if vin_m_s > 0 else 0.0
 
 
 def _saturation_problem(res: ImpactResult, raw, cond, polarity: int) -> None:
@@ -564,10 +571,14 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
             problem = Problem(problem.kind, problem.message, data={**problem.data,
                                                                    "also_biases": ("contact_time", "kcal")})
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
+    completed = _cloth_completion(res, cond, float(t[0]))
+    if completed is not None:
+        contact = completed
+        res.raw_time_s = t - contact.start_s  # (the same contact where its foot was read at the first contact)
     if cond.plate is None:  # an undone plate's start is fitted through its chain, the low-pass's spread included
-        _departure_problem(res, cond, float(t[0]))
-    if cond.plate is not None:
-        _cloth_problem(res, cond)
+        _departure_problem(res, cond, float(t[0]), contact)
+    if completed is None and (cond.plate is not None or {"start_jump", "start_step"} & set(contact.flags)):
+        _cloth_problem(res, cond)  # read at a jump, or on an undone force, and not completed from a steep edge
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
@@ -576,18 +587,64 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     return contact
 
 
-def _departure_problem(res: ImpactResult, cond, t0_s: float) -> None:
-    """A finding, with its effect on TC, where the signal departs from its noise before the contact's start
-    (:func:`ballimpact.signal.effects.departure_before_start`)."""
-    c = cond.contact
-    span, noise = departure_before_start(cond.voltage_V, res.sample_rate_hz, (c.start_s - t0_s) * res.sample_rate_hz)
-    if not (math.isfinite(span) and span > 0 and c.contact_time_s > 0):
+def _cloth_completion(res: ImpactResult, cond, t0_s: float):
+    """The contact with its start at the first contact the force's jump gives (:func:`ballimpact.signal.cloth.
+    first_contact`), where that is earlier than the start read by more than half a sample and twice the start's
+    standard uncertainty; the contact as read where it is not so much earlier (the foot read is the first contact);
+    None where the force shows no jump or the speed is not known.
+
+    The start read no longer rests on the foot: the findings about that foot (a CONTACT_END_UNDETERMINED of the
+    start) are kept with no effect on TC, and the start's uncertainty is the jump's."""
+    c, fs = cond.contact, res.sample_rate_hz
+    if not (c.found and math.isfinite(fs) and res.vin_m_s > 0):
+        return None
+    start_u = (c.start_s - t0_s) * fs
+    edge = steep_edge(cond.voltage_V, start_u, c.peak_index, cond.noise_rms_V, c.contact_time_s * fs)
+    if edge is None:
+        return None
+    if start_u > edge.at_u + 1.0:  # a start read after the jump: the jump located is not the contact's (a spike)
+        return None
+    first = first_contact(edge.at_u, fs, res.vin_m_s)
+    read_se = c.start_se_s * fs if math.isfinite(c.start_se_s) else 0.0
+    if not (0.0 <= first and start_u - first < c.contact_time_s * fs):  # a phase longer than TC: no ball's speed
+        return None
+    if start_u - first <= max(0.5, 2.0 * read_se):
+        return c  # the start read on the foot is the first contact (or earlier): as read
+    for k, p in enumerate(res.problems):
+        if p.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (p.data.get("end"), p.data.get("beyond")):
+            res.problems[k] = replace(p, effects={"contact_time": 0.0},
+                                      data={**p.data, "moot": "cloth_completed"})
+    x = np.asarray(cond.voltage_V, dtype=float)
+    a, b = int(math.ceil(first)), int(math.floor((c.end_s - t0_s) * fs))
+    whole, before = float(np.sum(x[a:b + 1])), float(np.sum(x[a:int(math.ceil(start_u))]))
+    phase = (edge.at_u - first) / fs
+    res.find(Problem(ProblemKind.CLOTH_PHASE_COMPLETED,
+                     f"contact start completed from the force's jump by the cloth's phase: {1e3 * phase:.2g} ms (2 mm "
+                     f"at {res.vin_m_s:.1f} m/s) before it, {1e3 * (start_u - first) / fs:.2g} ms before the start "
+                     "read on its foot",
+                     data={"cloth_phase_s": phase, "shift_s": (start_u - first) / fs},
+                     effects={"contact_time": 0.0, "kcal": abs(before) / whole if whole > 0 else math.nan}))
+    flags = tuple(f for f in c.flags if f not in ("start_jump", "start_step")) + ("cloth_completed",)
+    return replace(c, start_s=t0_s + first / fs, start_index=int(math.ceil(first)), start_se_s=edge.se_u / fs,
+                   start_spread_s=math.nan, flags=flags)
+
+
+def _departure_problem(res: ImpactResult, cond, t0_s: float, contact) -> None:
+    """A finding, with its effect on TC, where the signal departs from its noise before ``contact``'s start
+    (:func:`ballimpact.signal.effects.departure_before_start`; above it only, where that start was completed from
+    the force's jump)."""
+    c, fs = cond.contact, res.sample_rate_hz
+    if contact is c:
+        span, noise = departure_before_start(cond.voltage_V, fs, (c.start_s - t0_s) * fs)
+    else:  # completed from the jump: only a foot of force longer than the cloth's phase moves it
+        span, noise = departure_before_start(cond.voltage_V, fs, (contact.start_s - t0_s) * fs, force_only=True)
+    if not (math.isfinite(span) and span > 0 and contact.contact_time_s > 0):
         return
     res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                      f"contact start not known to better than {1e3 * span:.3g} ms: the signal departs from its "
                      f"noise ({noise * 1e3:.2g} mV) that long before the start found (an anti-aliasing filter's "
                      "ringing ahead of a jump, or a foot of the force)",
-                     data={"departure_s": span}, effects={"contact_time": span / c.contact_time_s}))
+                     data={"departure_s": span}, effects={"contact_time": span / contact.contact_time_s}))
 
 
 def _cloth_problem(res: ImpactResult, cond) -> None:
@@ -597,8 +654,9 @@ def _cloth_problem(res: ImpactResult, cond) -> None:
     effect = hidden_cloth_phase(res.vin_m_s, c.contact_time_s)
     phase = effect * c.contact_time_s  # [s]; NaN where the speed is not known
     res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
-                     "contact start may miss the cloth's phase: read on a plate-undone force, whose noise hides "
-                     "the cloth's light load over the ball's first 2 mm of compression "
+                     "contact start may miss the cloth's phase: read at the force's jump or on a plate-undone "
+                     "force, with no steep edge to complete it from, where the cloth's light load over the ball's "
+                     "first 2 mm of compression may hide "
                      f"({1e3 * phase:.2g} ms at {res.vin_m_s:.1f} m/s)",
                      data={"cloth_phase_s": phase}, effects={"contact_time": effect}))
 
@@ -688,7 +746,7 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
     res.time_to_peak_ms = summary.time_to_peak_s * 1e3
     res.peak_is_spike = bool(summary.time_to_peak_s < BUCKLING_TIME_S)
     res.max_displacement_mm = summary.max_displacement_m * 1e3
-    kb, cb = kelvin_voigt_parameters(row.mass_kg, contact.contact_time_s, res.cor)
+    kb, cb = kelvin_voigt_parameters(row.mass_kg, res.contact_time_ms * 1e-3, res.cor)  # TC, as completed
     res.kv_stiffness_kN_m = float(kb) / 1e3
     res.kv_damping_N_s_m = float(cb)
     return res

@@ -175,8 +175,8 @@ class ConditionedSignal:
 def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S,
-                      undo_plate: bool = True, plate: tuple | None = None, _kept: tuple | None = None,
-                      _near_ends: tuple = ()) -> ConditionedSignal:
+                      undo_plate: bool = True, plate: tuple | None = None, cloth_phase_s: float = 0.0,
+                      _kept: tuple | None = None, _near_ends: tuple = ()) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
 
     The force-plate voltage must be proportional to the force for kCAL to be
@@ -218,6 +218,12 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         undone exactly on every trace, neither identified nor refined; where the
         force so undone fails the undone force's checks, the trace is
         conditioned as without it (its plate identified where it rings).
+    cloth_phase_s : float
+        The cloth's phase of this impact, 2 mm at its inbound speed [s]
+        (``ballimpact.signal.cloth``): a foot of the sensed force no longer
+        than it before an undone force's jump is the cloth's, which the
+        contact's start completed from the jump counts; 0 (default) where the
+        speed is not known.
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the
@@ -267,8 +273,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
     if keep or near_ends:  # the force's own samples at its jump kept, lower spikes at the ends replaced: again
         return condition_voltage(voltage_V, sample_rate_hz, polarity=polarity, mains_hz=mains_hz,
                                  n_harmonics=n_harmonics, t0_s=t0_s, tau_s=tau_s, pre_guard_s=pre_guard_s,
-                                 post_guard_s=post_guard_s, undo_plate=undo_plate, plate=plate, _kept=keep,
-                                 _near_ends=near_ends)
+                                 post_guard_s=post_guard_s, undo_plate=undo_plate, plate=plate,
+                                 cloth_phase_s=cloth_phase_s, _kept=keep, _near_ends=near_ends)
     messages: list[str] = []
     for msg in it.pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2 if _kept is None else 3)
@@ -279,7 +285,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         found, staircase = _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_s is not None,
                                              post_guard_s)
         problems.extend(found)
-        undone, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate)
+        undone, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
@@ -369,16 +375,16 @@ def _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_gi
     return problems, staircase
 
 
-def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate):
+def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s=0.0):
     """The plate undone (see :func:`ballimpact.signal.undone.plate_undone`): (y, contact, plate, cutoff), why it
     was refused (str) or None (not tried); and a stated plate's peak problems (its undone force kept, the peak
     withheld)."""
     stated = []
     undone = None
     if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
-        undone, stated = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate)
+        undone, stated = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
     if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
-        undone = plate_undone(it.x, fs, it.fit, contact, problems, t0_s)
+        undone = plate_undone(it.x, fs, it.fit, contact, problems, t0_s, cloth_phase_s=cloth_phase_s)
     return undone, stated
 
 

@@ -8,13 +8,12 @@ from dataclasses import replace
 import numpy as np
 
 from ..problems import ProblemKind
-from ..model import CLOTH_DISPLACEMENT_M
 from .end_checks import PLATE_SLOPE_S
 from .noise import robust_noise
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
-           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start", "hidden_cloth_phase"]
+           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -302,7 +301,7 @@ def _excited_peak_factor(data: dict, line_hz: float, contact_time_s: float) -> f
 
 def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DEPARTURE_WINDOW_S,
                            sigma: float = DEPARTURE_SIGMA, chain_sigma: float = DEPARTURE_CHAIN_SIGMA,
-                           gap_s: float = DEPARTURE_GAP_S) -> tuple[float, float]:
+                           gap_s: float = DEPARTURE_GAP_S, force_only: bool = False) -> tuple[float, float]:
     """How long before the contact's start the signal already departs from its noise [s], and that noise [V].
 
     Before the force starts, the conditioned signal is noise. Signal standing out of it before the start found
@@ -322,6 +321,11 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
         Sample rate [Hz].
     start_u : float
         The contact's start in samples from ``x[0]`` [samples].
+    force_only : bool
+        Walk back through an unbroken run of samples above the noise only (a force presses: a foot of it is
+        positive and does not swing), not through the swings either side of it a filter's ringing makes: for a
+        start that no longer rests on the force's foot (:mod:`ballimpact.signal.cloth`), where only a foot longer
+        than it can move it.
 
     Returns
     -------
@@ -330,7 +334,7 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
         NaN) when the record before the window is too short to tell the noise.
     """
     x = np.asarray(x, dtype=float)
-    n, gap = max(int(round(window_s * fs)), 2), max(int(round(gap_s * fs)), 1)
+    n, gap = max(int(round(window_s * fs)), 2), 0 if force_only else max(int(round(gap_s * fs)), 1)
     last = int(math.ceil(start_u)) - 1 - DEPARTURE_SKIP  # the last sample looked at
     quiet = x[:max(last - n, 0)]
     if quiet.size < 20 or last < 0:
@@ -338,7 +342,8 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
     noise = robust_noise(quiet)
     if not noise > 0:
         return math.nan, math.nan
-    z = np.abs(x[last - n + 1:last + 1]) / noise  # z[-1] is the last sample before the start
+    seg = x[last - n + 1:last + 1]
+    z = (seg if force_only else np.abs(seg)) / noise  # z[-1] is the last sample before the start
     earliest, strong, since = None, False, 0
     for k in range(z.size - 1, -1, -1):
         if z[k] > chain_sigma:
@@ -350,26 +355,3 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
     if earliest is None or not strong:
         return 0.0, noise
     return (start_u - (last - n + 1 + earliest)) / fs, noise
-
-
-def hidden_cloth_phase(vin_m_s: float, contact_time_s: float) -> float:
-    """The relative shift of TC a cloth phase hidden by an undone plate may make: its length over TC [-].
-
-    A ball's first 2 mm of compression load only its cloth, lightly (section 3.2.4 and Fig. 9 of Goodwill & Haake
-    2004: the model's force is zero there, and its TC counts them), and TC runs from the first rise of that load.
-    Undoing a plate amplifies the noise by far more than that load, so that the start read on the undone force may
-    be late by up to the cloth's phase, 2 mm at the inbound speed (``ballimpact.model.CLOTH_DISPLACEMENT_M`` / vin):
-    read at the steep edge, or on the part of the foot that stands out of the amplified noise (a ``cloth_foot``
-    flag is no proof that the foot was seen from its start: 1.7-2.4 % short with it on rig 1000:18 of
-    bench/rigs.py, its exact plate stated). NaN where the speed or TC is not known.
-
-    Parameters
-    ----------
-    vin_m_s : float
-        Inbound speed at the plate [m/s].
-    contact_time_s : float
-        TC [s].
-    """
-    if not (vin_m_s > 0 and contact_time_s > 0):
-        return math.nan
-    return CLOTH_DISPLACEMENT_M / vin_m_s / contact_time_s

@@ -99,7 +99,8 @@ def adc_step_problems(x, fs, noise, step, contact: ContactResult, t0_s, scale) -
                                f"({1e3 * step * scale:.3g} mV) and does not dither it, and the force takes "
                                f"{1e6 * per_step:.3g} us ({100 * per_step / tc:.2g} % of TC) to cross a step at its "
                                f"{name}: the {name} is read off a staircase (record with a finer ADC range or more "
-                               "bits)"))
+                               "bits)",
+                               data={"end": name}))
     return out
 
 
@@ -256,7 +257,8 @@ def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scal
             if level < END_CHECK_SIGMA * fit.noise / math.sqrt(sel.size):
                 out.append(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                                    f"contact {where} not determined: the {1e3 * sel.size / fs:.2g} ms inside it hold "
-                                   f"no force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)"))
+                                   f"no force ({level * scale * 1e3:.3g} mV, noise {fit.noise * scale * 1e3:.2g} mV)",
+                                   data={"end": where}))
     n_contact = (contact.end_s - contact.start_s) * fs
     if n_contact < MIN_CONTACT_SAMPLES:
         out.append(Problem(ProblemKind.TOO_FEW_SAMPLES,
@@ -277,7 +279,8 @@ def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scal
                                f"contact {where} not determined to 1 %: fitted again from the samples above twice the "
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
                                f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
-                               "there"))
+                               "there",
+                               data={"end": where}))
     out.extend(_beyond_problems(x, fs, fit.noise, s_u, e_u, curve))
     # against the straight line's end (the bent hinge's sits earlier on an end whose slope eases; the threshold
     # was set on the line's)
@@ -320,4 +323,5 @@ def _hinge_problems(contact: ContactResult) -> list:
                 f"({END_SE_COVERAGE:g} times its standard uncertainty; TC known to +-{100 * spread / tc:.2g} % with "
                 "the other end's)")
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
-                    f"contact {worst} not determined to 1 %: the force fades into the noise there, and {seen}")]
+                    f"contact {worst} not determined to 1 %: the force fades into the noise there, and {seen}",
+                    data={"end": worst})]

@@ -10,6 +10,7 @@ import numpy as np
 from ..model import BUCKLING_TIME_S
 from ..problems import Problem, ProblemKind
 from .baseline import BaselineFit
+from .cloth import steep_edge
 from .contact import ContactResult, detect_contact
 from .end_checks import end_problems, end_uncertainty, foot_sigma
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, refine_plate_resonance,
@@ -68,7 +69,7 @@ PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING,
                          ProblemKind.IMPULSE_UNRESOLVED})  # a plate's first overshoot is a single-sample top too
 
 
-def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s):
+def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0):
     """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; None
     when it is not tried; why it was refused, in words (str), when it was.
 
@@ -162,10 +163,10 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
         if plate is None:
             return ("plate resonance not undone: no decaying oscillation identified out of the noise in the "
                     "contact and the 2 ms after it")
-        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s)
         if isinstance(hit, str):  # the undone force still rings or fails a check: refine the resonance, try again
             plate = refine_plate_resonance(x[ra:rb], fs, plate)
-            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate)
+            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s)
         if isinstance(hit, str):
             return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
@@ -189,7 +190,8 @@ def _plate_can_be_undone(x, fs, contact: ContactResult, t0_s) -> bool:
     return (contact.end_s - t0_s) * fs + PLATE_ID_AFTER_S * fs <= x.size - 1
 
 
-def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, plate: tuple):
+def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, plate: tuple, *,
+                        cloth_phase_s: float = 0.0):
     """The force with a stated resonance (fn [Hz], zeta [-]) undone, as :func:`plate_undone` returns it (force,
     contact, resonance, cutoff [Hz]; why it was refused, str; None where the contact is cut or doubled, or the
     ringing is not over before the record ends), and the peak problems it leaves. The resonance is used exactly,
@@ -201,7 +203,8 @@ def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, p
     s_u = (contact.start_s - t0_s) * fs
     resonance = stated_resonance(plate[0], plate[1], fs)
     peak_problems = []
-    hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, resonance, peak_problems=peak_problems)
+    hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, resonance, peak_problems=peak_problems,
+                             cloth_phase_s=cloth_phase_s)
     if isinstance(hit, str):
         return _refused(f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
                         f"plate.resonance_hz and plate.damping_ratio) not undone: {hit}", plate[0], plate[1]), []
@@ -286,7 +289,7 @@ def lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutoff
 
 
 def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance,
-                       peak_problems: list | None = None):
+                       peak_problems: list | None = None, cloth_phase_s: float = 0.0):
     """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
     (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
     low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down
@@ -297,7 +300,7 @@ def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate)
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, cloth_phase_s=cloth_phase_s)
         hides = None
         if not isinstance(c, str) and not math.isinf(cutoff):
             hides = lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
@@ -355,7 +358,8 @@ def _smoothed_peak_loss(y, fs, sigma):
     return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
 
 
-def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None, fit_ends=False):
+def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None, fit_ends=False,
+                    cloth_phase_s=0.0):
     """The contact of an undone force ``y`` and the force (a low-passed one, or with ``fit_ends`` the exact one,
     with its ends restored from their fits) when it passes every check of :func:`plate_undone`; else what it
     failed, in words (str). The exact force whose ends read off it fail on their uncertainty or start late is
@@ -379,7 +383,7 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
     if not fitted and plate is not None and (late or uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u)):
         # read off the exact force, its ends are its amplified noise over its slope and may lose a foot in it:
         # fitted through the plate instead (its step, ramp and parabola responses, undone)
-        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True)
+        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True, cloth_phase_s=cloth_phase_s)
         if not isinstance(again, str):
             return again
         tail = f"; its ends fitted through the plate: {again.removeprefix('the ')}"
@@ -392,7 +396,8 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
     if inside.size and float(np.min(inside)) < -NEGATIVE_SIGMA * noise:
         # the force is not what this plate's inverse assumes
         return "the undone force pulls on the plate during the contact"
-    if late and _lost_foot(x, fit.noise, s_u, cs_u, fitted):
+    if late and _lost_foot(x, fit.noise, s_u, cs_u, fitted) and not _cloth_foot(y, c, noise, s_u, cs_u, ce_u,
+                                                                                 cloth_phase_s * fs):
         return "the undone force starts later than the sensed one (a foot lost in its noise)" + tail
     return c, y
 
@@ -413,9 +418,31 @@ def _undone_found(y, x, fs, fit: BaselineFit, t0_s, cutoff):
     cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
     seen = (end_problems(y, fs, checked, c, cs_u, ce_u, 1.0)
             + ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u, fall=math.isinf(cutoff)))
+    if seen and _jumps(y, c, noise, cs_u, ce_u):  # its start is the jump's, less the cloth's phase, not the
+        seen = [p for p in seen if not _at_start(p)]  # foot's (a foot the sensed force shows: _lost_foot)
     if seen:
         return "the undone force still shows " + seen[0].message.split(":")[0]
     return c, noise
+
+
+def _at_start(problem) -> bool:
+    """Whether a finding of the contact's ends is about its start (its foot)."""
+    return problem.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (problem.data.get("end"),
+                                                                                  problem.data.get("beyond"))
+
+
+def _cloth_foot(y, c: ContactResult, noise, s_u, cs_u, ce_u, phase_u) -> bool:
+    """Whether the sensed force's foot, from ``s_u`` [samples], is no longer than the cloth's phase (``phase_u``
+    [samples], 0: not known) before the undone force's jump: the contact's start completed from that jump
+    (:func:`ballimpact.signal.cloth.first_contact`) counts it, lost in the undone noise or not."""
+    edge = steep_edge(y, cs_u, c.peak_index, noise, ce_u - cs_u) if phase_u > 0 else None
+    return edge is not None and s_u >= edge.at_u - phase_u - 1.0
+
+
+def _jumps(y, c: ContactResult, noise, cs_u, ce_u) -> bool:
+    """Whether the undone force starts with the ball's jump (:func:`ballimpact.signal.cloth.steep_edge`): its
+    contact's start is then completed from the jump by the cloth's phase, whatever its foot shows."""
+    return steep_edge(y, cs_u, c.peak_index, noise, ce_u - cs_u) is not None
 
 
 def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s):
@@ -456,10 +483,14 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
         y[f.first:f.first + f.correction.size] += f.correction
     cs_u, ce_u = fs_u, fe_u
     inside = y[int(math.ceil(cs_u)):int(math.floor(ce_u)) + 1]
+    se_start, se_end = _fitted_spread(f_start, f_end, noise)
+    # the ends' standard uncertainties for TC's budget: the fits', the end's with how far TC moves with the window
+    # and the plate's fn (a bound, as a uniform)
     c = replace(c, start_s=t0_s + fs_u / fs, end_s=t0_s + fe_u / fs, start_index=int(math.ceil(fs_u)),
                 end_index=int(math.floor(fe_u)), peak_index=int(math.ceil(cs_u)) + int(np.argmax(inside)),
-                peak_V=float(np.max(inside)))
-    uncertainty = 2.0 * math.hypot(*_fitted_spread(f_start, f_end, noise)) + bias
+                peak_V=float(np.max(inside)), start_se_s=se_start / fs,
+                end_se_s=math.hypot(se_end, bias / math.sqrt(3.0)) / fs)
+    uncertainty = 2.0 * math.hypot(se_start, se_end) + bias
     return y, c, cs_u, ce_u, uncertainty, bias
 
 
