@@ -590,11 +590,13 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
 def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     """The contact with its start at the first contact the force's jump gives (:func:`ballimpact.signal.cloth.
     first_contact`), where that is earlier than the start read by more than half a sample and twice the start's
-    standard uncertainty; the contact as read where it is not so much earlier (the foot read is the first contact);
-    None where the force shows no jump or the speed is not known.
+    standard uncertainty; the contact as read where it is not so far from it either way (the foot read is the
+    first contact) or is earlier still (a foot longer than the cloth's phase); None where the force shows no jump or
+    the speed is not known.
 
-    The start read no longer rests on the foot: the findings about that foot (a CONTACT_END_UNDETERMINED of the
-    start) are kept with no effect on TC, and the start's uncertainty is the jump's."""
+    Where the start read is the first contact or is completed, it no longer rests on its foot alone: the findings
+    about that foot (a CONTACT_END_UNDETERMINED of the start) are kept with the two starts' difference for their
+    effect on TC (none where completed: the start's uncertainty is then the jump's)."""
     c, fs = cond.contact, res.sample_rate_hz
     if not (c.found and math.isfinite(fs) and res.vin_m_s > 0):
         return None
@@ -608,12 +610,16 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     read_se = c.start_se_s * fs if math.isfinite(c.start_se_s) else 0.0
     if not (0.0 <= first and start_u - first < c.contact_time_s * fs):  # a phase longer than TC: no ball's speed
         return None
-    if start_u - first <= max(0.5, 2.0 * read_se):
-        return c  # the start read on the foot is the first contact (or earlier): as read
+    agree = max(0.5, 2.0 * read_se)
+    if start_u - first < -agree:
+        return c  # a foot longer than the cloth's phase: the start as read, what its checks found stands
+    # the start no longer rests on the foot alone: the findings about it are bounded by the two starts' difference
     for k, p in enumerate(res.problems):
         if p.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (p.data.get("end"), p.data.get("beyond")):
-            res.problems[k] = replace(p, effects={"contact_time": 0.0},
-                                      data={**p.data, "moot": "cloth_completed"})
+            moot = abs(start_u - first) / (c.contact_time_s * fs) if start_u - first <= agree else 0.0
+            res.problems[k] = replace(p, effects={"contact_time": moot}, data={**p.data, "moot": "cloth_phase"})
+    if start_u - first <= agree:
+        return c  # the start read on the foot is the first contact: as read
     x = np.asarray(cond.voltage_V, dtype=float)
     a, b = int(math.ceil(first)), int(math.floor((c.end_s - t0_s) * fs))
     whole, before = float(np.sum(x[a:b + 1])), float(np.sum(x[a:int(math.ceil(start_u))]))
