@@ -606,7 +606,11 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
         return None
     if start_u > edge.at_u + 1.0:  # a start read after the jump: the jump located is not the contact's (a spike)
         return None
-    first = first_contact(edge.at_u, fs, res.vin_m_s)
+    # a start read at a jump is the middle of the interval where the force left its foot: the jump is no later (a
+    # steeper rise after it, the ball's ramp to its spike at a low sample rate, draws the steepest slope later)
+    at_jump = {"start_jump", "start_step"} & set(c.flags) and "cloth_foot" not in c.flags  # (not a jump of the foot)
+    jump_u = min(edge.at_u, start_u) if at_jump else edge.at_u
+    first = first_contact(jump_u, fs, res.vin_m_s)
     read_se = c.start_se_s * fs if math.isfinite(c.start_se_s) else 0.0
     if not (0.0 <= first and start_u - first < c.contact_time_s * fs):  # a phase longer than TC: no ball's speed
         return None
@@ -623,7 +627,7 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     x = np.asarray(cond.voltage_V, dtype=float)
     a, b = int(math.ceil(first)), int(math.floor((c.end_s - t0_s) * fs))
     whole, before = float(np.sum(x[a:b + 1])), float(np.sum(x[a:int(math.ceil(start_u))]))
-    phase = (edge.at_u - first) / fs
+    phase = (jump_u - first) / fs
     res.find(Problem(ProblemKind.CLOTH_PHASE_COMPLETED,
                      f"contact start completed from the force's jump by the cloth's phase: {1e3 * phase:.2g} ms (2 mm "
                      f"at {res.vin_m_s:.1f} m/s) before it, {1e3 * (start_u - first) / fs:.2g} ms before the start "
