@@ -608,7 +608,9 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
         return None
     # a start read at a jump is the middle of the interval where the force left its foot: the jump is no later (a
     # steeper rise after it, the ball's ramp to its spike at a low sample rate, draws the steepest slope later)
-    at_jump = {"start_jump", "start_step"} & set(c.flags) and "cloth_foot" not in c.flags  # (not a jump of the foot)
+    # ... where the signal is quiet before it (a filter's ringing ahead of the jump draws a start read early)
+    at_jump = {"start_jump", "start_step"} & set(c.flags) and "cloth_foot" not in c.flags \
+        and departure_before_start(cond.voltage_V, fs, start_u)[0] == 0.0
     jump_u = min(edge.at_u, start_u) if at_jump else edge.at_u
     first = first_contact(jump_u, fs, res.vin_m_s)
     read_se = c.start_se_s * fs if math.isfinite(c.start_se_s) else 0.0
