@@ -26,12 +26,13 @@ from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect
 from .signal.contact import contact_samples, end_standard_uncertainties
 from .flight import BALL_DIAMETER_M, drag_constant, plate_speeds
 from .gates import check_gate_times, coefficient_of_restitution, gate_speeds
-from .model import BUCKLING_TIME_S, CLOTH_DISPLACEMENT_M, kelvin_voigt_parameters
+from .model import BUCKLING_TIME_S, kelvin_voigt_parameters
 from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, ProblemKind, has_kind
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
-from .signal.cloth import first_contact, hidden_cloth_phase, steep_edge
+from .signal.cloth import cloth_phase_s, first_contact, hidden_cloth_phase, steep_edge
 from .signal.effects import departure_before_start, end_slopes, finding_effects
+from .signal.end_checks import about_start
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
 __all__ = [
@@ -446,7 +447,7 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
             cond = condition_voltage(raw, fs, polarity=meta.polarity,
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s,
-                                     plate=meta.plate_resonance, cloth_phase_s=_cloth_phase(res.vin_m_s))
+                                     plate=meta.plate_resonance, cloth_phase_s=cloth_phase_s(res.vin_m_s))
         except ValueError as exc:
             res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None
@@ -456,11 +457,6 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
         res.find(Problem(ProblemKind.CLIPPING,
                             "clipping at the ADC rails (a sample at a rail that is not a single-sample spike)"))
     return t, raw, cond
-
-
-def _cloth_phase(vin_m_s: float) -> float:
-    """The cloth's phase at the inbound speed, 2 mm / vin [s] (section 3.2.4); 0 where the speed is not known."""
-    return CLOTH_DISPLACEMENT_M / vin_m_s if vin_m_s > 0 else 0.0
 
 
 def _saturation_problem(res: ImpactResult, raw, cond, polarity: int) -> None:
@@ -577,7 +573,7 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         res.raw_time_s = t - contact.start_s  # (the same contact where its foot was read at the first contact)
     if cond.plate is None:  # an undone plate's start is fitted through its chain, the low-pass's spread included
         _departure_problem(res, cond, float(t[0]), contact)
-    if completed is None and (cond.plate is not None or {"start_jump", "start_step"} & set(contact.flags)):
+    if completed is None and (cond.plate is not None or _JUMP_FLAGS & set(contact.flags)):
         _cloth_problem(res, cond)  # read at a jump, or on an undone force, and not completed from a steep edge
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
@@ -585,6 +581,10 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         res.find(Problem(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS,
                             f"contact time {tc_ms:.2f} ms outside physical bounds {PHYSICAL_BOUNDS['contact_time_ms']}"))
     return contact
+
+
+#: The contact's flags of a start read at the force's jump (signal.contact).
+_JUMP_FLAGS = frozenset({"start_jump", "start_step"})
 
 
 def _cloth_completion(res: ImpactResult, cond, t0_s: float):
@@ -609,7 +609,7 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     # a start read at a jump is the middle of the interval where the force left its foot: the jump is no later (a
     # steeper rise after it, the ball's ramp to its spike at a low sample rate, draws the steepest slope later)
     # ... where the signal is quiet before it (a filter's ringing ahead of the jump draws a start read early)
-    at_jump = {"start_jump", "start_step"} & set(c.flags) and "cloth_foot" not in c.flags \
+    at_jump = _JUMP_FLAGS & set(c.flags) and "cloth_foot" not in c.flags \
         and departure_before_start(cond.voltage_V, fs, start_u)[0] == 0.0
     jump_u = min(edge.at_u, start_u) if at_jump else edge.at_u
     first = first_contact(jump_u, fs, res.vin_m_s)
@@ -621,7 +621,7 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
         return c  # a foot longer than the cloth's phase: the start as read, what its checks found stands
     # the start no longer rests on the foot alone: the findings about it are bounded by the two starts' difference
     for k, p in enumerate(res.problems):
-        if p.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (p.data.get("end"), p.data.get("beyond")):
+        if about_start(p):
             moot = abs(start_u - first) / (c.contact_time_s * fs) if start_u - first <= agree else 0.0
             res.problems[k] = replace(p, effects={"contact_time": moot}, data={**p.data, "moot": "cloth_phase"})
     if start_u - first <= agree:
@@ -636,7 +636,7 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
                      "read on its foot",
                      data={"cloth_phase_s": phase, "shift_s": (start_u - first) / fs},
                      effects={"contact_time": 0.0, "kcal": abs(before) / whole if whole > 0 else math.nan}))
-    flags = tuple(f for f in c.flags if f not in ("start_jump", "start_step")) + ("cloth_completed",)
+    flags = tuple(f for f in c.flags if f not in _JUMP_FLAGS) + ("cloth_completed",)
     return replace(c, start_s=t0_s + first / fs, start_index=int(math.ceil(first)), start_se_s=edge.se_u / fs,
                    start_spread_s=math.nan, flags=flags)
 
@@ -660,8 +660,8 @@ def _departure_problem(res: ImpactResult, cond, t0_s: float, contact) -> None:
 
 
 def _cloth_problem(res: ImpactResult, cond) -> None:
-    """A finding, with its effect on TC, where an undone plate's start may miss the cloth's phase
-    (:func:`ballimpact.signal.effects.hidden_cloth_phase`)."""
+    """A finding, with its effect on TC, where a start read at the force's jump or on an undone plate's force, and
+    not completed from a steep edge, may miss the cloth's phase (:func:`ballimpact.signal.cloth.hidden_cloth_phase`)."""
     c = cond.contact
     effect = hidden_cloth_phase(res.vin_m_s, c.contact_time_s)
     phase = effect * c.contact_time_s  # [s]; NaN where the speed is not known

@@ -10,7 +10,7 @@ import numpy as np
 from ..model import CLOTH_DISPLACEMENT_M
 
 __all__ = ["STEEP_SLOPE_FRACTION", "STEEP_MIN_RISE", "STEEP_MIN_SIGMA", "STEEP_MAX_WIDTH", "SteepEdge", "steep_edge",
-           "first_contact", "hidden_cloth_phase"]
+           "cloth_phase_s", "first_contact", "hidden_cloth_phase"]
 
 #: The steep edge is the stretch about the force's steepest rise where its slope exceeds this fraction of it [-] ...
 STEEP_SLOPE_FRACTION = 0.25
@@ -104,6 +104,24 @@ def steep_edge(x, start_u: float, peak_index: int, noise: float, contact_samples
     return SteepEdge(at_u=i0 + k + 0.5 + shift, se_u=se, rise=rise, width_u=width)
 
 
+def cloth_phase_s(vin_m_s: float, cloth_displacement_m: float = CLOTH_DISPLACEMENT_M) -> float:
+    """The cloth's phase: how long the ball takes to compress its cloth at the inbound speed [s] (section 3.2.4).
+
+    Parameters
+    ----------
+    vin_m_s : float
+        Inbound speed at the plate [m/s].
+    cloth_displacement_m : float
+        The cloth's compression before the ball's core loads [m].
+
+    Returns
+    -------
+    float
+        ``cloth_displacement_m / vin`` [s]; NaN where the speed is not known.
+    """
+    return cloth_displacement_m / vin_m_s if vin_m_s > 0 else math.nan
+
+
 def first_contact(edge_u: float, fs: float, vin_m_s: float, *,
                   cloth_displacement_m: float = CLOTH_DISPLACEMENT_M) -> float:
     """The contact's first instant from the force's jump [samples]: the jump less the cloth's phase.
@@ -131,7 +149,7 @@ def first_contact(edge_u: float, fs: float, vin_m_s: float, *,
     """
     if not (vin_m_s > 0 and fs > 0):
         return math.nan
-    return edge_u - cloth_displacement_m / vin_m_s * fs
+    return edge_u - cloth_phase_s(vin_m_s, cloth_displacement_m) * fs
 
 
 def hidden_cloth_phase(vin_m_s: float, contact_time_s: float) -> float:
@@ -152,4 +170,4 @@ def hidden_cloth_phase(vin_m_s: float, contact_time_s: float) -> float:
     """
     if not (vin_m_s > 0 and contact_time_s > 0):
         return math.nan
-    return CLOTH_DISPLACEMENT_M / vin_m_s / contact_time_s
+    return cloth_phase_s(vin_m_s) / contact_time_s

@@ -222,8 +222,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         The cloth's phase of this impact, 2 mm at its inbound speed [s]
         (``ballimpact.signal.cloth``): a foot of the sensed force no longer
         than it before an undone force's jump is the cloth's, which the
-        contact's start completed from the jump counts; 0 (default) where the
-        speed is not known.
+        contact's start completed from the jump counts; 0 (default) or NaN
+        where the speed is not known.
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the

@@ -12,6 +12,7 @@ from .baseline import BaselineFit
 from .contact import ContactResult, end_standard_uncertainties
 
 __all__ = [
+    "about_start",
     "adc_step_problems",
     "end_uncertainty",
     "curve_end_contact",
@@ -230,6 +231,13 @@ def _beyond_problems(x, fs, noise, s_u, e_u, curve):
                                f"noise ({seen}, or a baseline wrong there): the force may {may}",
                                data={"beyond": where}))
     return out
+
+
+def about_start(problem) -> bool:
+    """Whether a CONTACT_END_UNDETERMINED finding of these checks is about the contact's start (its foot): its
+    ``end`` (or, for a signal beyond an end, ``beyond``) is ``"start"``."""
+    return problem.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (problem.data.get("end"),
+                                                                                  problem.data.get("beyond"))
 
 
 def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scale, curve=False):

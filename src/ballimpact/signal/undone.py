@@ -12,7 +12,7 @@ from ..problems import Problem, ProblemKind
 from .baseline import BaselineFit
 from .cloth import steep_edge
 from .contact import ContactResult, detect_contact
-from .end_checks import end_problems, end_uncertainty, foot_sigma
+from .end_checks import about_start, end_problems, end_uncertainty, foot_sigma
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, refine_plate_resonance,
                     stated_resonance)
 from .ringing import NEGATIVE_SIGMA, PLATE_EVIDENCE, ringing_problems
@@ -419,16 +419,10 @@ def _undone_found(y, x, fs, fit: BaselineFit, t0_s, cutoff):
     seen = (end_problems(y, fs, checked, c, cs_u, ce_u, 1.0)
             + ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u, fall=math.isinf(cutoff)))
     if seen and _jumps(y, c, noise, cs_u, ce_u):  # its start is the jump's, less the cloth's phase, not the
-        seen = [p for p in seen if not _at_start(p)]  # foot's (a foot the sensed force shows: _lost_foot)
+        seen = [p for p in seen if not about_start(p)]  # foot's (a foot the sensed force shows: _lost_foot)
     if seen:
         return "the undone force still shows " + seen[0].message.split(":")[0]
     return c, noise
-
-
-def _at_start(problem) -> bool:
-    """Whether a finding of the contact's ends is about its start (its foot)."""
-    return problem.kind is ProblemKind.CONTACT_END_UNDETERMINED and "start" in (problem.data.get("end"),
-                                                                                  problem.data.get("beyond"))
 
 
 def _cloth_foot(y, c: ContactResult, noise, s_u, cs_u, ce_u, phase_u) -> bool:
