@@ -10,6 +10,7 @@ from .._checks import finite_samples, positive_scalar
 
 __all__ = [
     "plate_discretisation",
+    "plate_undoable",
     "undo_plate_resonance",
     "undo_rows",
     "lowpass_kernel",
@@ -84,6 +85,18 @@ def undo_plate_resonance(sensed, sample_rate_hz: float, frequency_hz: float, dam
     return undo_rows(x, sample_rate_hz, frequency_hz, damping_ratio)
 
 
+def plate_undoable(frequency_hz: float, damping_ratio: float, sample_rate_hz: float) -> bool:
+    """Whether a plate's resonance (fn [Hz], zeta [-]) sampled at ``sample_rate_hz`` [Hz] can be undone.
+
+    The inverse runs through the zeros of the sampled plate (:func:`plate_discretisation`), one pass each; they are
+    real for a resonance the samples resolve, and complex for one too far above half the sample rate (a plate of
+    26 kHz at 34 kHz, say), whose sampled response has no such inverse.
+    """
+    b, _ = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
+    zeros = np.roots(b)
+    return not bool(np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)))
+
+
 def undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
     """:func:`undo_plate_resonance` along the last axis of x (one trace or many at once) [unit of x]."""
     from scipy import signal
@@ -93,7 +106,7 @@ def undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: floa
     zeros = np.roots(b)
     if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)):
         raise ValueError(f"the plate's sampled response has complex zeros {zeros}: not a second-order plate "
-                         "sampled below its resonance's decay")
+                         "sampled below its resonance's decay (plate_undoable)")
     for zero in zeros:
         z = float(np.real(zero))
         if abs(z) < 1.0:  # causal pass: u[n] = w[n] + z u[n-1]

@@ -16,7 +16,8 @@ from .end_checks import about_start, end_problems, end_uncertainty, foot_sigma
 from .plate import (PlateResonance, identify_free_ringing, identify_plate_resonance, refine_plate_resonance,
                     stated_resonance)
 from .ringing import NEGATIVE_SIGMA, PLATE_EVIDENCE, ringing_problems
-from .undo import lowpass_spread_samples, lowpass_zero_phase, undo_plate_resonance, undone_noise_gain
+from .undo import (lowpass_spread_samples, lowpass_zero_phase, plate_undoable, undo_plate_resonance,
+                   undone_noise_gain)
 from .undone_end import undone_end
 from .undone_peak import PLATE_LOWPASS_PEAK, lowpass_hides_peak
 
@@ -69,7 +70,8 @@ PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING,
                          ProblemKind.IMPULSE_UNRESOLVED})  # a plate's first overshoot is a single-sample top too
 
 
-def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0):
+def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0,
+                 peak_problems: list | None = None):
     """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; None
     when it is not tried; why it was refused, in words (str), when it was.
 
@@ -139,10 +141,17 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     few tenths of a sample). The fitted TC must be 0 to 2 W (+-1 sample)
     shorter than the contact found on the low-passed force.
     The force's ends are then restored from their fits (the impulse the
-    kernel spread outside them is back). Nor may the low-pass hide a peak:
+    kernel spread outside them is back), so the low-passed force's own end
+    checks (:func:`ballimpact.signal.end_checks.end_problems`) do not refuse
+    it: the fits' spread is what TC is charged. Nor may the low-pass hide a peak:
     the exact undone force's largest sample inside the contact at most
     PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed
     peak, with that noise low enough to show a loss of PLATE_LOWPASS_SPIKE.
+    Given a list ``peak_problems``, a low-passed force that may hide only its
+    peak is kept, and why goes into that list as a PEAK_ON_RINGING problem:
+    the peak alone is withheld (as for a stated plate,
+    :func:`stated_plate_undone`), not TC and kCAL, which the other checks
+    judge.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -163,10 +172,16 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
         if plate is None:
             return ("plate resonance not undone: no decaying oscillation identified out of the noise in the "
                     "contact and the 2 ms after it")
-        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s)
+        seen: list = []
+        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s,
+                                 peak_problems=None if peak_problems is None else seen)
         if isinstance(hit, str):  # the undone force still rings or fails a check: refine the resonance, try again
             plate = refine_plate_resonance(x[ra:rb], fs, plate)
-            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s)
+            seen = []
+            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s,
+                                     peak_problems=None if peak_problems is None else seen)
+        if not found and peak_problems is not None:
+            peak_problems.extend(seen)
         if isinstance(hit, str):
             return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
@@ -200,6 +215,10 @@ def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, p
     PEAK_ON_RINGING problem) instead of refusing the force whose ends and impulse every other check passed."""
     if not _plate_can_be_undone(x, fs, contact, t0_s):
         return None, []
+    if not plate_undoable(plate[0], plate[1], fs):
+        return _refused(f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
+                        f"plate.resonance_hz and plate.damping_ratio) not undone: sampled at {fs / 1e3:.3g} kHz, "
+                        "its response has no inverse (too far above half the sample rate)", plate[0], plate[1]), []
     s_u = (contact.start_s - t0_s) * fs
     resonance = stated_resonance(plate[0], plate[1], fs)
     peak_problems = []
@@ -405,7 +424,9 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
 def _undone_found(y, x, fs, fit: BaselineFit, t0_s, cutoff):
     """The single contact of an undone force ``y`` and its noise [V] when it is quiet enough and its ends and ringing
     pass their checks (:func:`ballimpact.signal.end_checks.end_problems`,
-    :func:`ballimpact.signal.ringing.ringing_problems`); else what it failed, in words (str)."""
+    :func:`ballimpact.signal.ringing.ringing_problems`); else what it failed, in words (str). The ends of a
+    low-passed force (finite ``cutoff`` [Hz]) are fitted through the kernel next, and the fits' spread is charged
+    to TC: the end checks' findings do not refuse it."""
     c = detect_contact(y, fs, t0_s=t0_s, spread=True)
     if not c.found or not c.peak_V > 0 or c.n_impacts > 1:
         return "the undone force holds no single contact"
@@ -418,6 +439,8 @@ def _undone_found(y, x, fs, fit: BaselineFit, t0_s, cutoff):
     cs_u, ce_u = (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs
     seen = (end_problems(y, fs, checked, c, cs_u, ce_u, 1.0)
             + ringing_problems(y, fs, noise, float(c.peak_V), cs_u, ce_u, cs_u, ce_u, fall=math.isinf(cutoff)))
+    if not math.isinf(cutoff):  # a low-passed force's ends are fitted through the kernel, their spread charged
+        seen = [p for p in seen if p.kind is not ProblemKind.CONTACT_END_UNDETERMINED]
     if seen and _jumps(y, c, noise, cs_u, ce_u):  # its start is the jump's, less the cloth's phase, not the
         seen = [p for p in seen if not about_start(p)]  # foot's (a foot the sensed force shows: _lost_foot)
     if seen:
