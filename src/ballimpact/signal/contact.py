@@ -62,6 +62,12 @@ __all__ = ["ContactResult", "contact_samples", "end_standard_uncertainties", "de
 SECOND_IMPACT_FRACTION = 0.05  # another impact reaches this fraction of the main peak [-]
 SECOND_IMPACT_MIN_S = 0.3e-3  # ... and lasts longer than this [s]
 SECOND_IMPACT_LOCAL_S = 20e-3  # ... above the level of the record in blocks this long around it [s]
+RING_GAP_MAX_S = 0.75e-3  # a run this close to the contact, the force swinging below zero between them ... [s]
+RING_SWING_SIGMA = 6.0  # ... by this many noise deviations ... [-]
+RING_MEAN_FRACTION = 0.1  # ... while its mean around the gap stays above this fraction of the peak, is a piece of
+#                           the contact that a plate's ringing split off, not another impact [-]
+RING_LOBE_SWING = 0.5  # a run shorter than RING_GAP_MAX_S with the force below minus this fraction of its height
+#                        within its length after it is a lobe of the plate's free ringing, not another impact [-]
 MERGE_GAP_S = 0.1e-3  # runs above threshold closer than this are one run [s]
 PRETRIGGER_GUARD_S = 0.5e-3  # gap between the noise window and the first crossing [s]
 MIN_CONTACT_SAMPLES = 3  # fewest samples above threshold for a contact [samples]
@@ -398,7 +404,7 @@ class ContactSearch:
         if k < 0 or ends[k] - starts[k] + 1 < MIN_CONTACT_SAMPLES:
             self._not_found = _not_found(sigma * scale, thr * scale, peak_index, peak * scale, clipped, flags)
             return
-        others_found = _other_impacts(xs, starts, ends, k, peak, fs)
+        others_found = _other_impacts(xs, starts, ends, k, peak, fs, sigma)
         if others_found:
             flags.append("multiple_impacts")
         self._xs, self._scale, self._peak_index, self._peak = xs, scale, peak_index, peak
@@ -501,12 +507,17 @@ def _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
     return max(sigma, smallest_step(xs) / math.sqrt(12.0), NOISE_FLOOR_FRACTION * peak, 1e-300)
 
 
-def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
-    """Runs above the threshold besides the main one (k) that count as impacts: (first sample, peak fraction)."""
+def _other_impacts(xs, starts, ends, k, peak, fs, sigma=0.0) -> list[tuple[int, float]]:
+    """Runs above the threshold besides the main one (k) that count as impacts: (first sample, peak fraction).
+
+    Runs split off the contact by a plate's ringing do not count (:func:`_ringing_pieces`).
+    """
     if starts.size <= 1:
         return []
     n = xs.size
     others = np.arange(starts.size) != k
+    others[_ringing_pieces(xs, starts, ends, k, peak, fs, sigma)] = False
+    others &= ~_ringing_lobes(xs, starts, ends, fs)
     # a run cut off by either end of the trace may be longer than it shows: its length does not count
     long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
     bounds = np.empty(2 * starts.size, dtype=int)
@@ -519,6 +530,47 @@ def _other_impacts(xs, starts, ends, k, peak, fs) -> list[tuple[int, float]]:
         height = _pulse_height(xs, int(starts[j]), int(ends[j]), max(int(round(SECOND_IMPACT_LOCAL_S * fs)), 2))
         if height > SECOND_IMPACT_FRACTION * peak:
             out.append((int(starts[j]), float(run_max[j] / peak)))
+    return out
+
+
+def _ringing_pieces(xs, starts, ends, k, peak, fs, sigma) -> list[int]:
+    """The runs above the threshold that are pieces of the main one (k), split off by a plate's ringing.
+
+    A plate ringing at 1-3 kHz swings a contact's force below the threshold and back, splitting its run: from the
+    main run outwards, a run less than RING_GAP_MAX_S [s] from the last piece, the force swinging below zero
+    between them (by RING_SWING_SIGMA noise deviations ``sigma``) while its mean over the gap and the gap's length
+    either side stays above RING_MEAN_FRACTION of the peak, is a piece too. A ball pulls on nothing, and its force
+    is what the sensed force averages to over a period of the plate: positive inside the contact; between two
+    contacts the plate rings freely about zero, and a ball that left the plate is away for longer (the zoos'
+    second contacts come 1 ms or more after the first).
+    """
+    pieces = []
+    for step in (-1, 1):
+        last = k
+        for j in range(k + step, -1 if step < 0 else starts.size, step):
+            a, b = (ends[j] + 1, starts[last]) if step < 0 else (ends[last] + 1, starts[j])
+            gap = b - a
+            if not (0 < gap < RING_GAP_MAX_S * fs and float(np.min(xs[a:b])) < -RING_SWING_SIGMA * sigma
+                    and float(np.mean(xs[max(a - gap, 0):b + gap])) > RING_MEAN_FRACTION * peak):
+                break
+            pieces.append(j)
+            last = j
+    return pieces
+
+
+def _ringing_lobes(xs, starts, ends, fs) -> np.ndarray:
+    """Which runs above the threshold are lobes of a plate's free ringing (a boolean per run).
+
+    A ringing swings both ways about zero and a ball's contact does not: a run shorter than RING_GAP_MAX_S [s]
+    (half a period of a plate of 0.67 kHz or more; a ball's contact lasts milliseconds) whose force falls below
+    minus RING_LOBE_SWING of its height within its own length after its end is a lobe, however high.
+    """
+    out = np.zeros(starts.size, dtype=bool)
+    for j, (a, b) in enumerate(zip(starts, ends)):
+        length = b - a + 1
+        after = xs[b + 1:b + 1 + length]
+        if length < RING_GAP_MAX_S * fs and after.size and a < b:
+            out[j] = float(np.min(after)) < -RING_LOBE_SWING * float(np.max(xs[a:b + 1]))
     return out
 
 
