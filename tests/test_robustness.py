@@ -736,7 +736,8 @@ def test_zoo_convex_end_not_ok(name, seed, index, what, tmp_path):
 
 #: Traces of the benchmark ok but wrong on main at 03757a8: a damped plate rings from the force's jump and the
 #: pre-buckling spike's top lands on a later maximum of that ringing (not its first overshoot, which the
-#: step-response check judges); a jump and a ramp fitted through a plate name it now (name, seed, index, what).
+#: step-response check judges); a jump and a ramp fitted through a plate name it, or the plate is undone and the
+#: peak alone withheld for what the low-pass and the identification leave of it (name, seed, index, what).
 ZOO_FRONT_RINGING = [
     ("plate-13.7kHz-spike-on-the-ringings-second-maximum", 3, 824,
      "13.7 kHz plate, damping 0.20, at 168 kHz: peak +5.3 %"),
@@ -749,7 +750,9 @@ def test_zoo_peak_on_the_ringing_from_the_jump(name, seed, index, what, tmp_path
     assert trace.truth.measurable and trace.truth.peak_is_spike, name
     assert trace.rig.plate_hz is not None and trace.rig.plate_zeta > 0.15, name
     result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement, excluded_with="ringing from the jump lifts the largest sample")
+    assert_invariant(trace, result, judgement)
+    assert "ringing from the jump lifts the largest sample" in result.reason + result.withheld_note \
+        or (result.peak_status == "withheld" and math.isfinite(result.plate_resonance_hz)), result.withheld_note
 
 
 #: Traces of the benchmark excluded on main at 6efe980 for "contact end not determined to 1 %: fitted again from

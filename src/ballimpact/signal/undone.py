@@ -147,11 +147,15 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     the exact undone force's largest sample inside the contact at most
     PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed
     peak, with that noise low enough to show a loss of PLATE_LOWPASS_SPIKE.
-    Given a list ``peak_problems``, a low-passed force that may hide only its
-    peak is kept, and why goes into that list as a PEAK_ON_RINGING problem:
-    the peak alone is withheld (as for a stated plate,
-    :func:`stated_plate_undone`), not TC and kCAL, which the other checks
-    judge.
+    Given a list ``peak_problems``, these checks are judged by their effect
+    instead (as for a stated plate, :func:`stated_plate_undone`): a
+    low-passed force that may hide or flatten only its peak is kept, and why
+    goes into that list as a PEAK_ON_RINGING problem (the peak alone is
+    withheld, not TC and kCAL, which the other checks judge); the two
+    identifications' TCs apart by more than PLATE_AGREE_TC are charged to the
+    contact's end (their difference as a bound), and their peaks apart by
+    more than PLATE_AGREE_PEAK withhold the peak; fitted ends that the
+    kernel's spread does not explain are charged to TC by the excess.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
@@ -187,12 +191,18 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
                             f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
         found.append(hit)
     (y, c, plate, cutoff), (_, c2, _, _) = found
-    if abs(c.contact_time_s - c2.contact_time_s) > PLATE_AGREE_TC * c.contact_time_s \
-            or abs(c.peak_V - c2.peak_V) > PLATE_AGREE_PEAK * c.peak_V:
+    d_tc, d_peak = abs(c.contact_time_s - c2.contact_time_s), abs(c.peak_V - c2.peak_V)
+    if (d_tc > PLATE_AGREE_TC * c.contact_time_s or d_peak > PLATE_AGREE_PEAK * c.peak_V) and peak_problems is None:
         return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: two identifications of "
                         f"it disagree by {100 * abs(c.contact_time_s / c2.contact_time_s - 1):.2g} % on TC and "
                         f"{100 * abs(c.peak_V / c2.peak_V - 1):.2g} % on the peak", plate.frequency_hz,
                         plate.damping_ratio)
+    if d_peak > PLATE_AGREE_PEAK * c.peak_V:
+        peak_problems.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: two identifications of "
+                                     f"the plate's resonance at {plate.frequency_hz / 1e3:.3g} kHz give peaks "
+                                     f"{100 * d_peak / c.peak_V:.2g} % apart"))
+    if d_tc > PLATE_AGREE_TC * c.contact_time_s:  # their TCs' difference, a bound, charged to the end as a uniform
+        c = replace(c, end_se_s=math.hypot(c.end_se_s, d_tc / math.sqrt(3.0)))
     return y, c, plate, cutoff
 
 
@@ -319,16 +329,20 @@ def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, cloth_phase_s=cloth_phase_s)
+        notes = None if peak_problems is None else []
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, cloth_phase_s=cloth_phase_s, notes=notes)
         hides = None
         if not isinstance(c, str) and not math.isinf(cutoff):
             hides = lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
             if hides and peak_problems is not None:
-                peak_problems.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to "
-                                             f"{cutoff / 1e3:.3g} kHz after the plate was undone, {hides}"))
+                peak_problems.extend(notes + [Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: "
+                                                      f"low-passed to {cutoff / 1e3:.3g} kHz after the plate was "
+                                                      f"undone, {hides}")])
                 return c[1], c[0], plate, cutoff
             c = hides or c
         if not isinstance(c, str):
+            if notes:
+                peak_problems.extend(notes)
             return c[1], c[0], plate, cutoff
         why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
         if hides:  # a lower cutoff only lowers the low-passed peak further below the exact force's
@@ -378,11 +392,12 @@ def _smoothed_peak_loss(y, fs, sigma):
 
 
 def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None, fit_ends=False,
-                    cloth_phase_s=0.0):
+                    cloth_phase_s=0.0, notes: list | None = None):
     """The contact of an undone force ``y`` and the force (a low-passed one, or with ``fit_ends`` the exact one,
     with its ends restored from their fits) when it passes every check of :func:`plate_undone`; else what it
     failed, in words (str). The exact force whose ends read off it fail on their uncertainty or start late is
-    tried again with its ends fitted through the plate."""
+    tried again with its ends fitted through the plate. Given a list ``notes``, a low-pass that lowers the peak
+    puts a PEAK_ON_RINGING problem into it instead of refusing the force (:func:`_fitted_ends`)."""
     found = _undone_found(y, x, fs, fit, t0_s, cutoff)
     if isinstance(found, str):
         return found
@@ -392,7 +407,7 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
     fitted = not math.isinf(cutoff) or (fit_ends and plate is not None)
     what = "low-passed force" if not math.isinf(cutoff) else "undone force"
     if fitted:  # for the exact force no kernel (W = 0): its ends fitted through the plate alone
-        ends = _fitted_ends(y, x, fs, fit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s)
+        ends = _fitted_ends(y, x, fs, fit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s, notes)
         if isinstance(ends, str):
             return ends
         y, c, cs_u, ce_u, uncertainty, bias = ends
@@ -402,7 +417,8 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
     if not fitted and plate is not None and (late or uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u)):
         # read off the exact force, its ends are its amplified noise over its slope and may lose a foot in it:
         # fitted through the plate instead (its step, ramp and parabola responses, undone)
-        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True, cloth_phase_s=cloth_phase_s)
+        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True, cloth_phase_s=cloth_phase_s,
+                                notes=notes)
         if not isinstance(again, str):
             return again
         tail = f"; its ends fitted through the plate: {again.removeprefix('the ')}"
@@ -462,15 +478,25 @@ def _jumps(y, c: ContactResult, noise, cs_u, ce_u) -> bool:
     return steep_edge(y, cs_u, c.peak_index, noise, ce_u - cs_u) is not None
 
 
-def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s):
+def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s, notes=None):
     """The ends of the ``what`` ``y`` (contact ``c`` from ``cs_u`` to ``ce_u`` [samples]) fitted through the plate's
     undoing and the low-pass's kernel (:func:`ballimpact.signal.undone_end.undone_end`): (the force with its ends'
     jump and spread impulse restored, its contact, its ends [samples], the expanded uncertainty of TC [samples],
-    and how far the ends move with the fit's window and the plate's fn [samples]); else why not (str)."""
+    and how far the ends move with the fit's window and the plate's fn [samples]); else why not (str).
+
+    A low-pass that flattens the peak by more than PLATE_LOWPASS_PEAK (from its curvature) withholds the peak
+    alone, a PEAK_ON_RINGING problem into the list ``notes``; without one it refuses the force. The fitted TC
+    0 to twice the kernel's half-width W (+-1 sample) shorter than the contact found on the low-passed force is
+    what the kernel's spread explains; the fits and the contact found disagree by what lies beyond, and that is
+    charged to TC with the fits' spread."""
     half_width, sigma = lowpass_spread_samples(fs, cutoff)
     loss = _smoothed_peak_loss(y, fs, sigma)
-    if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
+    if loss > PLATE_LOWPASS_PEAK and notes is None:  # the low-pass flattens a peak sharper than its kernel
         return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
+    if loss > PLATE_LOWPASS_PEAK:
+        notes.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to {cutoff / 1e3:.3g} "
+                             f"kHz after the plate was undone, the low-pass lowers the peak by about "
+                             f"{100 * loss:.2g} % (from its curvature)"))
     # the low-pass spreads the force by its kernel's half-width at each end: the ends are fitted through
     # the plate's undoing and the kernel (a line, or a jump from zero), twice, and the fits' difference
     # is charged to TC
@@ -491,9 +517,11 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
     if isinstance(bias, str):
         return bias
     shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
-    if not -1.0 <= shorter <= 2.0 * half_width + 2.0:
+    beyond = max(-1.0 - shorter, shorter - (2.0 * half_width + 2.0), 0.0)
+    if beyond > 0 and notes is None:
         return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
                 f"{what}'s contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
+    bias += beyond  # the fits and the contact found disagree by this beyond the kernel's spread
     # the ends' jump and the impulse the kernel spread outside them restored from their fits
     y = y.copy()
     for f in (f_start, f_end):
