@@ -213,6 +213,19 @@ ZOO_REFINED = [
 ]
 
 
+#: Traces of zoo seed 704 excluded on main at cff9dbf although measurable: the plate's undoing was refused by a
+#: check that sees something instead of judging what it does to TC (one case per refusal, or per fault taken for
+#: one); ok and right now (name, seed, index, what).
+ZOO_JUDGED_BY_EFFECT = [
+    ("identifications-disagree-76kHz", 704, 1122, "two identifications 0.3 % apart on TC: now charged to its end"),
+    ("lowpass-flattens-the-peak-127kHz", 704, 170, "the low-pass lowers the peak: now the peak alone is withheld"),
+    ("fitted-ends-beyond-the-kernel-148kHz", 704, 900, "fitted TC shorter than the kernel explains: excess charged"),
+    ("lowpass-may-hide-the-peak-82kHz", 704, 62, "an identified plate's low-pass may hide the peak: peak withheld"),
+    ("lowpassed-end-checks-72kHz", 704, 136, "the low-passed force's own end check: its ends are fitted"),
+    ("ringing-taken-for-a-second-contact-73kHz", 704, 1478, "the contact split by the plate's ringing: one impact"),
+]
+
+
 #: Traces of the benchmark excluded on main at 10b1d50 although measurable, for a peak between samples only (a damped
 #: plate's overshoot rises steeply to it): the step response is evidence of the plate, whose resonance is then
 #: identified and undone, ok and right (name, seed, index, what).
@@ -287,7 +300,8 @@ UNDONE_FN_TOLERANCE = {**{c[0]: 0.1 for c in ZOO_STEP_UNDONE},
 
 @pytest.mark.parametrize("name, seed, index, what",
                          named(ZOO_UNDONE + ZOO_LOWPASSED + ZOO_REFINED + ZOO_STEP_UNDONE + ZOO_LOWPASS_ENDS
-                               + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE + ZOO_FREE_RINGING))
+                               + ZOO_EXACT_ENDS + ZOO_FITTED_TOP + ZOO_FRONT_UNDONE + ZOO_FREE_RINGING
+                               + ZOO_JUDGED_BY_EFFECT))
 def test_zoo_ringing_plate_undone(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     assert trace.truth.measurable and trace.rig.plate_hz is not None, name
