@@ -17,9 +17,10 @@ Reads the mutants/src/ballimpact/<module>.py.meta files mutmut 3 writes (exit co
 test run per mutant) and bench/mutation_equivalent.txt (mutants judged equivalent: they
 change no behaviour any input can show, each with its reason). Score = (killed + timeout)
 / (mutants - equivalent). A mutant with no test covering its function counts as not killed.
-Only mutants matching SELECTION are counted: whole modules, and the core of fitting.py
-(the model inversion: kB(0), the two stages, the joint least squares and its residual
-scatter; not its interval profiles, outlier search, bootstrap and bands).
+Only mutants matching SELECTION are counted: whole modules, and the core of the fit
+(fitting_core.py, split from fitting.py; the model inversion: kB(0), the two stages, the
+joint least squares and its residual scatter; not the interval profiles, outlier search,
+bootstrap and bands).
 """
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ FITTING_CORE = (
 )
 SELECTION = (
     ["ballimpact.model.*", "ballimpact.gates.*", "ballimpact.calibration.*",
-     "ballimpact.signal.*", "ballimpact.fitting.x\u01c1_Problem\u01c1*"]
-    + [f"ballimpact.fitting.x_{name}__mutmut_*" for name in FITTING_CORE]
+     "ballimpact.signal.*", "ballimpact.fitting_core.x\u01c1_Problem\u01c1*"]
+    + [f"ballimpact.fitting_core.x_{name}__mutmut_*" for name in FITTING_CORE]
 )
 
 # mutmut 3.8 (mutmut/stats.py): exit code of the mutant's test run -> status
