@@ -53,7 +53,8 @@ class ReportFigure:
         Where it stands in the PDF report: ``own`` (a page of its own) or ``rig`` (on the rig page), one of
         :data:`PAGES`.
     module : str
-        Module of ``ballimpact`` that defines ``draw_name`` (``figures``, or ``figures_rig`` for the rig's).
+        Module of ``ballimpact`` that defines ``draw_name`` (``figures``, ``figures_model`` for the model's
+        figures, or ``figures_rig`` for the rig's).
     """
 
     stem: str
@@ -121,6 +122,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="Fig. 7",
         shows="contact time and COR vs inbound speed",
+        module="figures_model",
     ),
     ReportFigure(
         stem="cor_speed_itf",
@@ -141,6 +143,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="COR 3-40 m/s",
         shows="COR vs speed, extrapolation, ITF drop test",
+        module="figures_model",
     ),
     ReportFigure(
         stem="fig8_stiffness",
@@ -157,6 +160,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="Fig. 8",
         shows="structural stiffness vs displacement",
+        module="figures_model",
     ),
     ReportFigure(
         stem="fig9_force_curves",
@@ -174,6 +178,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="Fig. 9",
         shows="measured and modelled force curves",
+        module="figures_model",
     ),
     ReportFigure(
         stem="fig10_components",
@@ -191,6 +196,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="Fig. 10",
         shows="force components at 20 m/s",
+        module="figures_model",
     ),
     ReportFigure(
         stem="fig2b_kelvin_voigt",
@@ -207,6 +213,7 @@ REPORT_FIGURES: tuple[ReportFigure, ...] = (
         category=_MODEL_FIT,
         report_label="Fig. 2b",
         shows="Kelvin-Voigt model vs measurement",
+        module="figures_model",
     ),
     ReportFigure(
         stem="kcal",

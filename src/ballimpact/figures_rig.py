@@ -11,7 +11,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from . import archive_read as ar
-from .figures import _note, render
+from .figures_layout import _note, render
 from .rig import COVERAGE
 from .rig_archive import read_rig, ringing_overlay
 
