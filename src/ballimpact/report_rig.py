@@ -116,7 +116,7 @@ def rig_page(ds, info, figures_dir=None, images=None) -> Figure:
     matplotlib.figure.Figure
         A page of 8.27 x 11.69 in.
     """
-    from . import report as _r
+    from . import report_layout as _r
 
     margin = _r._MARGIN_IN
     pngs = [_r._figure_file(figures_dir, spec.file_name, images) for spec in RIG_PAGE_FIGURES]
@@ -143,7 +143,7 @@ def rig_page(ds, info, figures_dir=None, images=None) -> Figure:
 
 def _rig_table(fig, cur, ds) -> None:
     """The rig's table, its numbered notes and the plate fit's line, at the cursor; or why there is none."""
-    from . import report as _r
+    from . import report_layout as _r
 
     w, h = _r.A4_PORTRAIT_IN
     margin = _r._MARGIN_IN
@@ -170,7 +170,7 @@ def _rig_table(fig, cur, ds) -> None:
 def _rig_warnings(cur, ds) -> None:
     """The warnings of the rig's identification (stated keys the traces disagree with), at most
     MAX_RIG_WARNING_LINES lines."""
-    from . import report as _r
+    from . import report_layout as _r
 
     warned = rig_warnings(ds)
     if not warned:
@@ -191,7 +191,7 @@ def _rig_warnings(cur, ds) -> None:
 
 def _rig_figures(fig, cur, ds, pngs) -> None:
     """The figures of RIG_PAGE_FIGURES with their captions, shrunk to the room left on the page."""
-    from . import report as _r
+    from . import report_layout as _r
 
     h = _r.A4_PORTRAIT_IN[1]
     margin = _r._MARGIN_IN
