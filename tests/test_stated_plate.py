@@ -97,11 +97,13 @@ def test_plate_undoable_is_false_only_where_the_sampled_plate_has_complex_zeros(
 
 
 def test_a_stated_plate_the_samples_cannot_undo_is_not_used_and_loses_nothing(tmp_path):
-    # the keys state a plate of 26.3 kHz at 34.4 kHz: not undone (conditioned as without the keys, saying why),
-    # and the impact is not lost to an error ("unusable trace", as the inverse's ValueError once made it)
+    # the keys state a plate of 26.3 kHz at 34.4 kHz: not undone, and the impact is not lost to an error ("unusable
+    # trace", as the inverse's ValueError once made it); its ringing aliases, so TC is withheld saying why
     rng = np.random.default_rng([778, 0])
     trace = zoo.make_trace(rng, "plate", plate_hz=26.33e3, plate_zeta=0.145, sample_rate_hz=34.39e3)
     result, j = zoo.run_trace(trace, tmp_path, plate_extra=_keys(trace))
     assert "unusable trace" not in result.reason
     assert not math.isfinite(result.plate_resonance_hz)
+    assert result.contact_time_status == "withheld" and "has no inverse" in result.reason + result.withheld_note, \
+        result.reason
     assert not j.wrong, j.errors

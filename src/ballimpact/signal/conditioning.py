@@ -384,9 +384,11 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
     if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
         undone, stated = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
     if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
-        stated = []
+        stated, refused = [], undone
         undone = plate_undone(it.x, fs, it.fit, contact, problems, t0_s, cloth_phase_s=cloth_phase_s,
                               peak_problems=stated)
+        if undone is None and not getattr(refused, "undoable", True):  # a stated plate the samples cannot undo
+            undone = refused  # stands as a finding, though the sensed force shows no ringing (it aliases)
     return undone, stated
 
 

@@ -26,10 +26,12 @@ __all__ = ["Refusal", "plate_undone", "stated_plate_undone", "undone_peak_spread
 
 class Refusal(str):
     """Why a plate's resonance was not undone, in words, with the resonance refused [Hz] and its damping ratio [-]
-    (NaN: none identified)."""
+    (NaN: none identified), and whether the samples could undo it at all (False: its sampled response has no
+    inverse, :func:`ballimpact.signal.undo.plate_undoable`)."""
 
     resonance_hz: float = math.nan
     damping_ratio: float = math.nan
+    undoable: bool = True
 
 
 def _refused(message: str, resonance_hz: float, damping_ratio: float) -> Refusal:
@@ -53,6 +55,8 @@ PLATE_LOWPASS_MIN_FN = 1.0  # ... at a cutoff no lower than this times the reson
 PLATE_LOWPASS_STEPS = 10  # ... trying cutoffs from fs / 2 down in this many steps of sqrt(2) [-]
 PLATE_LOWPASS_TRIES = 6  # ... at most this many of them, from the first quiet enough (until one hides the peak) [-]
 PLATE_LOWPASS_END_INSIDE = (6, 12)  # a low-passed force's ends fitted with this many samples inside [samples]
+PLATE_LOWPASS_MAX_SPREAD = 0.07  # a kernel spreading each end over more than this fraction of TC (2 W) is too long
+#                                  for the ends' line and parabola: fitted through it, TC came out 0.4-1.1 % long [-]
 PLATE_EXACT_END_REACH = 6  # an exact undone force's ends fitted this many samples either side of those found [samples]
 PLATE_END_JUMP_SIGMA = 10.0  # a fitted end's jump above this many residuals locates it to half a sample [-]
 PLATE_FN_UNCERTAINTY = 0.01  # the resonance is known to about this fraction: how far TC moves is charged ... [-]
@@ -226,9 +230,12 @@ def stated_plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, t0_s, p
     if not _plate_can_be_undone(x, fs, contact, t0_s):
         return None, []
     if not plate_undoable(plate[0], plate[1], fs):
-        return _refused(f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
-                        f"plate.resonance_hz and plate.damping_ratio) not undone: sampled at {fs / 1e3:.3g} kHz, "
-                        "its response has no inverse (too far above half the sample rate)", plate[0], plate[1]), []
+        out = _refused(f"stated plate resonance {plate[0] / 1e3:.3g} kHz (damping ratio {plate[1]:.2g}, "
+                       f"plate.resonance_hz and plate.damping_ratio) not undone: sampled at {fs / 1e3:.3g} kHz, "
+                       "its response has no inverse (too far above half the sample rate; its ringing aliases, and "
+                       "what that does to the contact's ends is not known)", plate[0], plate[1])
+        out.undoable = False
+        return out, []
     s_u = (contact.start_s - t0_s) * fs
     resonance = stated_resonance(plate[0], plate[1], fs)
     peak_problems = []
@@ -484,12 +491,18 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
     jump and spread impulse restored, its contact, its ends [samples], the expanded uncertainty of TC [samples],
     and how far the ends move with the fit's window and the plate's fn [samples]); else why not (str).
 
-    A low-pass that flattens the peak by more than PLATE_LOWPASS_PEAK (from its curvature) withholds the peak
+    A kernel that spreads each end over more than PLATE_LOWPASS_MAX_SPREAD of TC (twice its half-width W) is
+    refused: over so long a stretch the force near its ends is no line and parabola, and the fitted TC comes out
+    long by more than the fits' spread says (0.4-1.1 % at 7.5-11 % of TC, plates of 1.1-1.6 kHz). A low-pass that
+    flattens the peak by more than PLATE_LOWPASS_PEAK (from its curvature) withholds the peak
     alone, a PEAK_ON_RINGING problem into the list ``notes``; without one it refuses the force. The fitted TC
     0 to twice the kernel's half-width W (+-1 sample) shorter than the contact found on the low-passed force is
     what the kernel's spread explains; the fits and the contact found disagree by what lies beyond, and that is
     charged to TC with the fits' spread."""
     half_width, sigma = lowpass_spread_samples(fs, cutoff)
+    if 2.0 * half_width > PLATE_LOWPASS_MAX_SPREAD * (ce_u - cs_u):
+        return (f"the low-pass spreads each end over {100 * 2 * half_width / (ce_u - cs_u):.2g} % of TC, too long for "
+                "the ends' fits")
     loss = _smoothed_peak_loss(y, fs, sigma)
     if loss > PLATE_LOWPASS_PEAK and notes is None:  # the low-pass flattens a peak sharper than its kernel
         return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
