@@ -155,10 +155,11 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     instead (as for a stated plate, :func:`stated_plate_undone`): a
     low-passed force that may hide or flatten only its peak is kept, and why
     goes into that list as a PEAK_ON_RINGING problem (the peak alone is
-    withheld, not TC and kCAL, which the other checks judge); the two
-    identifications' TCs apart by more than PLATE_AGREE_TC are charged to the
-    contact's end (their difference as a bound), and their peaks apart by
-    more than PLATE_AGREE_PEAK withhold the peak; fitted ends that the
+    withheld, not TC and kCAL, which the other checks judge); two
+    identifications apart by more than PLATE_AGREE_TC on TC or
+    PLATE_AGREE_PEAK on the peak put a PLATE_RINGING finding into that list
+    whose effects are their differences on TC, kCAL (the integrals over the
+    contact) and the peak, bounds in those budgets; fitted ends that the
     kernel's spread does not explain are charged to TC by the excess.
     """
     kinds = {p.kind for p in problems}
@@ -194,20 +195,29 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
             return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                             f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
         found.append(hit)
-    (y, c, plate, cutoff), (_, c2, _, _) = found
-    d_tc, d_peak = abs(c.contact_time_s - c2.contact_time_s), abs(c.peak_V - c2.peak_V)
-    if (d_tc > PLATE_AGREE_TC * c.contact_time_s or d_peak > PLATE_AGREE_PEAK * c.peak_V) and peak_problems is None:
-        return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: two identifications of "
-                        f"it disagree by {100 * abs(c.contact_time_s / c2.contact_time_s - 1):.2g} % on TC and "
-                        f"{100 * abs(c.peak_V / c2.peak_V - 1):.2g} % on the peak", plate.frequency_hz,
-                        plate.damping_ratio)
-    if d_peak > PLATE_AGREE_PEAK * c.peak_V:
-        peak_problems.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: two identifications of "
-                                     f"the plate's resonance at {plate.frequency_hz / 1e3:.3g} kHz give peaks "
-                                     f"{100 * d_peak / c.peak_V:.2g} % apart"))
-    if d_tc > PLATE_AGREE_TC * c.contact_time_s:  # their TCs' difference, a bound, charged to the end as a uniform
-        c = replace(c, end_se_s=math.hypot(c.end_se_s, d_tc / math.sqrt(3.0)))
+    (y, c, plate, cutoff), (y2, c2, _, _) = found
+    apart = _identifications_apart(y, c, y2, c2)
+    if apart["contact_time"] <= PLATE_AGREE_TC and apart["peak"] <= PLATE_AGREE_PEAK:
+        return y, c, plate, cutoff
+    what = (f"two identifications of the plate's resonance at {plate.frequency_hz / 1e3:.3g} kHz disagree by "
+            f"{100 * apart['contact_time']:.2g} % on TC and {100 * apart['peak']:.2g} % on the peak")
+    if peak_problems is None:
+        return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: {what}",
+                        plate.frequency_hz, plate.damping_ratio)
+    # their differences, bounds, go into the budgets of TC, kCAL and the peak
+    peak_problems.append(Problem(ProblemKind.PLATE_RINGING, f"plate resonance undone, but {what}",
+                                 data={"identifications_apart": 1.0}, effects=apart))
     return y, c, plate, cutoff
+
+
+def _identifications_apart(y, c: ContactResult, y2, c2: ContactResult) -> dict:
+    """How far two undone forces ``y``, ``y2`` [V] (their contacts ``c``, ``c2``) are apart on TC, kCAL (their
+    integrals over the first's contact) and the peak, relative to the first's [-]."""
+    a, b = max(c.start_index, 0), c.end_index + 1
+    whole = float(np.sum(y[a:b]))
+    return {"contact_time": abs(c.contact_time_s - c2.contact_time_s) / c.contact_time_s,
+            "kcal": abs(whole - float(np.sum(y2[a:b]))) / whole if whole > 0 else math.nan,
+            "peak": abs(c.peak_V - c2.peak_V) / c.peak_V}
 
 
 def _plate_can_be_undone(x, fs, contact: ContactResult, t0_s) -> bool:
