@@ -340,3 +340,25 @@ def test_a_start_read_behind_an_antialias_filter_s_ringing_is_completed_and_righ
         assert any(p.kind is ProblemKind.CLOTH_PHASE_COMPLETED for p in result.problems), row.impact_id
         kept += result.contact_time_status == "ok"
     assert kept >= len(clean) - 1, kept  # (the filter's ringing may stand above the noise before the first contact)
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_a_low_plate_s_long_kernel_leaves_no_tc_ok_and_wrong(tmp_path):
+    """Rig 6:173 (a 1.53 kHz plate, damping 0.134, at 82.4 kHz, its resonance stated): quieting the undone force
+    takes a low-pass near the resonance, whose kernel spreads each end over 10-13 % of TC, and the ends fitted
+    through it made the TCs of ball1-010 and ball2-020 1.5-1.6 % long, ok (f31ffcb, held-out rig seed 6). Such a
+    kernel is refused now, saying so: TC withheld or within its tolerance of the truth."""
+    from ballimpact import processing
+    from ballimpact.session import read_session
+
+    _, rig_zoo = _rigs()
+    rig = rig_zoo.draw_rig(6, 173)
+    truths = {t.impact_id: t for t in rig_zoo.write_session(rig, tmp_path)}
+    session = read_session(tmp_path / rig.session_id)
+    for row in session.impacts:
+        if row.impact_id not in ("ball1-010", "ball2-020"):
+            continue
+        result = processing.process_impact(row, session)
+        error = result.contact_time_ms / (1e3 * truths[row.impact_id].contact_time_s) - 1.0
+        assert result.contact_time_status != "ok" or abs(error) <= 0.01, (row.impact_id, error)
+        assert "spreads each end over" in result.reason + result.withheld_note, result.reason
