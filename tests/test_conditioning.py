@@ -1035,7 +1035,7 @@ def test_undone_contact_fits_the_exact_forces_ends_through_the_plate(seed):
     fs, fn, zeta = 50e3, 12e3, 0.02
     x, ts, tc, fit = _plate_case(fs, fn, zeta, 1e-3, seed)
     got = _undone_contact(undo_plate_resonance(x, fs, fn, zeta), x, fs, fit, ts - 6.0, 0.0, math.inf,
-                          _resonance(fn, zeta, fs))
+                          _resonance(fn, zeta, fs), [])
     assert not isinstance(got, str), got
     c = got[0]
     assert_allclose(c.start_s * fs, ts, atol=0.1)
@@ -1056,7 +1056,7 @@ def test_undone_contact_refuses_a_foot_lost_in_the_undone_noise(seed, foot):
     fs, fn, zeta = 50e3, 12e3, 0.02
     x, ts, tc, fit = _plate_case(fs, fn, zeta, 1e-3, seed, foot)
     got = _undone_contact(undo_plate_resonance(x, fs, fn, zeta), x, fs, fit, ts - foot[0], 0.0, math.inf,
-                          _resonance(fn, zeta, fs))
+                          _resonance(fn, zeta, fs), [])
     assert isinstance(got, str), (got[0].start_s * fs, ts - foot[0])
 
 

@@ -285,13 +285,13 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         found, staircase = _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_s is not None,
                                              post_guard_s)
         problems.extend(found)
-        undone, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
+        undone, findings = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
             problems.append(Problem(ProblemKind.PLATE_RINGING, str(undone), data={"undo_refused": 1.0, **refused}))
         elif undone is not None:
-            return _undone_result(it, fs, undone, stated, messages, at_ends + staircase, t0_s, scale, spikes,
+            return _undone_result(it, fs, undone, findings, messages, at_ends + staircase, t0_s, scale, spikes,
                                   mains_source)
         problems.extend(plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
     problems = _last_problems(it.x, fs, it.fit.noise, contact, problems, t0_s)
@@ -377,27 +377,26 @@ def _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_gi
 
 def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s=0.0):
     """The plate undone (see :func:`ballimpact.signal.undone.plate_undone`): (y, contact, plate, cutoff), why it
-    was refused (str) or None (not tried); and a stated plate's peak problems (its undone force kept, the peak
-    withheld)."""
-    stated = []
+    was refused (str) or None (not tried); and the findings of the undone force kept (its peak withheld, or the
+    effects of two identifications apart)."""
+    findings = []
     undone = None
     if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
-        undone, stated = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
+        undone, findings = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
     if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
-        stated, refused = [], undone
-        undone = plate_undone(it.x, fs, it.fit, contact, problems, t0_s, cloth_phase_s=cloth_phase_s,
-                              peak_problems=stated)
+        refused = undone
+        undone, findings = plate_undone(it.x, fs, it.fit, contact, problems, t0_s, cloth_phase_s=cloth_phase_s)
         if undone is None and not getattr(refused, "undoable", True):  # a stated plate the samples cannot undo
             undone = refused  # stands as a finding, though the sensed force shows no ringing (it aliases)
-    return undone, stated
+    return undone, findings
 
 
-def _undone_result(it, fs, undone, stated, messages, kept_problems, t0_s, scale, spikes, mains_source):
+def _undone_result(it, fs, undone, findings, messages, kept_problems, t0_s, scale, spikes, mains_source):
     """The ConditionedSignal of a force whose plate was undone: its peak's problems and the plateau check on its
     final contact added to ``kept_problems`` (those of the spikes at the ends and the staircases)."""
     y, contact, plate, cutoff = undone
     peak_problems = (undone_peak_spread(it.x, fs, contact, plate, cutoff, t0_s)
-                     + lowpassed_spike(y, fs, contact, plate, cutoff, t0_s) + stated)
+                     + lowpassed_spike(y, fs, contact, plate, cutoff, t0_s) + findings)
     messages.append(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
                     f"{plate.damping_ratio:.2g}) identified from its ringing and undone"
                     + ("" if math.isinf(cutoff) else f", low-passed at {cutoff / 1e3:.3g} kHz"))

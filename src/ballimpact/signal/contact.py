@@ -510,19 +510,20 @@ def _noise_level(xs, peak, peak_index, fs, merge_gap, noise_rms_V, scale, flags)
 def _other_impacts(xs, starts, ends, k, peak, fs, sigma=0.0) -> list[tuple[int, float]]:
     """Runs above the threshold besides the main one (k) that count as impacts: (first sample, peak fraction).
 
-    Runs split off the contact by a plate's ringing do not count (:func:`_ringing_pieces`).
+    A plate's ringing does not count: runs split off the contact (:func:`_ringing_pieces`) and lobes of its free
+    ringing (:func:`_ringing_lobes`).
     """
     if starts.size <= 1:
         return []
     n = xs.size
-    others = np.arange(starts.size) != k
-    others[_ringing_pieces(xs, starts, ends, k, peak, fs, sigma)] = False
-    others &= ~_ringing_lobes(xs, starts, ends, fs)
-    # a run cut off by either end of the trace may be longer than it shows: its length does not count
-    long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
     bounds = np.empty(2 * starts.size, dtype=int)
     bounds[0::2], bounds[1::2] = starts, ends + 1
     run_max = np.maximum.reduceat(np.concatenate([xs, [-np.inf]]), bounds)[0::2]
+    others = np.arange(starts.size) != k
+    others[_ringing_pieces(xs, starts, ends, k, peak, fs, sigma)] = False
+    others &= ~_ringing_lobes(xs, starts, ends, run_max, fs)
+    # a run cut off by either end of the trace may be longer than it shows: its length does not count
+    long_enough = ((ends - starts + 1) / fs > SECOND_IMPACT_MIN_S) | (starts == 0) | (ends == n - 1)
     high_enough = run_max > SECOND_IMPACT_FRACTION * peak
     counted = others & long_enough & high_enough
     out = []
@@ -558,8 +559,9 @@ def _ringing_pieces(xs, starts, ends, k, peak, fs, sigma) -> list[int]:
     return pieces
 
 
-def _ringing_lobes(xs, starts, ends, fs) -> np.ndarray:
-    """Which runs above the threshold are lobes of a plate's free ringing (a boolean per run).
+def _ringing_lobes(xs, starts, ends, run_max, fs) -> np.ndarray:
+    """Which runs above the threshold (their largest samples ``run_max``) are lobes of a plate's free ringing (a
+    boolean per run).
 
     A ringing swings both ways about zero and a ball's contact does not: a run shorter than RING_GAP_MAX_S [s]
     (half a period of a plate of 0.67 kHz or more; a ball's contact lasts milliseconds) whose force falls below
@@ -570,7 +572,7 @@ def _ringing_lobes(xs, starts, ends, fs) -> np.ndarray:
         length = b - a + 1
         after = xs[b + 1:b + 1 + length]
         if length < RING_GAP_MAX_S * fs and after.size and a < b:
-            out[j] = float(np.min(after)) < -RING_LOBE_SWING * float(np.max(xs[a:b + 1]))
+            out[j] = float(np.min(after)) < -RING_LOBE_SWING * float(run_max[j])
     return out
 
 

@@ -93,8 +93,13 @@ def plate_undoable(frequency_hz: float, damping_ratio: float, sample_rate_hz: fl
     26 kHz at 34 kHz, say), whose sampled response has no such inverse.
     """
     b, _ = plate_discretisation(frequency_hz, damping_ratio, sample_rate_hz)
+    return _real_zeros(b) is not None
+
+
+def _real_zeros(b) -> np.ndarray | None:
+    """The zeros of the sampled plate's numerator ``b`` (real parts) when all are real, else None."""
     zeros = np.roots(b)
-    return not bool(np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)))
+    return None if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)) else np.real(zeros)
 
 
 def undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: float) -> np.ndarray:
@@ -103,12 +108,12 @@ def undo_rows(x: np.ndarray, fs: float, frequency_hz: float, damping_ratio: floa
 
     b, a = plate_discretisation(frequency_hz, damping_ratio, fs)
     w = signal.lfilter(a, [1.0], x, axis=-1) / b[0]
-    zeros = np.roots(b)
-    if np.any(np.abs(np.imag(zeros)) > 1e-9 * np.abs(zeros)):
-        raise ValueError(f"the plate's sampled response has complex zeros {zeros}: not a second-order plate "
+    zeros = _real_zeros(b)
+    if zeros is None:
+        raise ValueError(f"the plate's sampled response has complex zeros {np.roots(b)}: not a second-order plate "
                          "sampled below its resonance's decay (plate_undoable)")
     for zero in zeros:
-        z = float(np.real(zero))
+        z = float(zero)
         if abs(z) < 1.0:  # causal pass: u[n] = w[n] + z u[n-1]
             w = signal.lfilter([1.0], [1.0, -z], w, axis=-1)
         else:  # backward pass: F[n-1] = (F[n] - u[n]) / z, stable since |1 / z| < 1

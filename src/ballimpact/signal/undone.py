@@ -74,10 +74,10 @@ PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING,
                          ProblemKind.IMPULSE_UNRESOLVED})  # a plate's first overshoot is a single-sample top too
 
 
-def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0,
-                 peak_problems: list | None = None):
+def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0):
     """The force with the plate's resonance undone, its contact, the resonance and the low-pass used [Hz]; None
-    when it is not tried; why it was refused, in words (str), when it was.
+    when it is not tried; why it was refused, in words (str), when it was; and, as :func:`stated_plate_undone`,
+    the findings the force kept leaves (a list of Problems, with their effects where known).
 
     Tried only when every problem is one plate ringing causes and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
@@ -147,32 +147,31 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     The force's ends are then restored from their fits (the impulse the
     kernel spread outside them is back), so the low-passed force's own end
     checks (:func:`ballimpact.signal.end_checks.end_problems`) do not refuse
-    it: the fits' spread is what TC is charged. Nor may the low-pass hide a peak:
-    the exact undone force's largest sample inside the contact at most
+    it: the fits' spread is what TC is charged. A low-pass may hide a peak:
+    the exact undone force's largest sample inside the contact more than
     PLATE_LOWPASS_PEAK and PLATE_PEAK_SIGMA of its noise above the low-passed
-    peak, with that noise low enough to show a loss of PLATE_LOWPASS_SPIKE.
-    Given a list ``peak_problems``, these checks are judged by their effect
-    instead (as for a stated plate, :func:`stated_plate_undone`): a
-    low-passed force that may hide or flatten only its peak is kept, and why
-    goes into that list as a PEAK_ON_RINGING problem (the peak alone is
-    withheld, not TC and kCAL, which the other checks judge); two
-    identifications apart by more than PLATE_AGREE_TC on TC or
-    PLATE_AGREE_PEAK on the peak put a PLATE_RINGING finding into that list
-    whose effects are their differences on TC, kCAL (the integrals over the
-    contact) and the peak, bounds in those budgets; fitted ends that the
-    kernel's spread does not explain are charged to TC by the excess.
+    peak, or that noise too high to show a loss of PLATE_LOWPASS_SPIKE.
+    These checks are judged by their effect, for an identified plate as for a
+    stated one (:func:`stated_plate_undone`): a low-passed force that may hide
+    or flatten only its peak is kept, and a PEAK_ON_RINGING finding says why
+    (the peak alone is withheld, not TC and kCAL, which the other checks
+    judge); two identifications apart by more than PLATE_AGREE_TC on TC or
+    PLATE_AGREE_PEAK on the peak leave a PLATE_RINGING finding whose effects
+    are their differences on TC, kCAL (the integrals over the contact) and
+    the peak, bounds in those budgets; fitted ends that the kernel's spread
+    does not explain are charged to TC by the excess.
     """
     kinds = {p.kind for p in problems}
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
-        return None
+        return None, []
     if not _plate_can_be_undone(x, fs, contact, t0_s):
-        return None
+        return None, []
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     a = max(int(math.ceil(s_u)) + 2, 0)
     b = min(int(math.floor(e_u)) + int(round(PLATE_ID_AFTER_S * fs)), x.size)
     ra = max(int(s_u - PLATE_REFINE_S[0] * fs), 0)
     rb = min(int(e_u + PLATE_REFINE_S[1] * fs), x.size)
-    found = []
+    found, findings = [], []
     for lag, after_s in zip(PLATE_ID_LAGS, PLATE_FREE_AFTER_S):
         plate = identify_plate_resonance(x[a:b], fs, lag=lag, noise_rms=fit.noise)
         if plate is None and fit.noise > 0:  # the force drowns a damped plate's recursion: its free ringing after
@@ -180,34 +179,29 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
             plate = identify_free_ringing(x[free:b], fs, fit.noise)
         if plate is None:
             return ("plate resonance not undone: no decaying oscillation identified out of the noise in the "
-                    "contact and the 2 ms after it")
-        seen: list = []
-        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s,
-                                 peak_problems=None if peak_problems is None else seen)
+                    "contact and the 2 ms after it"), []
+        seen: list = []  # the findings of the force kept, of the first identification
+        hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, seen, cloth_phase_s=cloth_phase_s)
         if isinstance(hit, str):  # the undone force still rings or fails a check: refine the resonance, try again
             plate = refine_plate_resonance(x[ra:rb], fs, plate)
             seen = []
-            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, cloth_phase_s=cloth_phase_s,
-                                     peak_problems=None if peak_problems is None else seen)
-        if not found and peak_problems is not None:
-            peak_problems.extend(seen)
+            hit = _undone_candidates(x, fs, fit, contact, s_u, t0_s, plate, seen, cloth_phase_s=cloth_phase_s)
         if isinstance(hit, str):
             return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz (damping ratio "
-                            f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz, plate.damping_ratio)
+                            f"{plate.damping_ratio:.2g}) not undone: {hit}", plate.frequency_hz,
+                            plate.damping_ratio), []
+        if not found:
+            findings = seen
         found.append(hit)
     (y, c, plate, cutoff), (y2, c2, _, _) = found
     apart = _identifications_apart(y, c, y2, c2)
-    if apart["contact_time"] <= PLATE_AGREE_TC and apart["peak"] <= PLATE_AGREE_PEAK:
-        return y, c, plate, cutoff
-    what = (f"two identifications of the plate's resonance at {plate.frequency_hz / 1e3:.3g} kHz disagree by "
-            f"{100 * apart['contact_time']:.2g} % on TC and {100 * apart['peak']:.2g} % on the peak")
-    if peak_problems is None:
-        return _refused(f"plate resonance at {plate.frequency_hz / 1e3:.3g} kHz not undone: {what}",
-                        plate.frequency_hz, plate.damping_ratio)
-    # their differences, bounds, go into the budgets of TC, kCAL and the peak
-    peak_problems.append(Problem(ProblemKind.PLATE_RINGING, f"plate resonance undone, but {what}",
-                                 data={"identifications_apart": 1.0}, effects=apart))
-    return y, c, plate, cutoff
+    if apart["contact_time"] > PLATE_AGREE_TC or apart["peak"] > PLATE_AGREE_PEAK:
+        # their differences, bounds, go into the budgets of TC, kCAL and the peak
+        findings.append(Problem(ProblemKind.PLATE_RINGING, "plate resonance undone, but two identifications of "
+                                f"the plate's resonance at {plate.frequency_hz / 1e3:.3g} kHz disagree by "
+                                f"{100 * apart['contact_time']:.2g} % on TC and {100 * apart['peak']:.2g} % on the "
+                                "peak", data={"identifications_apart": 1.0}, effects=apart))
+    return (y, c, plate, cutoff), findings
 
 
 def _identifications_apart(y, c: ContactResult, y2, c2: ContactResult) -> dict:
@@ -335,35 +329,27 @@ def lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutoff
 
 
 def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance,
-                       peak_problems: list | None = None, cloth_phase_s: float = 0.0):
+                       peak_problems: list, cloth_phase_s: float = 0.0):
     """The first undone force of one resonance, exact or low-passed, that passes :func:`_undone_contact`:
     (force, its contact, the resonance, the cutoff [Hz]); when none does, what the exact one and the last
-    low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down
-    until one hides the peak (:func:`lowpass_hides_peak`): a lower one would only lower the low-passed peak
-    further. Given a list ``peak_problems``, a low-passed force that only hides the peak is taken, and why goes
-    into that list as a PEAK_ON_RINGING problem."""
+    low-passed one failed, in words (str). The cutoffs (:func:`_plate_cutoffs`) are tried from the highest down.
+    The findings of the force taken go into the list ``peak_problems``: a low-pass that flattens its peak
+    (:func:`_fitted_ends`) or may hide it (:func:`lowpass_hides_peak`) is a PEAK_ON_RINGING problem."""
     exact = undo_plate_resonance(x, fs, plate.frequency_hz, plate.damping_ratio)
     why = []
     for cutoff in (math.inf, *_plate_cutoffs(fs, plate, fit.noise, float(contact.peak_V))):
         y = exact if math.isinf(cutoff) else lowpass_zero_phase(exact, fs, cutoff)
-        notes = None if peak_problems is None else []
-        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, cloth_phase_s=cloth_phase_s, notes=notes)
-        hides = None
-        if not isinstance(c, str) and not math.isinf(cutoff):
-            hides = lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
-            if hides and peak_problems is not None:
-                peak_problems.extend(notes + [Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: "
-                                                      f"low-passed to {cutoff / 1e3:.3g} kHz after the plate was "
-                                                      f"undone, {hides}")])
-                return c[1], c[0], plate, cutoff
-            c = hides or c
-        if not isinstance(c, str):
-            if notes:
-                peak_problems.extend(notes)
-            return c[1], c[0], plate, cutoff
-        why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
-        if hides:  # a lower cutoff only lowers the low-passed peak further below the exact force's
-            break
+        notes: list = []
+        c = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, notes, cloth_phase_s=cloth_phase_s)
+        if isinstance(c, str):
+            why.append(c if math.isinf(cutoff) else f"low-passed to {cutoff / 1e3:.3g} kHz, {c}")
+            continue
+        hides = None if math.isinf(cutoff) else lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
+        if hides:
+            notes.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to "
+                                 f"{cutoff / 1e3:.3g} kHz after the plate was undone, {hides}"))
+        peak_problems.extend(notes)
+        return c[1], c[0], plate, cutoff
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
 
 
@@ -408,13 +394,13 @@ def _smoothed_peak_loss(y, fs, sigma):
     return 0.5 * sigma * sigma * abs(curvature) / float(y[k])
 
 
-def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plate=None, fit_ends=False,
-                    cloth_phase_s=0.0, notes: list | None = None):
+def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff, plate, notes: list, fit_ends=False,
+                    cloth_phase_s=0.0):
     """The contact of an undone force ``y`` and the force (a low-passed one, or with ``fit_ends`` the exact one,
     with its ends restored from their fits) when it passes every check of :func:`plate_undone`; else what it
     failed, in words (str). The exact force whose ends read off it fail on their uncertainty or start late is
-    tried again with its ends fitted through the plate. Given a list ``notes``, a low-pass that lowers the peak
-    puts a PEAK_ON_RINGING problem into it instead of refusing the force (:func:`_fitted_ends`)."""
+    tried again with its ends fitted through the plate. A low-pass that lowers the peak puts a PEAK_ON_RINGING
+    problem into the list ``notes`` (:func:`_fitted_ends`)."""
     found = _undone_found(y, x, fs, fit, t0_s, cutoff)
     if isinstance(found, str):
         return found
@@ -434,8 +420,8 @@ def _undone_contact(y, x, fs, fit: BaselineFit, s_u, t0_s, cutoff=math.inf, plat
     if not fitted and plate is not None and (late or uncertainty > PLATE_TC_FRACTION * (ce_u - cs_u)):
         # read off the exact force, its ends are its amplified noise over its slope and may lose a foot in it:
         # fitted through the plate instead (its step, ramp and parabola responses, undone)
-        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, fit_ends=True, cloth_phase_s=cloth_phase_s,
-                                notes=notes)
+        again = _undone_contact(y, x, fs, fit, s_u, t0_s, cutoff, plate, notes, fit_ends=True,
+                                cloth_phase_s=cloth_phase_s)
         if not isinstance(again, str):
             return again
         tail = f"; its ends fitted through the plate: {again.removeprefix('the ')}"
@@ -495,7 +481,7 @@ def _jumps(y, c: ContactResult, noise, cs_u, ce_u) -> bool:
     return steep_edge(y, cs_u, c.peak_index, noise, ce_u - cs_u) is not None
 
 
-def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s, notes=None):
+def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate, what, t0_s, notes: list):
     """The ends of the ``what`` ``y`` (contact ``c`` from ``cs_u`` to ``ce_u`` [samples]) fitted through the plate's
     undoing and the low-pass's kernel (:func:`ballimpact.signal.undone_end.undone_end`): (the force with its ends'
     jump and spread impulse restored, its contact, its ends [samples], the expanded uncertainty of TC [samples],
@@ -505,7 +491,7 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
     refused: over so long a stretch the force near its ends is no line and parabola, and the fitted TC comes out
     long by more than the fits' spread says (0.4-1.1 % at 7.5-11 % of TC, plates of 1.1-1.6 kHz). A low-pass that
     flattens the peak by more than PLATE_LOWPASS_PEAK (from its curvature) withholds the peak
-    alone, a PEAK_ON_RINGING problem into the list ``notes``; without one it refuses the force. The fitted TC
+    alone, a PEAK_ON_RINGING problem into the list ``notes``. The fitted TC
     0 to twice the kernel's half-width W (+-1 sample) shorter than the contact found on the low-passed force is
     what the kernel's spread explains; the fits and the contact found disagree by what lies beyond, and that is
     charged to TC with the fits' spread."""
@@ -514,9 +500,7 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
         return (f"the low-pass spreads each end over {100 * 2 * half_width / (ce_u - cs_u):.2g} % of TC, too long for "
                 "the ends' fits")
     loss = _smoothed_peak_loss(y, fs, sigma)
-    if loss > PLATE_LOWPASS_PEAK and notes is None:  # the low-pass flattens a peak sharper than its kernel
-        return f"the low-pass lowers the peak by about {100 * loss:.2g} %"
-    if loss > PLATE_LOWPASS_PEAK:
+    if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
         notes.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to {cutoff / 1e3:.3g} "
                              f"kHz after the plate was undone, the low-pass lowers the peak by about "
                              f"{100 * loss:.2g} % (from its curvature)"))
@@ -540,11 +524,7 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
     if isinstance(bias, str):
         return bias
     shorter = (ce_u - cs_u) - (fe_u - fs_u)  # the kernel lengthens the contact found by 0 to 2 W samples
-    beyond = max(-1.0 - shorter, shorter - (2.0 * half_width + 2.0), 0.0)
-    if beyond > 0 and notes is None:
-        return (f"the ends fitted through the kernel make TC {shorter:+.3g} samples shorter than the "
-                f"{what}'s contact, outside 0 to twice the kernel's half-width of {half_width:.0f} samples")
-    bias += beyond  # the fits and the contact found disagree by this beyond the kernel's spread
+    bias += max(-1.0 - shorter, shorter - (2.0 * half_width + 2.0), 0.0)  # the fits and the contact found disagree by this beyond the kernel's spread
     # the ends' jump and the impulse the kernel spread outside them restored from their fits
     y = y.copy()
     for f in (f_start, f_end):
