@@ -10,7 +10,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.checks import CHECKS, QUANTITIES, TOLERANCES, check_of, get_check
-from ballimpact.signal.effects import end_slopes, line_amplitude_after, ringing_effects
+from ballimpact.signal.effects import (end_slopes, level_effects, line_amplitude_after, ringing_effects,
+                                       rounding_effects)
 from ballimpact.problems import Problem, ProblemKind
 from ballimpact.session_checks import apply_session_flags
 from ballimpact.verdicts import COVERAGE, gate_uncertainties, judge_quantities, random_uncertainties
@@ -200,6 +201,32 @@ def test_ringing_effects_bound_the_shift_of_a_triangle_s_end():
     assert first_order <= effects["contact_time"] <= 3 * first_order  # the slopes read less the line's share
     assert_allclose(effects["peak"], amp, rtol=0.02)
     assert effects["kcal"] < 1e-3
+
+
+def test_level_effects_bound_what_a_level_under_a_triangle_moves():
+    fs, level = 200e3, 0.004  # a baseline 0.4 % of the peak off under the contact
+    t, x, s_u, e_u = _triangle(fs)
+    effects = level_effects(x + level, fs, s_u, e_u, level)
+    # analytic: a level L moves the start by L x 1 ms and the end by L x 3 ms (the edges' slopes), TC by L in all;
+    # the integral over the 4 ms by L TC against the triangle's 2 ms: 2 L; the peak by L
+    assert level <= effects["contact_time"] <= 1.2 * level
+    assert_allclose(effects["kcal"], 2 * level, rtol=0.02)
+    assert_allclose(effects["peak"], level, rtol=0.02)
+    assert all(math.isnan(v) for v in level_effects(x, fs, e_u, s_u, level).values())
+
+
+def test_rounding_effects_bound_a_band_limited_jump_s_ends():
+    fs, tc, jump = 200e3, 4e-3, 0.3
+    t, x, s_u, e_u = _triangle(fs)
+    x = np.where((t >= 0) & (t <= tc), x + jump * (1 - t / tc), 0.0)  # the force jumps by 30 % of the peak
+    rounding = 0.5 / 20e3  # a band limit of 20 kHz spreads the jump over 25 us
+    effects = rounding_effects(x, fs, s_u, e_u, rounding)
+    assert_allclose(effects["contact_time"], rounding / tc, rtol=1e-9)
+    # the window moved by the rounding at either end loses at most the force's area there
+    moved = int(rounding * fs)
+    i0, i1 = int(s_u), int(e_u)
+    lost = (x[i0:i0 + moved].sum() + x[i1 - moved:i1].sum()) / x[i0:i1 + 1].sum()
+    assert lost <= effects["kcal"] <= 3 * lost
 
 
 # ------------------------------------------------------------------ the session's checks

@@ -31,7 +31,7 @@ from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, Pr
 from .session import PLATE_RESONANCE_MAX_HZ, ImpactRow, Session
 from .traces import TraceError, read_trace
 from .signal.cloth import cloth_phase_s, first_contact, hidden_cloth_phase, steep_edge
-from .signal.effects import departure_before_start, end_slopes, finding_effects
+from .signal.effects import departure_before_start, end_slopes, finding_effects, rounding_effects
 from .signal.end_checks import about_start
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
@@ -564,8 +564,7 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         # may hide a TC too long; without the key, an alias withholds kCAL and the peak (_aliasing_problem) and a
         # rounded front is judged by the ends' own checks, as at 60 kHz or faster
         if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone:
-            problem = Problem(problem.kind, problem.message, data={**problem.data,
-                                                                   "also_biases": ("contact_time", "kcal")})
+            problem = _front_rounding(problem, cond, meta.bandwidth_hz, res.sample_rate_hz, float(t[0]))
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
     completed = _cloth_completion(res, cond, float(t[0]))
     if completed is not None:
@@ -671,6 +670,19 @@ def _cloth_problem(res: ImpactResult, cond) -> None:
                      "first 2 mm of compression may hide "
                      f"({1e3 * phase:.2g} ms at {res.vin_m_s:.1f} m/s)",
                      data={"cloth_phase_s": phase}, effects={"contact_time": effect}))
+
+
+def _front_rounding(problem: Problem, cond, bandwidth_hz: float, fs: float, t0_s: float) -> Problem:
+    """A problem of the peak that may also hide a TC and a kCAL off by the stated band limit's rounding of the
+    contact's jump: those two added to the quantities it biases, with the rounding's effects on them
+    (:func:`ballimpact.signal.effects.rounding_effects`) where aliasing is ruled out (an alias's are not known)."""
+    effects = dict(problem.effects)
+    c = cond.contact
+    if alias_free(bandwidth_hz, fs) and c.found:
+        effects.update(rounding_effects(cond.voltage_V, fs, (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs,
+                                        0.5 / bandwidth_hz))
+    return Problem(problem.kind, problem.message, data={**problem.data, "also_biases": ("contact_time", "kcal")},
+                   effects=effects)
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:

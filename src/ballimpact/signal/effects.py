@@ -13,7 +13,8 @@ from .noise import robust_noise
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
-           "ringing_effects", "ringing_after", "finding_effects", "departure_before_start"]
+           "ringing_effects", "rounding_effects", "level_effects", "ringing_after", "finding_effects",
+           "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -162,6 +163,87 @@ def ringing_effects(x, fs: float, start_u: float, end_u: float, noise_V: float, 
     }
 
 
+def rounding_effects(x, fs: float, start_u: float, end_u: float, rounding_s: float) -> dict:
+    """First-order bounds of what a band limit that rounds the contact's jump does to TC and kCAL [-, relative].
+
+    A band limit B (a filter's cut-off, a plate's resonance) spreads the force's jump at first contact over about
+    half its period, ``rounding_s`` = 1 / (2 B), unseen by the checks of the ends where the front is all it
+    rounded. Each end read off the rounded force may then move by up to that much: TC by at most
+    ``rounding_s`` / TC (on an anti-aliasing filter at 9 kHz sampled at 21.5 kHz, rounding 1.7 % of TC, TC came
+    out 1.5 % long: ``python bench/antialias_map.py``); the contact's integral by at most the force's area within
+    ``rounding_s`` inside each end (the largest sample there times ``rounding_s``), against the whole integral.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's ends in samples from ``x[0]`` [samples].
+    rounding_s : float
+        How far the band limit spreads the jump [s].
+
+    Returns
+    -------
+    dict
+        ``contact_time`` and ``kcal``: bounds of the relative effects [-]; NaN (not known) where the contact cannot
+        be read.
+    """
+    x = np.asarray(x, dtype=float)
+    nan = {"contact_time": math.nan, "kcal": math.nan}
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    if not (0 <= i0 < i1 < x.size and fs > 0 and rounding_s >= 0):
+        return nan
+    tc = (end_u - start_u) / fs
+    integral = float(np.sum(x[i0:i1 + 1])) / fs
+    k = int(math.ceil(rounding_s * fs)) + 1
+    inside = float(np.max(x[i0:min(i0 + k, i1 + 1)])) + float(np.max(x[max(i1 + 1 - k, i0):i1 + 1]))
+    if not (tc > 0 and integral > 0):
+        return nan
+    return {"contact_time": rounding_s / tc, "kcal": max(inside, 0.0) * rounding_s / integral}
+
+
+def level_effects(x, fs: float, start_u: float, end_u: float, level_V: float) -> dict:
+    """First-order bounds of what a baseline uncertain by ``level_V`` under the contact does to TC, kCAL and the peak.
+
+    A level L left under the force moves an end where the force falls with slope s by at most L / s (s read as a
+    chord over END_SLOPE_S inside it, less the L the level can add to that chord); the largest sample by at most
+    L; the contact's integral by at most L TC [-, relative].
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's ends in samples from ``x[0]`` [samples].
+    level_V : float
+        The level's size [V].
+
+    Returns
+    -------
+    dict
+        ``contact_time``, ``kcal``, ``peak``: bounds of the relative effects [-]; NaN (not known) where the contact
+        or its slopes cannot be read.
+    """
+    x = np.asarray(x, dtype=float)
+    nan = {"contact_time": math.nan, "kcal": math.nan, "peak": math.nan}
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    level = abs(float(level_V))
+    if not (0 <= i0 < i1 < x.size and math.isfinite(level)):
+        return nan
+    s_start, s_end = (s - level / END_SLOPE_S for s in end_slopes(x, fs, start_u, end_u))
+    peak = float(np.max(x[i0:i1 + 1]))
+    integral = float(np.sum(x[i0:i1 + 1])) / fs
+    tc = (end_u - start_u) / fs
+    if not (peak > 0 and integral > 0 and tc > 0 and s_start > 0 and s_end > 0):
+        return nan
+    return {"contact_time": (level / s_start + level / s_end) / tc, "kcal": level * tc / integral,
+            "peak": level / peak}
+
+
 def ringing_after(x, fs: float, end_u: float, noise_V: float, *, over_s: float = RINGING_AFTER_S):
     """A damped line that explains what stands after the contact's end: (frequency [Hz], amplitude at the end [V]).
 
@@ -227,8 +309,11 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     identified but not undone (``undo_refused``) gets the effects of the line among ``siblings`` (on the peak
     widened by :func:`_excited_peak_factor` where the resonance is the line's) when that line is all the evidence
     of ringing (no ringing after the contact, no
-    force below zero, no peak on ringing): what was not undone is then the line itself. Any other finding is
-    returned as it is.
+    force below zero, no peak on ringing): what was not undone is then the line itself. A step in the baseline (a
+    BASELINE_STEP finding with its ``level_V``) gets :func:`level_effects` of that level where the amplifier's decay
+    was given (``decay_given``): an estimated decay takes up a step next to the contact, and the step found is then
+    a smaller one elsewhere (``python bench/step_map.py --n 400 --seed 1`` trace 1:114: a step of 3.5 % of the peak
+    just after the contact, 0.18 % found 10 ms later, TC 6 % long). Any other finding is returned as it is.
 
     Parameters
     ----------
@@ -259,6 +344,8 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
 
     if problem.effects:
         return problem
+    if problem.kind is ProblemKind.BASELINE_STEP and problem.data.get("decay_given"):
+        return replace(problem, effects=level_effects(voltage_V, fs, start_u, end_u, problem.data["level_V"]))
     if problem.kind is ProblemKind.CONTACT_END_UNDETERMINED and problem.data.get("beyond") == "end":
         found = ringing_after(voltage_V, fs, end_u, noise_V)
         if found is None:

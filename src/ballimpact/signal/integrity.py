@@ -257,7 +257,8 @@ def baseline_step_problems(x, fs, fit: BaselineFit, contact: ContactResult, t0_s
                     f"step in the baseline: the corrected signal's level shifts by {d * scale * 1e3:.3g} mV "
                     f"({100 * abs(d) / peak:.2g} % of the peak, {z:.3g} standard errors) between "
                     f"{1e3 * (before / fs + t0_s):.4g} and {1e3 * (after / fs + t0_s):.4g} ms, which offset, drift, "
-                    "hum and decay do not explain; the baseline under the contact is uncertain")]
+                    "hum and decay do not explain; the baseline under the contact is uncertain",
+                    data={"level_V": abs(d) * scale, "decay_given": bool(tau_given)})]
 
 
 def _residual_where(y, pre, post, white, peak) -> str:
