@@ -195,7 +195,12 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
     Check(ProblemKind.BASELINE_STEP, "baseline step", "a step in the level of the quiet baseline", _ALL_SIGNAL,
           thresholds=(_t("signal.integrity", "BASELINE_STEP_SIGMA", "standard errors", "a step's significance"),
                       _t("signal.integrity", "BASELINE_STEP_FRACTION", "of the peak", "a step's size")),
-          test="tests/test_conditioning.py -k step"),
+          test="tests/test_conditioning.py -k step",
+          effect="with the amplifier's time constant given, the step's size L as a level left under the contact "
+                 "(ballimpact.signal.effects.level_effects): L over the force's slope at each end bounds each end's "
+                 "shift (TC), L TC over the contact's integral bounds kCAL, L over the peak bounds the peak; with "
+                 "the time constant estimated, the decay may take up a step next to the contact and the step found "
+                 "is then a smaller one elsewhere: not estimated"),
     Check(ProblemKind.MAINS_UNRESOLVED, "mains unresolved", "50 and 60 Hz hum fits that differ under the contact",
           _ALL_SIGNAL, thresholds=(_t("signal.integrity", "MAINS_AMBIGUOUS_FRACTION", "of the peak", "difference"),),
           test="tests/test_conditioning_mains.py"),
@@ -248,13 +253,26 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           "single samples that may be electrical spikes at the contact's ends or top", (_K, _P),
           thresholds=(_t("signal.spikes", "SPIKE_END_IMPULSE", "of the impulse", "a kept sample's share"),),
           test="tests/test_spike_ends.py"),
-    Check(ProblemKind.PEAK_ON_RINGING, "peak on ringing", "the peak against one period of ringing about it", (_P,),
-          thresholds=(_t("signal.peak", "PEAK_ON_RINGING_FRACTION", "of the peak", "drop over a period"),),
-          test="tests/test_processing.py -k withheld"),
+    Check(ProblemKind.PEAK_ON_RINGING, "peak on ringing",
+          "the peak against one period of ringing about it; and, once the session's plate is known (stated or "
+          "identified from all its impacts), the largest sample against the force that plate's inverse gives",
+          (_P,),
+          thresholds=(_t("signal.peak", "PEAK_ON_RINGING_FRACTION", "of the peak", "drop over a period"),
+                      _t("session_checks", "PLATE_PEAK_NOISE_SIGMA", "standard deviations",
+                         "the noise's share added to the session plate's effect")),
+          test="tests/test_processing.py -k withheld; tests/test_verdicts.py -k overshoot",
+          effect="the session's plate (ballimpact.session_checks.plate_overshoot): the largest sample's distance "
+                 "from the peak of the force undone through the plate, in the peak's budget. With daq.bandwidth_hz "
+                 "stated where its band limit may round the contact's jump unseen, a peak problem of the sensed "
+                 "force biases TC and kCAL too, by that rounding (ballimpact.signal.effects.rounding_effects: "
+                 "1 / (2 B) over TC; the force's area within it at each end over the integral)"),
     Check(ProblemKind.PEAK_BETWEEN_SAMPLES, "peak between samples",
           "how far the force may rise above its largest sample", (_P,),
           thresholds=(_t("signal.peak", "PEAK_SAMPLING_FRACTION", "of the peak", "rise above the largest sample"),),
-          test="tests/test_processing.py -k withheld"),
+          test="tests/test_processing.py -k withheld",
+          effect="with daq.bandwidth_hz stated where its band limit may round the contact's jump unseen, it biases "
+                 "TC and kCAL too, by that rounding (ballimpact.signal.effects.rounding_effects); the peak itself: "
+                 "not estimated"),
     # --- the physical bounds and the calibration
     Check(ProblemKind.CONTACT_TIME_OUT_OF_BOUNDS, "TC out of bounds", "TC against plausible contact times", (_TC,),
           thresholds=(_t("processing", "PHYSICAL_BOUNDS", "ms (contact_time_ms)", "plausible TC"),),

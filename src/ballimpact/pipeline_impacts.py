@@ -229,7 +229,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     import numpy as np
     import xarray as xr
 
-    from . import archive, processing
+    from . import archive, processing, rig_archive
     from .session import read_session
 
     chunk_ncs = [Path(p) for p in chunk_ncs]
@@ -279,8 +279,10 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds.attrs["time_constant_median_s"] = tau_median
     meta = read_session(session_dir).meta
+    rig = _session_rig(ds, meta)
+    ds = _plate_overshoot_check(ds, rig)
     ds = mark_fit_outliers(ds, meta.balls)
-    ds = ds.merge(_session_rig_variables(ds, meta))
+    ds = ds.merge(rig_archive.rig_variables(rig))
     ds = archive.set_variable_attrs(ds)
     archive.write_dataset(ds, out_nc)
     table = archive.impacts_table(ds)
@@ -291,12 +293,37 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
                 len(table), len(chunk_ncs), len(table) - n_excluded, n_excluded)
 
 
-def _session_rig_variables(ds, meta):
-    """The session's rig identified from all its impacts (:func:`ballimpact.rig_archive.session_rig`), as archive
-    variables; each warning (a stated key the traces disagree with) logged."""
+def _plate_overshoot_check(ds, rig):
+    """``ds`` with the session plate check of the peak applied to its verdict columns
+    (:func:`ballimpact.session_checks.plate_overshoot_columns`): the plate stated, or identified (its interval's low
+    resonance, the larger bound)."""
+    import numpy as np
+
+    from . import session_checks
+    from .rig_archive import floats_of
+
+    fn, zeta = rig["plate_resonance_hz"], rig["plate_damping_ratio"]
+    if fn.source == "none" or zeta.source == "none":
+        return ds
+    low = fn.low if fn.source == "identified" and np.isfinite(fn.low) else fn.value
+    columns = {c: [str(v) for v in ds[c].values] for c in session_checks.VERDICT_COLUMNS if c in ds}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        peak_u = floats_of(ds, "peak_force_u_N") / floats_of(ds, "peak_force_N")
+    columns = session_checks.plate_overshoot_columns(
+        columns, ds["voltage_V"].values, floats_of(ds, "sample_rate_hz"), floats_of(ds, "noise_rms_V"), peak_u,
+        floats_of(ds, "time_to_peak_ms"), np.isfinite(floats_of(ds, "plate_resonance_hz")), float(low),
+        float(zeta.value))
+    for c, values in columns.items():
+        ds[c] = ("impact", np.array(values, dtype=object), ds[c].attrs if c in ds else {})
+    return ds
+
+
+def _session_rig(ds, meta):
+    """The session's rig identified from all its impacts (:func:`ballimpact.rig_archive.session_rig`); each warning
+    (a stated key the traces disagree with) logged."""
     import warnings
 
-    from .rig_archive import rig_variables, session_rig
+    from .rig_archive import session_rig
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -306,7 +333,7 @@ def _session_rig_variables(ds, meta):
     for name, est in rig.estimates.items():
         if est.source == "identified" or est.note:
             logger.info("rig %s: %.6g [%.6g, %.6g] %s %s", name, est.value, est.low, est.high, est.source, est.note)
-    return rig_variables(rig)
+    return rig
 
 
 def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float | None = None) -> None:

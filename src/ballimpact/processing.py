@@ -562,8 +562,10 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     for problem in cond.problems:
         # with daq.bandwidth_hz stated, a peak problem where that band limit may round the front unseen (or alias)
         # may hide a TC too long; without the key, an alias withholds kCAL and the peak (_aliasing_problem) and a
-        # rounded front is judged by the ends' own checks, as at 60 kHz or faster
-        if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone:
+        # rounded front is judged by the ends' own checks, as at 60 kHz or faster; a problem of an undone force's
+        # peak is one of its undoing or low-pass, no sign of that rounding
+        if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone \
+                and not problem.data.get("undone_peak"):
             problem = _front_rounding(problem, cond, meta.bandwidth_hz, res.sample_rate_hz, float(t[0]))
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
     completed = _cloth_completion(res, cond, float(t[0]))

@@ -13,7 +13,7 @@ from typing import NamedTuple
 from .rig import (RIG_QUANTITIES, PlateFit, Rig, RigEstimate, identify_rig, pooled_ringing, ringing_response,
                   ringing_segments)
 
-__all__ = ["RIG_DIM", "RingingOverlay", "session_rig", "rig_variables", "read_rig", "rig_warnings", "plate_impacts",
+__all__ = ["RIG_DIM", "floats_of", "RingingOverlay", "session_rig", "rig_variables", "read_rig", "rig_warnings", "plate_impacts",
            "ringing_overlay"]
 
 RIG_DIM = "rig_quantity"  #: the archive's dimension of the rig's quantities (RIG_QUANTITIES, in order)
@@ -23,7 +23,8 @@ def _texts(ds: xr.Dataset, name: str) -> list[str]:
     return [str(v) for v in ds[name].values] if name in ds else [""] * ds.sizes["impact"]
 
 
-def _floats(ds: xr.Dataset, name: str) -> np.ndarray:
+def floats_of(ds: xr.Dataset, name: str) -> np.ndarray:
+    """The per-impact variable ``name`` of ``ds`` as floats; NaN where ``ds`` lacks it."""
     return np.asarray(ds[name].values, dtype=float) if name in ds else np.full(ds.sizes["impact"], np.nan)
 
 
@@ -51,17 +52,17 @@ def session_rig(ds: xr.Dataset, meta) -> Rig:
     status = _texts(ds, "status")
     fault_codes = {k.value for k in ProblemKind if check_of(k).fault}
     usable = [s != "excluded" or not (set(c.split(";")) & fault_codes) for s, c in zip(status, codes)]
-    usable = np.asarray(usable) & np.isfinite(_floats(ds, "contact_time_ms"))
+    usable = np.asarray(usable) & np.isfinite(floats_of(ds, "contact_time_ms"))
     impacts = {
         "impact_id": [str(v) for v in ds["impact_id"].values],
         "raw_time_s": ds["raw_time_s"].values, "raw_voltage_V": ds["raw_voltage_V"].values,
-        "contact_time_ms": _floats(ds, "contact_time_ms"), "noise_rms_V": _floats(ds, "noise_rms_V"),
-        "hum_amplitude_V": _floats(ds, "hum_amplitude_V"), "mains_hz": _floats(ds, "mains_frequency_hz"),
-        "mains_source": _texts(ds, "mains_source"), "tau_s": _floats(ds, "amplifier_time_constant_s"),
-        "tau_se_s": _floats(ds, "amplifier_time_constant_se_s"),
+        "contact_time_ms": floats_of(ds, "contact_time_ms"), "noise_rms_V": floats_of(ds, "noise_rms_V"),
+        "hum_amplitude_V": floats_of(ds, "hum_amplitude_V"), "mains_hz": floats_of(ds, "mains_frequency_hz"),
+        "mains_source": _texts(ds, "mains_source"), "tau_s": floats_of(ds, "amplifier_time_constant_s"),
+        "tau_se_s": floats_of(ds, "amplifier_time_constant_se_s"),
         "tau_source": _texts(ds, "amplifier_time_constant_source"),
-        "kcal_N_per_V": _floats(ds, "kcal_N_per_V"), "sample_rate_hz": _floats(ds, "sample_rate_hz"),
-        "vout_m_s": _floats(ds, "vout_m_s"),
+        "kcal_N_per_V": floats_of(ds, "kcal_N_per_V"), "sample_rate_hz": floats_of(ds, "sample_rate_hz"),
+        "vout_m_s": floats_of(ds, "vout_m_s"),
         "usable": usable,
         "kcal_ok": np.array([s == "ok" for s in _texts(ds, "kcal_status")]),
     }
@@ -173,8 +174,8 @@ def ringing_overlay(ds: xr.Dataset) -> RingingOverlay | None:
     ids = [str(v) for v in ds["impact_id"].values]
     use = np.array([i in wanted for i in ids])
     segments = ringing_segments(ids, ds["raw_time_s"].values, ds["raw_voltage_V"].values,
-                                _floats(ds, "contact_time_ms"), _floats(ds, "noise_rms_V"), use,
-                                vout_m_s=_floats(ds, "vout_m_s"))
+                                floats_of(ds, "contact_time_ms"), floats_of(ds, "noise_rms_V"), use,
+                                vout_m_s=floats_of(ds, "vout_m_s"))
     if not segments:
         return None
     mains = rig["mains_hz"].value if "mains_hz" in rig else math.nan

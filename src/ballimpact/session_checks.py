@@ -1,4 +1,4 @@
-"""The session's checks: kCAL and the amplifier's time constant of each impact against the whole session's."""
+"""The session's checks: each impact's kCAL, amplifier time constant and peak against the session's rig."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ __all__ = [
     "KCAL_MAX_ROBUST_Z", "KCAL_MAX_RELATIVE", "TAU_MAX_Z", "TAU_MAX_IMPULSE", "VERDICT_COLUMNS",
     "flag_calibration_outliers", "flag_time_constant_outliers", "apply_session_flags",
     "calibration_outlier_columns", "time_constant_outlier_columns", "apply_calibration_check",
-    "apply_time_constant_check",
+    "apply_time_constant_check", "PLATE_PEAK_NOISE_SIGMA", "plate_overshoot", "flag_plate_overshoots",
+    "plate_overshoot_columns",
 ]
 
 #: Session-level kCAL check: a finding when both the robust z-score and the relative
@@ -28,6 +29,9 @@ KCAL_MAX_RELATIVE = 0.10
 TAU_MAX_Z = 5.0
 #: ... and by enough to move its impulse, and kCAL, by more than this fraction (kappa TC / 2) [-]
 TAU_MAX_IMPULSE = 0.003
+#: Session plate check of the peak: the bound of the plate's overshoot at the largest sample is raised by this many
+#: standard deviations of its estimate from the noise [-]
+PLATE_PEAK_NOISE_SIGMA = 2.0
 
 
 def flag_calibration_outliers(kcal_N_per_V, ok, *, max_robust_z=KCAL_MAX_ROBUST_Z, max_relative=KCAL_MAX_RELATIVE):
@@ -277,3 +281,134 @@ def apply_calibration_check(results: list) -> tuple[float, float]:
                                                       [r.status == "ok" and r.kcal_status == "ok" for r in results])
     _find_flagged_results(results, flags, ProblemKind.KCAL_OUTLIER)
     return median, spread
+
+
+def plate_overshoot(voltage_V, fs: float, fn_hz: float, zeta: float, noise_V: float) -> float:
+    """How far a plate moves the largest sample of a contact from the force's peak [-, relative to the peak].
+
+    The plate senses the force F through its second-order response, x''/wn^2 + (2 zeta/wn) x' + x = F, so that
+    F = x + (2 zeta/wn) x' + x''/wn^2 (wn = 2 pi fn). A damped plate of 8-16 kHz answers the force's jump at first
+    contact (section 3.2.4 in Goodwill & Haake 2004) with a lobe that no ringing check sees, up to 25 % above the
+    force's peak. The force is undone so at every sample, x' and x'' from parabolas fitted over an eighth of the
+    plate's period either side (Savitzky-Golay; at least one sample), and the effect is the largest sample's
+    distance from that force's peak, plus PLATE_PEAK_NOISE_SIGMA standard deviations of the undone samples from the
+    noise. The fits flatten the undone force's sharp features a little, so that the distance errs high where
+    the plate lifted the peak.
+
+    Parameters
+    ----------
+    voltage_V : array_like
+        The contact's conditioned voltage, proportional to the sensed force, at the sample rate [V] (NaN padding
+        allowed).
+    fs : float
+        Sample rate [Hz].
+    fn_hz, zeta : float
+        The plate's resonance [Hz] and damping ratio [-].
+    noise_V : float
+        The noise's standard deviation [V].
+
+    Returns
+    -------
+    float
+        The effect [-], at least 0; NaN where the contact has too few samples or an input is not finite.
+    """
+    from scipy.signal import savgol_filter
+
+    x = np.asarray(voltage_V, dtype=float)
+    x = x[np.isfinite(x)]
+    h = max(int(round(fs / (8.0 * fn_hz))), 1) if fs > 0 and fn_hz > 0 else 0
+    if not (h > 0 and x.size >= 2 * h + 3 and zeta >= 0 and math.isfinite(noise_V)):
+        return math.nan
+    wn = 2.0 * math.pi * fn_hz
+    w = 2 * h + 1
+    slope = savgol_filter(x, w, 2, deriv=1, delta=1.0 / fs, mode="interp")
+    curvature = savgol_filter(x, w, 2, deriv=2, delta=1.0 / fs, mode="interp")
+    force = x + (2.0 * zeta / wn) * slope + curvature / wn ** 2
+    top = float(np.max(force))
+    if not (top > 0 and np.max(x) > 0):
+        return math.nan
+    # the undone sample's deviation from the noise: the inverse's weights over the fit's window
+    u = np.arange(-h, h + 1) / fs
+    pinv = np.linalg.pinv(np.vstack([np.ones_like(u), u, u * u]).T)
+    weights = (2.0 * zeta / wn) * pinv[1] + (2.0 / wn ** 2) * pinv[2]
+    weights[h] += 1.0
+    spread = abs(noise_V) * float(np.sqrt(np.sum(weights ** 2)))
+    return (abs(float(np.max(x)) - top) + PLATE_PEAK_NOISE_SIGMA * spread) / top
+
+
+def flag_plate_overshoots(voltage_V, fs, noise_V, peak_u, peak_is_spike, check, fn_hz: float, zeta: float):
+    """Impacts whose peak the session's plate may lift beyond its tolerance (:func:`plate_overshoot`).
+
+    The bound enters the peak's budget as a uniform distribution (as a finding's estimated effect,
+    :func:`ballimpact.verdicts.judge_quantities`): an impact is flagged when twice the root sum of squares of its
+    peak's standard uncertainty and the bound over sqrt 3 exceeds the peak's tolerance.
+
+    Parameters
+    ----------
+    voltage_V : sequence of array_like
+        Per impact, the contact's conditioned voltage [V].
+    fs, noise_V : array_like
+        Per impact, the sample rate [Hz] and the noise's standard deviation [V].
+    peak_u : array_like
+        Per impact, the peak's relative standard uncertainty [-].
+    peak_is_spike : array_like of bool
+        Per impact, the peak is the pre-buckling spike (its tolerance is the spike's).
+    check : array_like of bool
+        Per impact, whether to judge it (an ok peak sensed through the plate, not undone).
+    fn_hz, zeta : float
+        The session's plate: resonance [Hz] (the low end of its interval, the larger bound) and damping ratio [-].
+
+    Returns
+    -------
+    list of str
+        Per impact, "" or the finding's message.
+    """
+    from .checks import TOLERANCES
+    from .verdicts import COVERAGE
+
+    flags = []
+    for v, f, n, u, spike, judge in zip(voltage_V, fs, noise_V, peak_u, peak_is_spike, check):
+        bound = plate_overshoot(v, float(f), fn_hz, zeta, float(n)) if judge else math.nan
+        tol = TOLERANCES["peak_spike" if spike else "peak"]
+        u = float(u) if math.isfinite(float(u)) else 0.0
+        if not (math.isfinite(bound) and COVERAGE * math.hypot(u, bound / math.sqrt(3.0)) > tol):
+            flags.append("")
+            continue
+        flags.append(f"peak force on plate ringing: the session's plate ({fn_hz / 1e3:.3g} kHz, damping ratio "
+                     f"{zeta:.2g}) may lift the largest sample up to {100 * bound:.2g} % above the force's peak "
+                     "(its inverse at the sample)")
+    return flags
+
+
+def plate_overshoot_columns(columns: dict, voltage_V, fs, noise_V, peak_u, time_to_peak_ms, plate_undone,
+                            fn_hz: float, zeta: float) -> dict:
+    """The session plate check of the peak on table columns (:func:`apply_session_flags` with PEAK_ON_RINGING).
+
+    Parameters
+    ----------
+    columns : dict
+        :data:`VERDICT_COLUMNS` -> one value per impact.
+    voltage_V : sequence of array_like
+        Per impact, the contact's conditioned voltage [V].
+    fs, noise_V, peak_u : array_like
+        Per impact, the sample rate [Hz], the noise [V] and the peak's relative standard uncertainty [-].
+    time_to_peak_ms : array_like
+        Per impact, the time from the contact's start to the peak [ms] (before the model's buckling: the spike).
+    plate_undone : array_like of bool
+        Per impact, whether its own processing undid a plate (its peak then judged there).
+    fn_hz, zeta : float
+        The session's plate (NaN: none, nothing judged).
+
+    Returns
+    -------
+    dict
+        With the flagged peaks withheld.
+    """
+    from .model import BUCKLING_TIME_S
+
+    if not (math.isfinite(fn_hz) and math.isfinite(zeta)):
+        return columns
+    check = [str(p) == "ok" and not undone for p, undone in zip(columns["peak_status"], plate_undone)]
+    spike = np.asarray(time_to_peak_ms, dtype=float) < 1e3 * BUCKLING_TIME_S
+    flags = flag_plate_overshoots(voltage_V, fs, noise_V, peak_u, spike, check, fn_hz, zeta)
+    return apply_session_flags(columns, flags, ProblemKind.PEAK_ON_RINGING)

@@ -21,7 +21,7 @@ from .undo import (lowpass_spread_samples, lowpass_zero_phase, plate_undoable, u
 from .undone_end import undone_end
 from .undone_peak import PLATE_LOWPASS_PEAK, lowpass_hides_peak
 
-__all__ = ["Refusal", "plate_undone", "stated_plate_undone", "undone_peak_spread", "lowpassed_spike"]
+__all__ = ["UNDONE_PEAK", "Refusal", "plate_undone", "stated_plate_undone", "undone_peak_spread", "lowpassed_spike"]
 
 
 class Refusal(str):
@@ -67,6 +67,9 @@ PLATE_PEAK_SPREAD = 0.015  # the undone peak moving by more than this fraction w
 #                            fn PLATE_FN_UNCERTAINTY off, is not known: half the peak's 3 % tolerance [-]
 LOWPASS_SPIKE_FRACTION = 0.9  # a low-passed undone force's maximum in the spike's phase above this of its peak: the
 #                               peak may be the spike, lowered by the kernel (and the sampling) by up to 15 % [-]
+#: The data of a problem of the undone force's peak (its undoing, its low-pass): no sign of a band limit rounding
+#: the contact's jump unseen (ballimpact.processing judges those of the sensed force so).
+UNDONE_PEAK = {"undone_peak": True}
 #: Problems that plate ringing causes: checked again on the undone force.
 PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
@@ -288,7 +291,7 @@ def undone_peak_spread(x, fs, contact: ContactResult, plate: PlateResonance, cut
     return [Problem(ProblemKind.PEAK_ON_RINGING,
                     f"peak force not determined: undone from the plate's resonance at {fn / 1e3:.3g} kHz (damping "
                     f"ratio {zeta:.2g}), the peak moves by {100 * spread:.2g} % with {what}; the plate's undoing "
-                    "builds it from the sensed force's slope and curvature")]
+                    "builds it from the sensed force's slope and curvature", data=dict(UNDONE_PEAK))]
 
 
 def lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutoff: float, t0_s) -> list:
@@ -325,7 +328,7 @@ def lowpassed_spike(y, fs, contact: ContactResult, plate: PlateResonance, cutoff
                     f"kHz and low-passed at {cutoff / 1e3:.3g} kHz, the force's maximum {1e3 * (k - s_u) / fs:.2g} ms "
                     f"into the contact ({100 * top / peak:.3g} % of the peak) may be the pre-buckling spike's top, "
                     "which the low-pass lowers by an amount the noisy exact undone force cannot bound (2 % on average "
-                    "in the zoo, up to 15 % with the sampling's share)")]
+                    "in the zoo, up to 15 % with the sampling's share)", data=dict(UNDONE_PEAK))]
 
 
 def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_s, plate: PlateResonance,
@@ -347,7 +350,8 @@ def _undone_candidates(x, fs, fit: BaselineFit, contact: ContactResult, s_u, t0_
         hides = None if math.isinf(cutoff) else lowpass_hides_peak(exact, fs, fit.noise, plate, c[0], t0_s)
         if hides:
             notes.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to "
-                                 f"{cutoff / 1e3:.3g} kHz after the plate was undone, {hides}"))
+                                 f"{cutoff / 1e3:.3g} kHz after the plate was undone, {hides}",
+                                 data=dict(UNDONE_PEAK)))
         peak_problems.extend(notes)
         return c[1], c[0], plate, cutoff
     return "; ".join(why[:1] + why[-1:] if len(why) > 1 else why)
@@ -503,7 +507,7 @@ def _fitted_ends(y, x, fs, fit: BaselineFit, c, cs_u, ce_u, noise, cutoff, plate
     if loss > PLATE_LOWPASS_PEAK:  # the low-pass flattens a peak sharper than its kernel
         notes.append(Problem(ProblemKind.PEAK_ON_RINGING, f"peak force not known: low-passed to {cutoff / 1e3:.3g} "
                              f"kHz after the plate was undone, the low-pass lowers the peak by about "
-                             f"{100 * loss:.2g} % (from its curvature)"))
+                             f"{100 * loss:.2g} % (from its curvature)", data=dict(UNDONE_PEAK)))
     # the low-pass spreads the force by its kernel's half-width at each end: the ends are fitted through
     # the plate's undoing and the kernel (a line, or a jump from zero), twice, and the fits' difference
     # is charged to TC
