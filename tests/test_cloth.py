@@ -95,7 +95,30 @@ def test_hidden_cloth_phase_is_its_length_over_tc():
 
 
 def test_a_steeper_rise_after_the_jump_is_not_taken_for_it():
-    # an electrical spike three samples after the jump is steeper than the jump: the force had risen before it
+    # an electrical spike three samples after the jump is steeper than the jump: the jump is the first rise through
+    # STEEP_MIN_RISE of the peak, located at its instant all the same
     _, x = _front(200 / FS)
     x[203] += 1.5
-    assert steep_edge(x, 199.5, int(np.argmax(x)), 1e-3, TC_S * FS) is None
+    edge = steep_edge(x, 199.5, int(np.argmax(x)), 1e-3, TC_S * FS)
+    assert edge is not None and abs(edge.at_u - 199.5) <= 0.15, edge
+
+
+@pytest.mark.parametrize("offset", np.arange(0.0, 1.0, 0.1))
+def test_a_jump_is_found_before_a_plate_s_swing_steeper_than_it(offset):
+    """A plate of 27 kHz sampled at 97 kHz (zoo trace 804:1222) answers the jump with swings at 3.6 samples a
+    period, some steeper than the jump itself; the jump is still the contact's, at its instant within a sample (the
+    plate's lag), at every phase of the sampling."""
+    from scipy import signal
+
+    fs, fn, zeta = 96.6e3, 26.5e3, 0.12
+    dt = 1e-7
+    t = np.arange(0, 6e-3, dt)
+    jump_s = (100 + offset) / fs
+    u = t - jump_s  # a jump, a ramp to the pre-buckling spike at 0.2 ms, and the hump
+    force = np.where((u >= 0) & (u <= TC_S), np.where(u < 0.2e-3, 0.35 + 0.65 * np.clip(u / 0.25e-3, 0, 1),
+                                                       0.1 + 0.75 * np.sin(np.pi * np.clip(u / TC_S, 0, 1))), 0.0)
+    wn = 2 * np.pi * fn
+    _, sensed, _ = signal.lsim(signal.lti([wn ** 2], [1.0, 2 * zeta * wn, wn ** 2]), force, t)
+    x = np.interp(np.arange(int(6e-3 * fs)) / fs, t, sensed)
+    edge = steep_edge(x, jump_s * fs - 0.5, int(np.argmax(x)), 1e-3, TC_S * fs)
+    assert edge is not None and abs(edge.at_u - jump_s * fs) <= 1.0, (edge, jump_s * fs)

@@ -54,8 +54,10 @@ def steep_edge(x, start_u: float, peak_index: int, noise: float, contact_samples
     steepest. The edge is the stretch about the steepest rise between the start and the peak where the slope exceeds
     STEEP_SLOPE_FRACTION of it; it is a jump when the force rises across it by STEEP_MIN_RISE of the peak and
     STEEP_MIN_SIGMA noise deviations within STEEP_MAX_WIDTH of TC, and stays below STEEP_MIN_RISE of the peak from
-    the start to it (a steeper rise later, an electrical spike's or a plate's swing, is not the contact's jump). A
-    smooth pulse (a half-sine, whose steepest rise is its start) has none.
+    the start to it. The steepest rise is sought up to where the force first reaches STEEP_MIN_RISE of the peak, and
+    on up the slope while it steepens (a rounded jump crosses that level on its way up): a steeper rise later, an electrical spike's or a plate's swing (a plate of 27 kHz sampled at 97 kHz swings back
+    up faster than the jump), is not the contact's jump. A smooth pulse (a half-sine, whose steepest rise is its
+    start) has none.
 
     Parameters
     ----------
@@ -80,7 +82,16 @@ def steep_edge(x, start_u: float, peak_index: int, noise: float, contact_samples
     if not (0 <= i0 < peak_index < x.size and contact_samples > 0):
         return None
     d = np.diff(x[i0:peak_index + 1])  # d[j]: from sample i0 + j to i0 + j + 1
-    k = int(np.argmax(d))
+    # the jump is the steepest rise up to where the force first reaches STEEP_MIN_RISE of the peak: a steeper swing
+    # later (a plate's, ringing at a few samples a period after the jump) is not the contact's jump
+    s0 = max(int(math.ceil(start_u)), 0)
+    above = np.flatnonzero(x[s0:peak_index + 1] >= STEEP_MIN_RISE * float(x[peak_index]))
+    m = s0 + int(above[0]) - i0 if above.size else d.size  # d[m - 1]: the step into the first sample there
+    if m < 1:
+        return None
+    while m < d.size and d[m] >= d[m - 1]:  # up the rounded jump's slope to its steepest
+        m += 1
+    k = int(np.argmax(d[:m]))
     if not d[k] > 0:
         return None
     a, b = k, k
