@@ -226,6 +226,26 @@ ZOO_JUDGED_BY_EFFECT = [
 ]
 
 
+#: Zoo traces whose TC came out ok and 4.5-4.9 % wrong on a9b3ff2 (held-out seed 804, looked at since), and the TC
+#: outcome now (name, seed, index, what, outcome).
+ZOO_TC_OK_BUT_WRONG_MENDED = [
+    ("jump-before-a-steeper-plate-swing-97kHz", 804, 1222,
+     "a 27 kHz plate swings back up faster than the jump: the jump was lost, TC -4.5 % ok", "ok_right"),
+    ("slow-alias-at-the-end-29kHz", 804, 124,
+     "a 29.3 kHz plate at 29.2 kHz (daq.bandwidth_hz stated) aliases near zero: the end read on its tail, TC +4.9 % ok",
+     "withheld_wrong"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what, outcome", ZOO_TC_OK_BUT_WRONG_MENDED,
+                         ids=[c[0] for c in ZOO_TC_OK_BUT_WRONG_MENDED])
+def test_zoo_tc_ok_but_wrong_mended(name, seed, index, what, outcome, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert judgement.outcomes["tc"] == outcome, (what, judgement.errors, result.reason)
+
+
 #: Traces of the benchmark excluded on main at 10b1d50 although measurable, for a peak between samples only (a damped
 #: plate's overshoot rises steeply to it): the step response is evidence of the plate, whose resonance is then
 #: identified and undone, ok and right (name, seed, index, what).
@@ -1154,11 +1174,13 @@ def test_zoo_burst_at_the_end_case(name, seed, index, what, tmp_path):
 #: DAQ's or an amplifier's offset changing), and the baseline fit spread the shift over the record as drift, leaving
 #: the contact's ends on a level a little off zero; or, with the decay estimated and the step 1.7 ms after the end,
 #: kappa took it for the undershoot and the correction lifted the record before it into a shelf of force (name,
-#: seed, index, what the reason must name, what).
+#: seed, index, what the reason must name, what). Since the step's effect is estimated where the time constant is
+#: given (signal.effects.level_effects), 2:300 and 2:374 are kept and right (TC +0.84 % and +0.51 %, their
+#: budgets under 1 %): no reason then.
 BASELINE_STEPS = [
-    ("step-0.43pc-17ms-before", 2, 300, "step in the baseline", "ok but wrong on cedcc5c: TC +1.01 %"),
+    ("step-0.43pc-17ms-before", 2, 300, None, "ok but wrong on cedcc5c: TC +1.01 %; ok and right since"),
     ("step-0.28pc-after-the-end", 1, 138, "step in the baseline", "ok but wrong on cedcc5c: TC +2.06 %"),
-    ("step-0.15pc-in-the-contact-tau-given", 2, 374, "step in the baseline", "ok but wrong on cedcc5c: TC +2.39 %"),
+    ("step-0.15pc-in-the-contact-tau-given", 2, 374, None, "ok but wrong on cedcc5c: TC +2.39 %; ok and right since"),
     ("step-3.1pc-1.7ms-after-tau-estimated", 2, 95, "force is flat over the last",
      "ok but wrong on cedcc5c: TC +42.5 %, kCAL -6.2 %"),
 ]

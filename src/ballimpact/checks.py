@@ -171,8 +171,13 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           (_TC, _K, _P, _C), fault=True, test="tests/test_contact.py -k trace_start"),
     # --- the signal: each withholds what it can bias
     Check(ProblemKind.ALIASING, "aliasing", "daq.bandwidth_hz against half the sample rate", (_K, _P),
-          thresholds=(_t("session", "PLATE_RESONANCE_MAX_HZ", "Hz", "highest plate resonance of the format"),),
-          test="tests/test_verdicts.py -k alias"),
+          thresholds=(_t("session", "PLATE_RESONANCE_MAX_HZ", "Hz", "highest plate resonance of the format"),
+                      _t("bandlimit", "ALIAS_SLOW_FRACTION", "of the sample rate",
+                         "a stated bandwidth aliasing below it biases TC too")),
+          test="tests/test_verdicts.py -k alias; tests/test_robustness.py -k mended",
+          effect="not estimated: where daq.bandwidth_hz lets a resonance alias below ALIAS_SLOW_FRACTION of the "
+                 "sample rate, the end can be read on the alias's smooth tail, and TC is withheld with kCAL and the "
+                 "peak (ballimpact.bandlimit.aliasing_problem)"),
     Check(ProblemKind.CONTACT_UNSTABLE, "contact window unstable",
           "the contact window and the baseline fitted around it converge", _ALL_SIGNAL,
           thresholds=(_t("signal.window", "UNSTABLE_SAMPLES", "samples", "still moving after the iterations"),),
