@@ -386,6 +386,31 @@ def test_departure_before_start_bounds_a_foot_hidden_by_an_antialias_filter():
     assert span == 0.0
 
 
+def test_a_filter_s_ringing_ahead_of_a_jump_is_no_foot_but_a_foot_longer_than_the_cloth_s_phase_is():
+    """With the start completed from the jump (force_only), the linear-phase filter's ringing that alternates ahead
+    of a bare jump is no departure; a foot of force 300 us long under the same filter still is, its span covering
+    the foot (the foot starts 300 us before the jump; the start completed 2 mm at 20 m/s, 100 us, before it)."""
+    from scipy.signal import firwin, lfilter
+
+    from ballimpact.signal.effects import departure_before_start
+
+    fs = 1e6 / 14
+    t = np.arange(0, 0.04, 1 / fs)
+    jump_s, tc = 20e-3, 4e-3
+    u = t - jump_s
+    bare = np.where((u >= 0) & (u <= tc), 300.0 + 700.0 * np.sin(np.pi * np.clip(u, 0, tc) / tc), 0.0)
+    foot = np.where((u >= -300e-6) & (u < 0), 60.0 * (u + 300e-6) / 300e-6, bare)
+    taps = firwin(201, 0.42 * fs, fs=fs)  # a steep filter: its ringing reaches far ahead of the jump
+    rng = np.random.default_rng(2)
+    completed = (jump_s - 100e-6) * fs
+    spans = []
+    for force in (bare, foot):  # noise 0.05 N on a jump of 300 N: the ringing's far lobes stand out of it
+        x = lfilter(taps, 1.0, force)[100:] + rng.normal(0, 0.05, t.size - 100)
+        spans.append(departure_before_start(x, fs, completed, force_only=True)[0])
+    assert spans[0] == 0.0
+    assert spans[1] >= 150e-6  # the foot's 200 us before the completed start, less the samples skipped
+
+
 def test_a_quantity_withheld_by_its_budget_names_the_check_of_its_largest_effect():
     small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001, "kcal": 0.001,
                                                                        "peak": 0.001})

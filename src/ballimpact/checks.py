@@ -218,7 +218,9 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           thresholds=(_t("signal.end_checks", "END_SE_MAX_FRACTION", "of TC", "expanded uncertainty of the ends"),
                       _t("signal.end_checks", "SPREAD_MAX_FRACTION", "of TC", "an end's spread"),
                       _t("signal.end_checks", "END_CHECK_SIGMA", "standard errors", "force standing after an end"),
-                      _t("signal.effects", "DEPARTURE_SIGMA", "noise deviations", "signal before the start")),
+                      _t("signal.effects", "DEPARTURE_SIGMA", "noise deviations", "signal before the start"),
+                      _t("signal.effects", "DEPARTURE_SWING", "of its height",
+                         "a run before a completed start swinging below zero so far is ringing, not force")),
           test="tests/test_conditioning.py -k end",
           effect="signal departing from its noise before the start (ballimpact.signal.effects.departure_before_start): "
                  "the span from the earliest departure to the start as completed bounds the start's shift (TC); a "

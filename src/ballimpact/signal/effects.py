@@ -12,7 +12,7 @@ from .end_checks import PLATE_SLOPE_S
 from .noise import robust_noise
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
-           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "end_slopes", "line_amplitude_after",
+           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "DEPARTURE_SWING", "end_slopes", "line_amplitude_after",
            "ringing_effects", "rounding_effects", "level_effects", "ringing_after", "finding_effects",
            "departure_before_start"]
 
@@ -38,6 +38,9 @@ DEPARTURE_CHAIN_SIGMA = 3.0
 #: place, and the transient an undone plate leaves in the sample interval of a jump) [samples]
 DEPARTURE_GAP_S = 0.05e-3
 DEPARTURE_SKIP = 2
+#: A positive run before the start whose stretch to it swings below zero by this fraction of its height is ringing,
+#: not a foot of force [-]
+DEPARTURE_SWING = 0.5
 #: An identified resonance is the line's when their frequencies agree to this fraction [-]
 EXCITED_MATCH = 0.1
 #: damping rates tried for the sinusoid [1/s]
@@ -412,7 +415,9 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
         Walk back through an unbroken run of samples above the noise only (a force presses: a foot of it is
         positive and does not swing), not through the swings either side of it a filter's ringing makes: for a
         start that no longer rests on the force's foot (:mod:`ballimpact.signal.cloth`), where only a foot longer
-        than it can move it.
+        than it can move it. A run from which the signal to the start swings below zero by DEPARTURE_SWING of its
+        height or more is that ringing (a linear-phase filter's, alternating sample to sample ahead of the jump),
+        no foot.
 
     Returns
     -------
@@ -441,4 +446,7 @@ def departure_before_start(x, fs: float, start_u: float, *, window_s: float = DE
                 break
     if earliest is None or not strong:
         return 0.0, noise
+    to_start = x[last - n + 1 + earliest:int(math.ceil(start_u))]
+    if force_only and -float(np.min(to_start)) >= DEPARTURE_SWING * float(np.max(to_start)):
+        return 0.0, noise  # it swings below zero by as much: a filter's ringing ahead of the jump, no foot of force
     return (start_u - (last - n + 1 + earliest)) / fs, noise
