@@ -411,6 +411,24 @@ def test_a_filter_s_ringing_ahead_of_a_jump_is_no_foot_but_a_foot_longer_than_th
     assert spans[1] >= 150e-6  # the foot's 200 us before the completed start, less the samples skipped
 
 
+def test_a_refused_undoing_with_only_a_peak_on_ringing_bounds_tc_by_a_ringing_hidden_in_the_noise():
+    """No resonance out of the noise, and a peak on ringing all the evidence: TC gets 3 noise deviations over the
+    end's slope (a triangle falling 1 over 3 ms: 3 x 0.001 x 3 ms over its 4 ms), kCAL and the peak stay unknown;
+    with the force below zero after the contact as well (a plate there), nothing is estimated."""
+    from ballimpact.signal.effects import finding_effects
+
+    fs = 100e3
+    t, x, s_u, e_u = _triangle(fs)
+    refused = Problem(ProblemKind.PLATE_RINGING, "plate resonance not undone: no decaying oscillation identified",
+                      data={"undo_refused": 1.0})
+    peak = Problem(ProblemKind.PEAK_ON_RINGING, "peak force on the plate's ringing")
+    effects = finding_effects(refused, [peak, refused], x, fs, s_u, e_u, 0.001).effects
+    assert_allclose(effects["contact_time"], 3 * 0.001 * 3e-3 / 4e-3, rtol=0.02)
+    assert math.isnan(effects["kcal"]) and math.isnan(effects["peak"])
+    below = Problem(ProblemKind.NEGATIVE_FORCE, "force below zero after the contact")
+    assert not finding_effects(refused, [peak, below, refused], x, fs, s_u, e_u, 0.001).effects
+
+
 def test_a_quantity_withheld_by_its_budget_names_the_check_of_its_largest_effect():
     small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001, "kcal": 0.001,
                                                                        "peak": 0.001})

@@ -236,12 +236,16 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           _ALL_SIGNAL,
           thresholds=(_t("signal.ringing", "RING_MAX_FRACTION", "of the peak", "rms ringing after the contact"),
                       _t("signal.ringing", "RING_LINE_PROMINENCE", "-", "a line over its neighbourhood"),
-                      _t("signal.ringing", "RING_LINE_NOISE_FACTOR", "-", "a line over the noise in a bin")),
+                      _t("signal.ringing", "RING_LINE_NOISE_FACTOR", "-", "a line over the noise in a bin"),
+                      _t("signal.effects", "UNSEEN_RING_SIGMA", "noise deviations",
+                         "a ringing no identification finds, at most")),
           test="tests/test_verdicts.py -k faint",
           effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f "
                  "after the contact, over the force's slope at each end, bounds each end's shift (TC); A over the "
                  "peak bounds the peak; A / (pi f) over the contact's integral bounds kCAL. A plate identified "
-                 "but not undone carries the line's effects when the line is all the evidence."),
+                 "but not undone carries the line's effects when the line is all the evidence; where a peak on "
+                 "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
+                 "noise deviations over the end's slope (kCAL and the peak not estimated)."),
     Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,
           thresholds=(_t("signal.ringing", "NEGATIVE_FRACTION", "of the peak", "depth"),
                       _t("signal.ringing", "NEGATIVE_SIGMA", "standard errors", "significance")),

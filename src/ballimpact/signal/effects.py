@@ -41,6 +41,8 @@ DEPARTURE_SKIP = 2
 #: A positive run before the start whose stretch to it swings below zero by this fraction of its height is ringing,
 #: not a foot of force [-]
 DEPARTURE_SWING = 0.5
+#: A ringing that no identification finds out of the noise is at most this many noise deviations [-]
+UNSEEN_RING_SIGMA = 3.0
 #: An identified resonance is the line's when their frequencies agree to this fraction [-]
 EXCITED_MATCH = 0.1
 #: damping rates tried for the sinusoid [1/s]
@@ -312,7 +314,9 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     identified but not undone (``undo_refused``) gets the effects of the line among ``siblings`` (on the peak
     widened by :func:`_excited_peak_factor` where the resonance is the line's) when that line is all the evidence
     of ringing (no ringing after the contact, no
-    force below zero, no peak on ringing): what was not undone is then the line itself. A step in the baseline (a
+    force below zero, no peak on ringing): what was not undone is then the line itself. Where a peak on ringing
+    was all the evidence and no resonance came out of the noise, TC gets the bound of a ringing hidden in the noise
+    at its end (:func:`_unseen_ringing_effects`). A step in the baseline (a
     BASELINE_STEP finding with its ``level_V``) gets :func:`level_effects` of that level where the amplifier's decay
     was given (``decay_given``): an estimated decay takes up a step next to the contact, and the step found is then
     a smaller one elsewhere (``python bench/step_map.py --n 400 --seed 1`` trace 1:114: a step of 3.5 % of the peak
@@ -371,7 +375,21 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
                 each.append(e)
             return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in each]))
                                              for q in ("contact_time", "kcal", "peak")})
+        if ringing and "refused_hz" not in problem.data \
+                and all(p.kind is ProblemKind.PEAK_ON_RINGING for p in ringing):
+            return replace(problem, effects=_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
     return problem
+
+
+def _unseen_ringing_effects(x, fs: float, start_u: float, end_u: float, noise_V: float) -> dict:
+    """TC's bound where a peak on ringing was all the evidence of a plate and no decaying oscillation stands out of
+    the noise in the contact and after it: a ringing at the end, which would ring on after it, is at most
+    UNSEEN_RING_SIGMA noise deviations, and moves the end by at most that over the force's slope there (the start
+    is the force's jump, which the ringing follows). kCAL and the peak: not known (NaN)."""
+    _, s_end = end_slopes(x, fs, start_u, end_u)
+    tc = (end_u - start_u) / fs
+    bound = UNSEEN_RING_SIGMA * noise_V / s_end / tc if s_end > 0 and tc > 0 and noise_V >= 0 else math.nan
+    return {"contact_time": float(bound), "kcal": math.nan, "peak": math.nan}
 
 
 def _excited_peak_factor(data: dict, line_hz: float, contact_time_s: float) -> float:
