@@ -194,7 +194,53 @@ def _log_exclusions(order, before, status, reason, check: str) -> None:
             logger.info("%s: excluded by the session %s check: %s", impact_id, check, why)
 
 
-def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
+def _joined(parts):
+    """The per-impact datasets ``parts`` concatenated along ``impact``, their series NaN-padded to one length."""
+    import xarray as xr
+
+    sizes = {dim: max(part.sizes.get(dim, 1) for part in parts) for dim in ("sample", "raw_sample")}
+    padded = []
+    for part in parts:
+        widths = {dim: (0, n - part.sizes[dim]) for dim, n in sizes.items() if dim in part.dims and part.sizes[dim] < n}
+        padded.append(part.pad(widths) if widths else part)  # NaN padding of the series
+    return xr.concat(padded, dim="impact", data_vars="all", coords="minimal", join="exact",
+                     combine_attrs="drop_conflicts")
+
+
+def _with_session_plate(ds, session_dir, order, mains_hz=None):
+    """``ds`` with the impacts whose TC a plate's ringing withheld processed again with the plate the session
+    identified from all its impacts, as if stated, where that keeps their TC and COR (:mod:`ballimpact.session_plate`);
+    the others as they were."""
+    from . import archive, processing, session_plate
+    from .session import read_session
+
+    ids = session_plate.retry_candidates(ds["impact_id"].values, ds["contact_time_status"].values,
+                                         ds["reason_code"].values)
+    if not ids:
+        return ds
+    session = read_session(session_dir)
+    plate = session_plate.session_plate(_session_rig(ds, session.meta))
+    if plate is None:
+        return ds
+    session.meta = dataclasses.replace(session.meta, plate_resonance=plate,
+                                       **({} if mains_hz is None else {"mains_hz": float(mains_hz)}))
+    kept = [r for r in processing.iter_process(session, impact_ids=ids)
+            if r.contact_time_status == "ok" and r.cor_status == "ok"]
+    if not kept:
+        return ds
+    rows = {row.impact_id: row for row in session.impacts}
+    for r in kept:
+        logger.info("%s (%s): TC kept with the session's plate (%.6g Hz, damping ratio %.3g)", r.impact_id, r.ball,
+                    *plate)
+    new = archive.impacts_dataset(kept, trace_info={r.impact_id: _trace_info(session, rows[r.impact_id])
+                                                    for r in kept})
+    replaced = {r.impact_id for r in kept}
+    joined = _joined([ds.isel(impact=[k for k, i in enumerate(order) if i not in replaced]), new])
+    position = {str(i): k for k, i in enumerate(joined["impact_id"].values)}
+    return joined.isel(impact=[position[i] for i in order])
+
+
+def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc, *, mains_hz: float | None = None) -> None:
     """
     Join the chunk files into all impacts in raw order: ``impacts.csv`` and ``work/impacts.nc``.
 
@@ -208,7 +254,9 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     amplifier time constant, estimated from the trace, is not the session's; the
     session's typical one [s] goes into ``time_constant_median_s``. Then
     the fit outliers of every ball type are named (:func:`mark_fit_outliers`:
-    ``used_in_fit``, ``fit_note``), so that impacts.csv carries them.
+    ``used_in_fit``, ``fit_note``), so that impacts.csv carries them. First, the impacts whose TC
+    a plate's ringing withheld are processed again with the plate the session identified from all
+    its impacts (:mod:`ballimpact.session_plate`), where that keeps their TC.
 
     Parameters
     ----------
@@ -220,6 +268,8 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
         ``impacts.csv`` to write (atomically), columns of outputs.md.
     out_nc : str or Path
         ``work/impacts.nc`` to write (atomically).
+    mains_hz : float or None, optional
+        Mains frequency [Hz] the chunks were processed with (config ``mains_hz``); None keeps session.yaml's.
 
     Raises
     ------
@@ -227,8 +277,6 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
         An impact missing from the chunks, given twice, or not in the raw impacts.csv.
     """
     import numpy as np
-    import xarray as xr
-
     from . import archive, processing, rig_archive
     from .session import read_session
 
@@ -236,13 +284,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
     if not chunk_ncs:
         raise ValueError("chunk_ncs must name at least one chunk file, got none")
     order = [row.impact_id for row in read_session(session_dir).impacts]
-    parts = [archive.open_dataset(p) for p in chunk_ncs]
-    sizes = {dim: max(part.sizes.get(dim, 1) for part in parts) for dim in ("sample", "raw_sample")}
-    padded = []
-    for part in parts:
-        widths = {dim: (0, n - part.sizes[dim]) for dim, n in sizes.items() if dim in part.dims and part.sizes[dim] < n}
-        padded.append(part.pad(widths) if widths else part)  # NaN padding of the series
-    ds = xr.concat(padded, dim="impact", data_vars="all", coords="minimal", join="exact", combine_attrs="drop_conflicts")
+    ds = _joined([archive.open_dataset(p) for p in chunk_ncs])
     found = [str(i) for i in ds["impact_id"].values]
     position = {}
     for k, impact_id in enumerate(found):
@@ -256,7 +298,7 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc) -> None:
             f"chunk files do not match {Path(session_dir) / 'impacts.csv'}: "
             f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
         )
-    ds = ds.isel(impact=[position[i] for i in order])
+    ds = _with_session_plate(ds.isel(impact=[position[i] for i in order]), session_dir, order, mains_hz)
     # the session's checks (ballimpact.session_checks): one amplifier and one plate serve the session; an impact
     # unlike the others withholds what the finding can bias (its kCAL, or with the time constant its TC too)
     columns = {c: [str(v) for v in ds[c].values] if c in ds else None for c in processing.VERDICT_COLUMNS}
@@ -372,4 +414,4 @@ def session_impacts(session_dir, out_json, out_csv, out_nc, *, mains_hz: float |
     with _staging(out_nc.parent / f".{out_nc.name}.chunk.tmp") as staging:
         chunk_nc = staging / "chunk_0.nc"
         process_chunk(session_dir, 0, 1, chunk_nc, mains_hz=mains_hz)
-        collect_impacts(session_dir, [chunk_nc], out_csv, out_nc)
+        collect_impacts(session_dir, [chunk_nc], out_csv, out_nc, mains_hz=mains_hz)

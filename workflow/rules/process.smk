@@ -55,6 +55,7 @@ rule collect_impacts:
         impacts_nc=result_path("work/impacts.nc"),
     params:
         session_dir=session_dir,
+        mains_hz=config.get("mains_hz"),
     conda:
         "../envs/ballimpact.yaml"
     log:

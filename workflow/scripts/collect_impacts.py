@@ -10,4 +10,5 @@ with log_to_file(snakemake.log[0]):
         chunk_ncs=list(snakemake.input.chunks),
         out_csv=snakemake.output.impacts_csv,
         out_nc=snakemake.output.impacts_nc,
+        mains_hz=snakemake.params.mains_hz,
     )

@@ -1,0 +1,72 @@
+"""The session's identified plate, undone in the impacts whose own trace could not tell it from the force."""
+
+from __future__ import annotations
+
+import math
+
+from .problems import ProblemKind
+from .rig import Rig
+
+__all__ = ["SESSION_PLATE_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_candidates"]
+
+#: The session's plate is used in the impacts when its resonance's 95 % interval is this narrow or narrower, as a
+#: fraction of the resonance on either side [-]: the undoing charges TC for the plate 1 % off in fn
+#: (ballimpact.signal.undone.PLATE_FN_UNCERTAINTY), which then covers the interval.
+SESSION_PLATE_MAX_SPREAD = 0.01
+#: An impact whose TC its own processing withheld for these findings alone, one of them evidence of the plate,
+#: is processed again with the session's plate, as if stated (the problems a plate's ringing causes).
+RETRY_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
+                         ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
+                         ProblemKind.CONTACT_JUMP_UNRESOLVED, ProblemKind.IMPULSE_UNRESOLVED,
+                         ProblemKind.CLOTH_PHASE_COMPLETED})
+_EVIDENCE = frozenset({ProblemKind.PLATE_RINGING.value, ProblemKind.PEAK_ON_RINGING.value,
+                       ProblemKind.NEGATIVE_FORCE.value})
+
+
+def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD) -> tuple[float, float] | None:
+    """The plate the session identified from all its impacts, to undo in each: (resonance [Hz], damping ratio [-]),
+    or None where the plate was stated (the impacts used it already), not identified, or its resonance is known
+    no better than ``max_spread`` either side.
+
+    Parameters
+    ----------
+    rig : ballimpact.rig.Rig
+        The session's rig (:func:`ballimpact.rig_archive.session_rig`).
+    max_spread : float
+        Widest half-interval of the resonance accepted, as a fraction of it [-].
+
+    Returns
+    -------
+    tuple of float or None
+    """
+    fn, zeta = rig["plate_resonance_hz"], rig["plate_damping_ratio"]
+    if fn.source != "identified" or zeta.source != "identified":
+        return None
+    if not (fn.value > 0 and zeta.value > 0 and math.isfinite(fn.low) and math.isfinite(fn.high)):
+        return None
+    if max(fn.high - fn.value, fn.value - fn.low) > max_spread * fn.value:
+        return None
+    return float(fn.value), float(zeta.value)
+
+
+def retry_candidates(impact_ids, contact_time_status, reason_code) -> list[str]:
+    """The impacts to process again with the session's plate: TC withheld for problems a plate's ringing causes
+    alone (:data:`RETRY_KINDS`), one of them evidence of the plate (ringing, a peak on it, the force below zero).
+
+    Parameters
+    ----------
+    impact_ids, contact_time_status, reason_code : sequence of str
+        Per impact, its id, TC's status and its ``;``-separated codes.
+
+    Returns
+    -------
+    list of str
+    """
+    allowed = {k.value for k in RETRY_KINDS}
+    out = []
+    for impact_id, status, codes in zip(impact_ids, contact_time_status, reason_code):
+        found = {c for c in str(codes).split(";") if c}
+        if str(status) != "ok" and found and found <= allowed and found & _EVIDENCE:
+            out.append(str(impact_id))
+    return out
+

@@ -1,0 +1,33 @@
+"""The session's identified plate, used in the impacts whose own trace could not undo it (ballimpact.session_plate)."""
+
+from __future__ import annotations
+
+import pytest
+
+from ballimpact.rig import Rig, RigEstimate
+from ballimpact.session_plate import SESSION_PLATE_MAX_SPREAD, retry_candidates, session_plate
+
+
+def _rig(fn, low, high, zeta=0.05, source="identified"):
+    return Rig(estimates={"plate_resonance_hz": RigEstimate(fn, low, high, source=source, n_impacts=30),
+                          "plate_damping_ratio": RigEstimate(zeta, 0.04, 0.06, source=source, n_impacts=30)})
+
+
+def test_an_identified_plate_known_to_its_charge_is_used_and_no_other():
+    assert session_plate(_rig(5000.0, 4980.0, 5030.0)) == (5000.0, 0.05)
+    # an interval wider than SESSION_PLATE_MAX_SPREAD on either side: the 1 % charge would not cover it
+    wide = 5000.0 * (1 + 1.2 * SESSION_PLATE_MAX_SPREAD)
+    assert session_plate(_rig(5000.0, 4990.0, wide)) is None
+    assert session_plate(_rig(5000.0, 5000.0, 5000.0, source="stated")) is None  # the impacts used it already
+    assert session_plate(_rig(float("nan"), float("nan"), float("nan"), source="none")) is None
+    with pytest.raises(KeyError, match="valid names"):
+        Rig(estimates={})["plate_resonance_hz"]
+
+
+def test_impacts_retried_are_those_a_plate_s_ringing_alone_withheld():
+    ids = ["a", "b", "c", "d", "e", "f"]
+    status = ["withheld", "withheld", "withheld", "ok", "withheld", "withheld"]
+    codes = ["plate_ringing;negative_force", "peak_between_samples", "plate_ringing;multiple_impacts",
+             "plate_ringing", "peak_on_ringing;contact_end_undetermined", ""]
+    # b: no evidence of the plate; c: a fault besides; d: TC ok; f: nothing found
+    assert retry_candidates(ids, status, codes) == ["a", "e"]
