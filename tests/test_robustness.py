@@ -843,7 +843,7 @@ def test_zoo_noisy_undone_force_low_passed_with_its_peak_shown(name, seed, index
 #: Traces of the zoo's chain, a rig drawn in "plate" mode (seed) with these overrides, ok but wrong on main at
 #: 6efe980: a lightly damped plate sampled 2.6-2.7 times a period, the contact's largest sample its first overshoot
 #: of the force's jump, with too few samples up to it for the front's own check (name, seed, overrides, what,
-#: must be ok: the plate then identified and undone, ok and right).
+#: must be ok: the plate then identified and undone, ok and right; else the peak withheld).
 _ONE = (1.0, 1.0, 1.0, 1.0, 1.0)
 ZOO_FIRST_OVERSHOOT = [
     ("plate-24.4kHz-first-overshoot-at-65kHz-a", 2,
@@ -867,9 +867,11 @@ def test_zoo_peak_on_the_plates_first_overshoot(name, seed, overrides, what, mus
     assert_invariant(trace, result, judgement, must_be_ok=must_be_ok)
     if must_be_ok:
         assert result.plate_resonance_hz == pytest.approx(trace.rig.plate_hz, rel=0.03)
-    else:
-        assert result.status == "excluded" and "the plate's first overshoot of the force's jump" in result.reason, \
-            result.reason
+    else:  # the peak, the plate's first overshoot, withheld saying so; TC on its budget (no resonance out of the
+        # noise to undo: a ringing hidden in it bounds the end, signal.effects)
+        assert result.peak_status == "withheld", result.reason
+        assert "the plate's first overshoot of the force's jump" in result.reason + result.withheld_note, \
+            (result.reason, result.withheld_note)
 
 
 #: A trace of the benchmark ok but wrong on main at 6efe980 (it was ZOO_STILL_WRONG's): a plate above fs/2, whose
