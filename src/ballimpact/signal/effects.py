@@ -155,17 +155,24 @@ def ringing_effects(x, fs: float, start_u: float, end_u: float, noise_V: float, 
     after = line_amplitude_after(x, fs, end_u, line_hz, noise_V)
     amp = max(line_amplitude_V, after) if math.isfinite(after) else math.nan
     # the line on the chord itself moves it by up to 2 A over END_SLOPE_S: the slopes' lower bounds
-    s_start, s_end = (s - 2.0 * amp / END_SLOPE_S for s in end_slopes(x, fs, start_u, end_u))
+    return _amplitude_effects(x, fs, start_u, end_u, (line_amplitude_V, amp), 2.0 * amp,
+                              amp / (math.pi * line_hz))
+
+
+def _amplitude_effects(x, fs, start_u, end_u, at_ends, on_chord, area) -> dict:
+    """Bounds of what a signal of amplitude ``at_ends`` (start, end) [V] added to the force does to TC (each over
+    the force's slope there, read as a chord over END_SLOPE_S less the ``on_chord`` [V] it can add to it), kCAL (its
+    ``area`` [V s] over the contact's integral) and the peak (the larger amplitude over it) [-]; NaN where the
+    contact or its slopes cannot be read."""
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    s_start, s_end = (s - on_chord / END_SLOPE_S for s in end_slopes(x, fs, start_u, end_u))
     peak = float(np.max(x[i0:i1 + 1]))
     integral = float(np.sum(x[i0:i1 + 1])) / fs
     tc = (end_u - start_u) / fs
-    if not (math.isfinite(amp) and peak > 0 and integral > 0 and tc > 0 and s_start > 0 and s_end > 0):
-        return nan
-    return {
-        "contact_time": (line_amplitude_V / s_start + amp / s_end) / tc,
-        "kcal": amp / (math.pi * line_hz) / integral,
-        "peak": amp / peak,
-    }
+    if not (math.isfinite(on_chord) and peak > 0 and integral > 0 and tc > 0 and s_start > 0 and s_end > 0):
+        return {"contact_time": math.nan, "kcal": math.nan, "peak": math.nan}
+    return {"contact_time": (at_ends[0] / s_start + at_ends[1] / s_end) / tc, "kcal": area / integral,
+            "peak": max(at_ends) / peak}
 
 
 def rounding_effects(x, fs: float, start_u: float, end_u: float, rounding_s: float) -> dict:
@@ -234,19 +241,11 @@ def level_effects(x, fs: float, start_u: float, end_u: float, level_V: float) ->
         or its slopes cannot be read.
     """
     x = np.asarray(x, dtype=float)
-    nan = {"contact_time": math.nan, "kcal": math.nan, "peak": math.nan}
     i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
     level = abs(float(level_V))
     if not (0 <= i0 < i1 < x.size and math.isfinite(level)):
-        return nan
-    s_start, s_end = (s - level / END_SLOPE_S for s in end_slopes(x, fs, start_u, end_u))
-    peak = float(np.max(x[i0:i1 + 1]))
-    integral = float(np.sum(x[i0:i1 + 1])) / fs
-    tc = (end_u - start_u) / fs
-    if not (peak > 0 and integral > 0 and tc > 0 and s_start > 0 and s_end > 0):
-        return nan
-    return {"contact_time": (level / s_start + level / s_end) / tc, "kcal": level * tc / integral,
-            "peak": level / peak}
+        return {"contact_time": math.nan, "kcal": math.nan, "peak": math.nan}
+    return _amplitude_effects(x, fs, start_u, end_u, (level, level), level, level * (end_u - start_u) / fs)
 
 
 def ringing_after(x, fs: float, end_u: float, noise_V: float, *, over_s: float = RINGING_AFTER_S):
