@@ -243,7 +243,8 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f "
                  "after the contact, over the force's slope at each end, bounds each end's shift (TC); A over the "
                  "peak bounds the peak; A / (pi f) over the contact's integral bounds kCAL. A plate identified "
-                 "but not undone carries the line's effects when the line is all the evidence; where a peak on "
+                 "but not undone carries the line's effects when the line is all the evidence and the plate's "
+                 "resonance lies in the band the line check looks in; where a peak on "
                  "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
                  "noise deviations over the end's slope (kCAL and the peak not estimated)."),
     Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,

@@ -10,6 +10,7 @@ import numpy as np
 from ..problems import ProblemKind
 from .end_checks import PLATE_SLOPE_S
 from .noise import robust_noise
+from .ringing import RING_LINE_MIN_HZ
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "DEPARTURE_SWING", "end_slopes", "line_amplitude_after",
@@ -313,7 +314,9 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     identified but not undone (``undo_refused``) gets the effects of the line among ``siblings`` (on the peak
     widened by :func:`_excited_peak_factor` where the resonance is the line's) when that line is all the evidence
     of ringing (no ringing after the contact, no
-    force below zero, no peak on ringing): what was not undone is then the line itself. Where a peak on ringing
+    force below zero, no peak on ringing) and the resonance identified, if any, lies in the band the line check
+    looks in (above RING_LINE_MIN_HZ): what was not undone is then the line itself (a 0.59 kHz plate identified and
+    refused beside a faint 3 kHz line left its peak 42 % high, ok: zoo 809:3210). Where a peak on ringing
     was all the evidence and no resonance came out of the noise, TC gets the bound of a ringing hidden in the noise
     at its end (:func:`_unseen_ringing_effects`). A step in the baseline (a
     BASELINE_STEP finding with its ``level_V``) gets :func:`level_effects` of that level where the amplifier's decay
@@ -365,6 +368,8 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
         ringing = [p for p in siblings if p.kind in (ProblemKind.PLATE_RINGING, ProblemKind.NEGATIVE_FORCE,
                                                      ProblemKind.PEAK_ON_RINGING) and p is not problem]
         lines = [p for p in ringing if "line_hz" in p.data]
+        if float(problem.data.get("refused_hz", math.inf)) < RING_LINE_MIN_HZ:
+            return problem  # a resonance below the band the line check looks in: no line can show what it does
         if lines and len(lines) == len(ringing):
             tc_s = (end_u - start_u) / fs
             each = []
