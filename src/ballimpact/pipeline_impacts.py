@@ -207,23 +207,37 @@ def _joined(parts):
                      combine_attrs="drop_conflicts")
 
 
-def _with_session_plate(ds, session_dir, order, mains_hz=None):
+def _verdict_columns(ds) -> dict:
+    """The verdict columns of ``ds`` (:data:`ballimpact.session_checks.VERDICT_COLUMNS` it holds) as lists of str."""
+    from .session_checks import VERDICT_COLUMNS
+
+    return {c: [str(v) for v in ds[c].values] for c in VERDICT_COLUMNS if c in ds}
+
+
+def _with_columns(ds, columns: dict):
+    """``ds`` with its per-impact text columns replaced by ``columns`` (name -> one value per impact)."""
+    import numpy as np
+
+    for c, values in columns.items():
+        ds[c] = ("impact", np.array(values, dtype=object), ds[c].attrs if c in ds else {})
+    return ds
+
+
+def _with_session_plate(ds, session, order, mains_hz=None):
     """``ds`` with the impacts whose TC a plate's ringing withheld processed again with the plate the session
     identified from all its impacts, as if stated, where that keeps their TC and COR (:mod:`ballimpact.session_plate`);
-    the others as they were."""
+    the others as they were. ``session`` (:class:`ballimpact.session.Session`) is left as it is."""
     from . import archive, processing, session_plate
-    from .session import read_session
 
     ids = session_plate.retry_candidates(ds["impact_id"].values, ds["contact_time_status"].values,
                                          ds["reason_code"].values)
     if not ids:
         return ds
-    session = read_session(session_dir)
     plate = session_plate.session_plate(_session_rig(ds, session.meta))
     if plate is None:
         return ds
-    session.meta = dataclasses.replace(session.meta, plate_resonance=plate,
-                                       **({} if mains_hz is None else {"mains_hz": float(mains_hz)}))
+    session = dataclasses.replace(session, meta=dataclasses.replace(
+        session.meta, plate_resonance=plate, **({} if mains_hz is None else {"mains_hz": float(mains_hz)})))
     kept = [r for r in processing.iter_process(session, impact_ids=ids)
             if r.contact_time_status == "ok" and r.cor_status == "ok"]
     if not kept:
@@ -276,14 +290,14 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc, *, mains_hz: float 
     ValueError
         An impact missing from the chunks, given twice, or not in the raw impacts.csv.
     """
-    import numpy as np
     from . import archive, processing, rig_archive
     from .session import read_session
 
     chunk_ncs = [Path(p) for p in chunk_ncs]
     if not chunk_ncs:
         raise ValueError("chunk_ncs must name at least one chunk file, got none")
-    order = [row.impact_id for row in read_session(session_dir).impacts]
+    session = read_session(session_dir)
+    order = [row.impact_id for row in session.impacts]
     ds = _joined([archive.open_dataset(p) for p in chunk_ncs])
     found = [str(i) for i in ds["impact_id"].values]
     position = {}
@@ -298,11 +312,10 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc, *, mains_hz: float 
             f"chunk files do not match {Path(session_dir) / 'impacts.csv'}: "
             f"missing impacts {missing[:10]}, unknown impacts {extra[:10]} (re-run the chunks)"
         )
-    ds = _with_session_plate(ds.isel(impact=[position[i] for i in order]), session_dir, order, mains_hz)
+    ds = _with_session_plate(ds.isel(impact=[position[i] for i in order]), session, order, mains_hz)
     # the session's checks (ballimpact.session_checks): one amplifier and one plate serve the session; an impact
     # unlike the others withholds what the finding can bias (its kCAL, or with the time constant its TC too)
-    columns = {c: [str(v) for v in ds[c].values] if c in ds else None for c in processing.VERDICT_COLUMNS}
-    columns = {c: v for c, v in columns.items() if v is not None}
+    columns = _verdict_columns(ds)
     before = list(columns["status"])
     tau_names = ["amplifier_time_constant_s", "amplifier_time_constant_se_s", "amplifier_time_constant_source"]
     if all(name in ds for name in tau_names):
@@ -315,12 +328,11 @@ def collect_impacts(session_dir, chunk_ncs, out_csv, out_nc, *, mains_hz: float 
     before = list(columns["status"])
     columns, median, spread = processing.calibration_outlier_columns(columns, ds["kcal_N_per_V"].values)
     _log_exclusions(order, before, columns["status"], columns["reason"], "kCAL")
-    for c, values in columns.items():
-        ds[c] = ("impact", np.array(values, dtype=object), ds[c].attrs if c in ds else {})
+    ds = _with_columns(ds, columns)
     ds.attrs["kcal_median_N_per_V"] = median
     ds.attrs["kcal_robust_sd_N_per_V"] = spread
     ds.attrs["time_constant_median_s"] = tau_median
-    meta = read_session(session_dir).meta
+    meta = session.meta
     rig = _session_rig(ds, meta)
     ds = _plate_overshoot_check(ds, rig)
     ds = mark_fit_outliers(ds, meta.balls)
@@ -348,16 +360,13 @@ def _plate_overshoot_check(ds, rig):
     if fn.source == "none" or zeta.source == "none":
         return ds
     low = fn.low if fn.source == "identified" and np.isfinite(fn.low) else fn.value
-    columns = {c: [str(v) for v in ds[c].values] for c in session_checks.VERDICT_COLUMNS if c in ds}
     with np.errstate(invalid="ignore", divide="ignore"):
         peak_u = floats_of(ds, "peak_force_u_N") / floats_of(ds, "peak_force_N")
     columns = session_checks.plate_overshoot_columns(
-        columns, ds["voltage_V"].values, floats_of(ds, "sample_rate_hz"), floats_of(ds, "noise_rms_V"), peak_u,
+        _verdict_columns(ds), ds["voltage_V"].values, floats_of(ds, "sample_rate_hz"), floats_of(ds, "noise_rms_V"), peak_u,
         floats_of(ds, "time_to_peak_ms"), np.isfinite(floats_of(ds, "plate_resonance_hz")), float(low),
         float(zeta.value))
-    for c, values in columns.items():
-        ds[c] = ("impact", np.array(values, dtype=object), ds[c].attrs if c in ds else {})
-    return ds
+    return _with_columns(ds, columns)
 
 
 def _session_rig(ds, meta):

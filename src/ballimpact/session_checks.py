@@ -312,7 +312,7 @@ def plate_overshoot(voltage_V, fs: float, fn_hz: float, zeta: float, noise_V: fl
     float
         The effect [-], at least 0; NaN where the contact has too few samples or an input is not finite.
     """
-    from scipy.signal import savgol_filter
+    from scipy.signal import savgol_coeffs, savgol_filter
 
     x = np.asarray(voltage_V, dtype=float)
     x = x[np.isfinite(x)]
@@ -328,9 +328,8 @@ def plate_overshoot(voltage_V, fs: float, fn_hz: float, zeta: float, noise_V: fl
     if not (top > 0 and np.max(x) > 0):
         return math.nan
     # the undone sample's deviation from the noise: the inverse's weights over the fit's window
-    u = np.arange(-h, h + 1) / fs
-    pinv = np.linalg.pinv(np.vstack([np.ones_like(u), u, u * u]).T)
-    weights = (2.0 * zeta / wn) * pinv[1] + (2.0 / wn ** 2) * pinv[2]
+    weights = ((2.0 * zeta / wn) * savgol_coeffs(w, 2, deriv=1, delta=1.0 / fs, use="dot")
+               + savgol_coeffs(w, 2, deriv=2, delta=1.0 / fs, use="dot") / wn ** 2)
     weights[h] += 1.0
     spread = abs(noise_V) * float(np.sqrt(np.sum(weights ** 2)))
     return (abs(float(np.max(x)) - top) + PLATE_PEAK_NOISE_SIGMA * spread) / top

@@ -6,6 +6,8 @@ import math
 
 from .problems import ProblemKind
 from .rig import Rig
+from .signal.ringing import PLATE_EVIDENCE
+from .signal.undone import PLATE_KINDS
 
 __all__ = ["SESSION_PLATE_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_candidates"]
 
@@ -14,13 +16,10 @@ __all__ = ["SESSION_PLATE_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_ca
 #: (ballimpact.signal.undone.PLATE_FN_UNCERTAINTY), which then covers the interval.
 SESSION_PLATE_MAX_SPREAD = 0.01
 #: An impact whose TC its own processing withheld for these findings alone, one of them evidence of the plate,
-#: is processed again with the session's plate, as if stated (the problems a plate's ringing causes).
-RETRY_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING, ProblemKind.NEGATIVE_FORCE,
-                         ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
-                         ProblemKind.CONTACT_JUMP_UNRESOLVED, ProblemKind.IMPULSE_UNRESOLVED,
-                         ProblemKind.CLOTH_PHASE_COMPLETED})
-_EVIDENCE = frozenset({ProblemKind.PLATE_RINGING.value, ProblemKind.PEAK_ON_RINGING.value,
-                       ProblemKind.NEGATIVE_FORCE.value})
+#: is processed again with the session's plate, as if stated: the problems a plate's ringing causes, which the
+#: undoing judges again (ballimpact.signal.undone.PLATE_KINDS), and the cloth's phase completed on them.
+RETRY_KINDS = PLATE_KINDS | {ProblemKind.CLOTH_PHASE_COMPLETED}
+_EVIDENCE = frozenset(k.value for k in PLATE_EVIDENCE)
 
 
 def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD) -> tuple[float, float] | None:
