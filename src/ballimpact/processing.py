@@ -450,18 +450,20 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
         # with daq.bandwidth_hz stated, a peak problem where that band limit may round the front unseen (or alias)
         # may hide a TC too long; without the key, an alias withholds kCAL and the peak (_aliasing_problem) and a
         # rounded front is judged by the ends' own checks, as at 60 kHz or faster; a problem of an undone force's
-        # peak is one of its undoing or low-pass, no sign of that rounding
+        # peak is one of its undoing or low-pass, no sign of that rounding (nor is a peak on the ringing of a plate
+        # through which the ends were fitted: signal.sensed_ends)
         if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone \
-                and not problem.data.get("undone_peak"):
+                and not problem.data.get("undone_peak") and not problem.data.get("ends_fitted"):
             problem = front_rounding(problem, cond, meta.bandwidth_hz, res.sample_rate_hz, float(t[0]))
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
-    completed = _cloth_completion(res, cond, float(t[0]))
+    sensed = "ends_fitted_sensed" in contact.flags  # fitted through a known plate, the cloth's phase included
+    completed = None if sensed else _cloth_completion(res, cond, float(t[0]))
     if completed is not None:
         contact = completed
         res.raw_time_s = t - contact.start_s  # (the same contact where its foot was read at the first contact)
-    if cond.plate is None:  # an undone plate's start is fitted through its chain, the low-pass's spread included
-        _departure_problem(res, cond, float(t[0]), contact)
-    if completed is None and (cond.plate is not None or _JUMP_FLAGS & set(contact.flags)):
+    if cond.plate is None and not sensed:  # an undone plate's start is fitted through its chain, the low-pass's
+        _departure_problem(res, cond, float(t[0]), contact)  # spread included
+    if completed is None and not sensed and (cond.plate is not None or _JUMP_FLAGS & set(contact.flags)):
         _cloth_problem(res, cond)  # read at a jump, or on an undone force, and not completed from a steep edge
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms

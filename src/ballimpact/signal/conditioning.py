@@ -94,7 +94,8 @@ from .plate import PlateResonance
 from .ringing import ringing_problems
 from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
-from .undone import lowpassed_spike, plate_undone, stated_plate_undone, undone_peak_spread
+from .sensed_ends import sensed_contact
+from .undone import PLATE_KINDS, lowpassed_spike, plate_undone, stated_plate_undone, undone_peak_spread
 from .window import iterate
 
 __all__ = ["ConditioningWarning", "ConditionedSignal", "condition_voltage"]
@@ -285,7 +286,12 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         found, staircase = _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_s is not None,
                                              post_guard_s)
         problems.extend(found)
-        undone, findings = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
+        undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
+        if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
+            fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s)  # the contact's
+            if fitted is not None:  # ends fitted through it in the sensed force, where the noise is white
+                return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
+                               scale, spikes, it.mains, mains_source, it.contact_integral)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
@@ -377,18 +383,54 @@ def _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_gi
 
 def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s=0.0):
     """The plate undone (see :func:`ballimpact.signal.undone.plate_undone`): (y, contact, plate, cutoff), why it
-    was refused (str) or None (not tried); and the findings of the undone force kept (its peak withheld, or the
-    effects of two identifications apart)."""
+    was refused (str) or None (not tried); the findings of the undone force kept (its peak withheld, or the
+    effects of two identifications apart); and why a stated plate was refused (str), or None."""
     findings = []
-    undone = None
+    undone = stated = None
     if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
         undone, findings = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
+        stated = undone if isinstance(undone, str) else None
     if undo_plate and (plate is None or isinstance(undone, str)):  # ... or, refused, identified from the trace
         refused = undone
         undone, findings = plate_undone(it.x, fs, it.fit, contact, problems, t0_s, cloth_phase_s=cloth_phase_s)
         if undone is None and not getattr(refused, "undoable", True):  # a stated plate the samples cannot undo
             undone = refused  # stands as a finding, though the sensed force shows no ringing (it aliases)
-    return undone, findings
+    return undone, findings, stated
+
+
+def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s):
+    """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
+    the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
+    that fit judges, or None where the fit refuses too. The problems a plate's ringing causes
+    (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
+    response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
+    undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
+    if not getattr(refusal, "undoable", True):
+        return None
+    s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
+                         cloth_phase_samples=cloth_phase_s * fs)
+    if isinstance(fit, str):
+        return None
+    tc_u = fit.end - fit.start
+    nan = math.nan
+    kept = [p if p.kind not in PLATE_KINDS else replace(p, effects={"contact_time": 0.0, "kcal": nan, "peak": nan},
+                                                        data={**p.data, "ends_fitted": 1.0})
+            for p in problems]
+    kept.append(Problem(ProblemKind.PLATE_RINGING, f"{refusal}; its contact's ends fitted through the plate in the "
+                        f"sensed force instead (TC moves by up to {100 * fit.bias / tc_u:.2g} % with the fit's window "
+                        "and the plate's resonance and damping off by their uncertainty): kCAL and the peak, read on "
+                        "the force the plate rings in, not known",
+                        data={"ends_fitted": 1.0, "residual_sigma": fit.residual},
+                        effects={"contact_time": fit.bias / tc_u, "kcal": nan, "peak": nan}))
+    inside = it.x[int(math.ceil(fit.start)):int(math.floor(fit.end)) + 1]
+    fitted = replace(contact, start_s=t0_s + fit.start / fs, end_s=t0_s + fit.end / fs,
+                     start_index=int(math.ceil(fit.start)), end_index=int(math.floor(fit.end)),
+                     start_se_s=fit.start_se / fs, end_se_s=fit.end_se / fs,
+                     flags=tuple(f for f in contact.flags if f not in ("start_jump", "end_jump", "start_step"))
+                     + ("ends_fitted_sensed",),
+                     peak_index=int(math.ceil(fit.start)) + int(np.argmax(inside)), peak_V=float(np.max(inside)))
+    return fitted, kept
 
 
 def _undone_result(it, fs, undone, findings, messages, kept_problems, t0_s, scale, spikes, mains_source):
