@@ -9,12 +9,15 @@ from .rig import Rig
 from .signal.ringing import PLATE_EVIDENCE
 from .signal.undone import PLATE_KINDS
 
-__all__ = ["SESSION_PLATE_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_candidates"]
+__all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_candidates"]
 
 #: The session's plate is used in the impacts when its resonance's 95 % interval is this narrow or narrower, as a
 #: fraction of the resonance on either side [-]: the undoing charges TC for the plate 1 % off in fn
 #: (ballimpact.signal.undone.PLATE_FN_UNCERTAINTY), which then covers the interval.
 SESSION_PLATE_MAX_SPREAD = 0.01
+#: ... and its damping ratio's this narrow or narrower: the undoing and the ends fitted through the plate charge TC
+#: for it this far off either way (PLATE_ZETA_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY) [-]
+SESSION_ZETA_MAX_SPREAD = 0.25
 #: An impact whose TC its own processing withheld for these findings alone, one of them evidence of the plate,
 #: is processed again with the session's plate, as if stated: the problems a plate's ringing causes, which the
 #: undoing judges again (ballimpact.signal.undone.PLATE_KINDS), and the cloth's phase completed on them.
@@ -22,10 +25,11 @@ RETRY_KINDS = PLATE_KINDS | {ProblemKind.CLOTH_PHASE_COMPLETED}
 _EVIDENCE = frozenset(k.value for k in PLATE_EVIDENCE)
 
 
-def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD) -> tuple[float, float] | None:
+def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
+                  max_zeta_spread: float = SESSION_ZETA_MAX_SPREAD) -> tuple[float, float] | None:
     """The plate the session identified from all its impacts, to undo in each: (resonance [Hz], damping ratio [-]),
-    or None where the plate was stated (the impacts used it already), not identified, or its resonance is known
-    no better than ``max_spread`` either side.
+    or None where the plate was stated (the impacts used it already), not identified, its resonance known no
+    better than ``max_spread`` either side, or its damping ratio no better than ``max_zeta_spread``.
 
     Parameters
     ----------
@@ -33,6 +37,8 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD) -> 
         The session's rig (:func:`ballimpact.rig_archive.session_rig`).
     max_spread : float
         Widest half-interval of the resonance accepted, as a fraction of it [-].
+    max_zeta_spread : float
+        Widest half-interval of the damping ratio accepted, as a fraction of it [-].
 
     Returns
     -------
@@ -44,6 +50,9 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD) -> 
     if not (fn.value > 0 and zeta.value > 0 and math.isfinite(fn.low) and math.isfinite(fn.high)):
         return None
     if max(fn.high - fn.value, fn.value - fn.low) > max_spread * fn.value:
+        return None
+    if not (math.isfinite(zeta.low) and math.isfinite(zeta.high)) \
+            or max(zeta.high - zeta.value, zeta.value - zeta.low) > max_zeta_spread * zeta.value:
         return None
     return float(fn.value), float(zeta.value)
 

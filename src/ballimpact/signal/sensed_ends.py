@@ -11,7 +11,7 @@ from .._checks import finite_samples, positive_scalar
 from .front import front_responses
 
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
-           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_BEFORE", "SENSED_REACH_PERIODS", "SENSED_MAX_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_FN_UNCERTAINTY",
+           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_BEFORE", "SENSED_REACH_PERIODS", "SENSED_MAX_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP", "SENSED_FN_UNCERTAINTY",
            "SENSED_ZETA_UNCERTAINTY", "SensedEnd", "SensedContact", "sensed_end", "sensed_contact"]
 
 #: Each end's window reaches this fraction of TC into the contact ... [-]
@@ -24,19 +24,26 @@ SENSED_MIN_INSIDE = 6
 #: The start's window reaches this fraction of the plate's period past the jump (at least SENSED_MIN_START samples,
 #: at most SENSED_INSIDE_FRACTION of TC): the plate's first rise pins the jump, and beyond it lies the pre-buckling
 #: spike, which no parabola follows [-]; fitted again reaching three quarters as far (at least 3 samples)
-SENSED_START_PERIODS = 0.1
+SENSED_START_PERIODS = 0.2
 SENSED_MIN_START = 4
+#: The force after the jump is fitted as the jump, a line and (3) a parabola [-]
+SENSED_START_TERMS = 3
 #: The end's window reaches this many of the plate's periods after it (its free ringing) [-]
 SENSED_OUTSIDE_PERIODS = 1.5
-#: The start's window begins this many samples before the first contact (the plate at rest: the signal is noise)
+#: The start's window begins this many samples before the jump, or within the cloth's phase where that is shorter
+#: (three quarters of it less 2 samples, at least 2): the force there is the cloth's line [samples]
 SENSED_BEFORE = 8
 #: Candidates reach this many of the plate's periods either side of the end found on the sensed force (at least 4
 #: samples): a plate's swing moves the crossings read there by up to about half a period [-]
 SENSED_REACH_PERIODS = 0.5
-#: A fit whose rms residual exceeds this many noise deviations is no line and parabola through the plate [-]
-SENSED_MAX_RESIDUAL = 3.0
+#: A fit whose rms residual exceeds this many noise deviations is no line and parabola through the plate (a force's
+#: shape the windows do not follow leaves a few; what that does to the ends is charged as the windows' difference) [-]
+SENSED_MAX_RESIDUAL = 10.0
 #: The fitted TC this fraction or more from the contact found on the sensed force: another contact's ends [-]
 SENSED_MAX_MOVE = 0.05
+#: A start whose fitted jump is below this fraction of the sensed peak is no ball's jump (a fit to the noise before
+#: a start found early) [-]
+SENSED_MIN_JUMP = 0.05
 #: The plate's resonance and damping ratio are known to about these fractions: how far TC moves with them either
 #: way is charged to TC [-]
 SENSED_FN_UNCERTAINTY = 0.01
@@ -52,6 +59,7 @@ class SensedEnd(NamedTuple):
     residual: float  #: rms residual of the fit [unit of the signal]
     first: int  #: first sample of the fit's window [-]
     last: int  #: last sample of the fit's window [-]
+    jump: float = math.nan  #: the start's fitted jump [unit of the signal] (NaN at an end)
 
 
 class SensedContact(NamedTuple):
@@ -72,7 +80,7 @@ def _start_design(n, ts, wn, zeta, lo):
     none, and the cloth's load before the jump drew the jump early."""
     c = 2.0 * zeta / wn
     u = n - lo
-    return np.column_stack([np.ones_like(n), u - c, front_responses(n - ts, wn, zeta, 0.0)])
+    return np.column_stack([np.ones_like(n), u - c, front_responses(n - ts, wn, zeta, 0.0)[:, :SENSED_START_TERMS]])
 
 
 def _end_design(n, te, wn, zeta, lo):
@@ -91,8 +99,9 @@ def _end_design(n, te, wn, zeta, lo):
 
 def _window(centre, side, inside, outside, phase, reach):
     """First and last sample of the window for candidates within ``reach`` of ``centre`` [samples]."""
-    if side == "start":
-        return int(math.floor(centre - phase - reach)) - SENSED_BEFORE, int(math.ceil(centre + reach + inside))
+    if side == "start":  # from within the cloth's phase, where the force before the jump is a line (the cloth's)
+        before = SENSED_BEFORE if phase <= 0 else min(max(int(0.75 * phase) - 2, 2), SENSED_BEFORE)
+        return int(math.floor(centre - reach)) - before, int(math.ceil(centre + reach + inside))
     return int(math.floor(centre - reach - inside)), int(math.ceil(centre + reach + outside))
 
 
@@ -214,7 +223,8 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
     sigma2 = max(float(noise_rms) ** 2, resid2)
     se = math.sqrt(max(sigma2 * float(inv[0, 0]), 0.0)) / float(scale[0])
     at = float(fine[k]) - (phase if side == "start" else 0.0)
-    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi))
+    jump = float(coef[k][2]) if side == "start" else math.nan
+    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi), jump)
 
 
 def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, start_u: float,
@@ -279,6 +289,10 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
                     "sensed force" + (f" ({name})" if name else ""))
         fits[name] = pair
     start, end = fits[""]
+    peak = float(np.max(np.asarray(x, dtype=float)[max(int(start_u), 0):max(int(end_u) + 1, 1)], initial=0.0))
+    if not start.jump >= SENSED_MIN_JUMP * peak:
+        return (f"its start fitted through the plate jumps by {100 * start.jump / peak:.2g} % of the peak only (less "
+                f"than {100 * SENSED_MIN_JUMP:g} %): no ball's jump there")
     residual = max(start.residual, end.residual) / noise_rms
     if residual > SENSED_MAX_RESIDUAL:
         return (f"its ends' fits through the plate leave {residual:.2g} noise deviations rms (more than "
