@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from .checks import CHECKS
 from .problems import ProblemKind
 from .rig import Rig
 from .signal.ringing import PLATE_EVIDENCE
@@ -23,6 +24,9 @@ SESSION_ZETA_MAX_SPREAD = 0.25
 #: undoing judges again (ballimpact.signal.undone.PLATE_KINDS), and the cloth's phase completed on them.
 RETRY_KINDS = PLATE_KINDS | {ProblemKind.CLOTH_PHASE_COMPLETED}
 _EVIDENCE = frozenset(k.value for k in PLATE_EVIDENCE)
+#: The codes of checks that cannot bias TC and are no fault (an alias's, say: kCAL and the peak): beside the plate's,
+#: they leave TC to the plate alone.
+_NOT_TC = frozenset(c.code for c in CHECKS.values() if not c.fault and "contact_time" not in c.biases)
 
 
 def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
@@ -59,7 +63,8 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
 
 def retry_candidates(impact_ids, contact_time_status, reason_code) -> list[str]:
     """The impacts to process again with the session's plate: TC withheld for problems a plate's ringing causes
-    alone (:data:`RETRY_KINDS`), one of them evidence of the plate (ringing, a peak on it, the force below zero).
+    alone (:data:`RETRY_KINDS`, beside findings of checks that cannot bias TC and are no fault), one of them
+    evidence of the plate (ringing, a peak on it, the force below zero).
 
     Parameters
     ----------
@@ -70,7 +75,7 @@ def retry_candidates(impact_ids, contact_time_status, reason_code) -> list[str]:
     -------
     list of str
     """
-    allowed = {k.value for k in RETRY_KINDS}
+    allowed = {k.value for k in RETRY_KINDS} | _NOT_TC
     out = []
     for impact_id, status, codes in zip(impact_ids, contact_time_status, reason_code):
         found = {c for c in str(codes).split(";") if c}

@@ -11,7 +11,7 @@ from .._checks import finite_samples, positive_scalar
 from .front import front_responses
 
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
-           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_BEFORE", "SENSED_REACH_PERIODS", "SENSED_MAX_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP", "SENSED_FN_UNCERTAINTY",
+           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_BEFORE", "SENSED_REACH_PERIODS", "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP", "SENSED_FN_UNCERTAINTY",
            "SENSED_ZETA_UNCERTAINTY", "SensedEnd", "SensedContact", "sensed_end", "sensed_contact"]
 
 #: Each end's window reaches this fraction of TC into the contact ... [-]
@@ -36,9 +36,12 @@ SENSED_BEFORE = 8
 #: Candidates reach this many of the plate's periods either side of the end found on the sensed force (at least 4
 #: samples): a plate's swing moves the crossings read there by up to about half a period [-]
 SENSED_REACH_PERIODS = 0.5
-#: A fit whose rms residual exceeds this many noise deviations is no line and parabola through the plate (a force's
-#: shape the windows do not follow leaves a few; what that does to the ends is charged as the windows' difference) [-]
-SENSED_MAX_RESIDUAL = 10.0
+#: An end's fit whose rms residual exceeds this many noise deviations is no line and parabola falling to zero
+#: through the plate (the free ringing and a smooth force leave about one) [-] ...
+SENSED_MAX_RESIDUAL = 4.0
+#: ... a start's, this many (the pre-buckling spike beyond the jump's window leaves up to tens; what the force's
+#: shape does to the start is charged as the windows' difference) [-]
+SENSED_MAX_START_RESIDUAL = 30.0
 #: The fitted TC this fraction or more from the contact found on the sensed force: another contact's ends [-]
 SENSED_MAX_MOVE = 0.05
 #: A start whose fitted jump is below this fraction of the sensed peak is no ball's jump (a fit to the noise before
@@ -236,9 +239,11 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact; fitted again
     reaching SENSED_INSIDE_SHORT, and with the plate's resonance and damping ratio off by ``fn_uncertainty``
     and ``zeta_uncertainty`` either way, TC moves: the largest move is a bound on what the model leaves out
-    (the force's shape beyond a parabola, the plate known only so well). A fit whose rms residual exceeds
-    SENSED_MAX_RESIDUAL noise deviations is refused: the sensed force is then not that plate's response to
-    such a force (another mode, a baseline wrong there, a second contact).
+    (the force's shape beyond a parabola, the plate known only so well). An end's fit whose rms residual
+    exceeds SENSED_MAX_RESIDUAL noise deviations, or a start's SENSED_MAX_START_RESIDUAL, is refused: the sensed
+    force is then not that plate's response to such a force (another mode, a baseline wrong there, a second
+    contact); so is a start whose jump is under SENSED_MIN_JUMP of the peak, and a TC SENSED_MAX_MOVE or more
+    from the contact found.
 
     Parameters
     ----------
@@ -293,10 +298,11 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     if not start.jump >= SENSED_MIN_JUMP * peak:
         return (f"its start fitted through the plate jumps by {100 * start.jump / peak:.2g} % of the peak only (less "
                 f"than {100 * SENSED_MIN_JUMP:g} %): no ball's jump there")
+    for side, fit, limit in (("start", start, SENSED_MAX_START_RESIDUAL), ("end", end, SENSED_MAX_RESIDUAL)):
+        if fit.residual > limit * noise_rms:
+            return (f"its {side}'s fit through the plate leaves {fit.residual / noise_rms:.2g} noise deviations rms "
+                    f"(more than {limit:g}): the sensed force is not that plate's response to the force there")
     residual = max(start.residual, end.residual) / noise_rms
-    if residual > SENSED_MAX_RESIDUAL:
-        return (f"its ends' fits through the plate leave {residual:.2g} noise deviations rms (more than "
-                f"{SENSED_MAX_RESIDUAL:g}): the sensed force is not that plate's response to a line and parabola there")
     tc_fit = end.index - start.index
     if not abs(tc_fit / tc - 1.0) < SENSED_MAX_MOVE:
         return (f"its ends fitted through the plate give a TC {100 * (tc_fit / tc - 1.0):+.2g} % from the contact "
