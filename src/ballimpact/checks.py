@@ -238,7 +238,13 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                       _t("signal.ringing", "RING_LINE_PROMINENCE", "-", "a line over its neighbourhood"),
                       _t("signal.ringing", "RING_LINE_NOISE_FACTOR", "-", "a line over the noise in a bin"),
                       _t("signal.effects", "UNSEEN_RING_SIGMA", "noise deviations",
-                         "a ringing no identification finds, at most")),
+                         "a ringing no identification finds, at most"),
+                      _t("signal.sensed_ends", "SENSED_FN_UNCERTAINTY", "-", "a known plate's resonance, charged"),
+                      _t("signal.sensed_ends", "SENSED_ZETA_UNCERTAINTY", "-", "its damping ratio, charged"),
+                      _t("signal.sensed_ends", "SENSED_MAX_RESIDUAL", "noise deviations",
+                         "an end's fit through the plate, at most"),
+                      _t("signal.sensed_ends", "SENSED_MAX_START_RESIDUAL", "noise deviations",
+                         "a start's fit through the plate, at most")),
           test="tests/test_verdicts.py -k faint",
           effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f "
                  "after the contact, over the force's slope at each end, bounds each end's shift (TC); A over the "
@@ -246,7 +252,10 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                  "but not undone carries the line's effects when the line is all the evidence and the plate's "
                  "resonance lies in the band the line check looks in; where a peak on "
                  "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
-                 "noise deviations over the end's slope (kCAL and the peak not estimated)."),
+                 "noise deviations over the end's slope (kCAL and the peak not estimated). A known plate (stated, or "
+                 "the session's) that is not undone has the contact's ends fitted through it in the sensed force: "
+                 "TC gets how far it moves with the fit's windows and the plate off by SENSED_FN_UNCERTAINTY and "
+                 "SENSED_ZETA_UNCERTAINTY, and the ringing's other findings then bias kCAL and the peak only."),
     Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,
           thresholds=(_t("signal.ringing", "NEGATIVE_FRACTION", "of the peak", "depth"),
                       _t("signal.ringing", "NEGATIVE_SIGMA", "standard errors", "significance")),
