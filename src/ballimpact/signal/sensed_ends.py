@@ -52,6 +52,7 @@ SENSED_MIN_JUMP = 0.05
 SENSED_FN_UNCERTAINTY = 0.01
 SENSED_ZETA_UNCERTAINTY = 0.25
 _COARSE, _FINE = 0.25, 0.02  # grids of the candidates [samples]
+_ITERATIONS = 10  # the window re-anchored on the best at most this many times
 
 
 class SensedEnd(NamedTuple):
@@ -186,7 +187,7 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
     phase = max(float(cloth_phase_samples), 0.0)
     inside = max(int(inside_samples), 2)
     centre = float(index) + (phase if side == "start" else 0.0)  # the start's guess is the first contact's
-    for it in range(6):
+    for it in range(_ITERATIONS):
         lo, hi = _window(centre, side, inside, outside, phase, reach)
         if lo < 0 or hi >= y.size:
             return None
@@ -198,9 +199,10 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
         centre = best
         if it > 0 and moved <= 1.0:
             break
-        if k in (0, grid.size - 1) and it >= 3:
-            return None
-        reach = min(reach, 2.0)  # the window follows the best: the force beyond ``inside`` stays out of it
+        if k not in (0, grid.size - 1):  # inside the candidates: the window follows the best, and the force
+            reach = min(reach, 2.0)  # beyond ``inside`` stays out of it
+    else:
+        return None  # still moving: no least the window settles on
     lo, hi = _window(centre, side, inside, outside, phase, 1.0)
     if lo < 0 or hi >= y.size:
         return None
