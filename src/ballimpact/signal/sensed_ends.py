@@ -203,13 +203,17 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
             reach = min(reach, 2.0)  # beyond ``inside`` stays out of it
     else:
         return None  # still moving: no least the window settles on
-    lo, hi = _window(centre, side, inside, outside, phase, 1.0)
-    if lo < 0 or hi >= y.size:
-        return None
-    fine = np.arange(centre - 1.0, centre + 1.0 + 1e-9, _FINE)
-    sse, coef, design = _fits(y, lo, hi, fine, side, wn, zeta, phase)
-    k = int(np.argmin(sse))
-    if k in (0, fine.size - 1):
+    for _ in range(_ITERATIONS):  # the window's anchor moves the least by a fraction of a sample: follow it
+        lo, hi = _window(centre, side, inside, outside, phase, 1.0)
+        if lo < 0 or hi >= y.size:
+            return None
+        fine = np.arange(centre - 1.0, centre + 1.0 + 1e-9, _FINE)
+        sse, coef, design = _fits(y, lo, hi, fine, side, wn, zeta, phase)
+        k = int(np.argmin(sse))
+        if k not in (0, fine.size - 1):
+            break
+        centre = float(fine[k])
+    else:
         return None
     m = hi - lo + 1
     resid2 = float(sse[k]) / max(m - design.shape[-1] - 1, 1)
