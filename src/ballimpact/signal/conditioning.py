@@ -86,6 +86,7 @@ from ..problems import Problem, ProblemKind
 from .baseline import (BaselineFit, MAINS_CANDIDATES_HZ, MIN_QUIET_SAMPLES, POST_GUARD_S, PRE_GUARD_S, fit_baseline,
                        mains_frequencies, rough_trend)
 from .contact import ContactResult, detect_contact
+from .undo import lowpass_zero_phase, undo_plate_resonance
 from .end_checks import adc_step_problems, curve_end_contact, end_problems, plateau_end_problems
 from .integrity import (baseline_bend_problems, baseline_step_problems, edge_event_problems, end_event_problems,
                         level_problems, mains_problems, short_record_hum)
@@ -405,7 +406,7 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
     response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
     undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
-    if not getattr(refusal, "undoable", True):
+    if not getattr(refusal, "undoable", True) or _second_contact_under_ringing(it.x, fs, plate, t0_s):
         return None
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
@@ -431,6 +432,14 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
                      + ("ends_fitted_sensed",),
                      peak_index=int(math.ceil(fit.start)) + int(np.argmax(inside)), peak_V=float(np.max(inside)))
     return fitted, kept
+
+
+def _second_contact_under_ringing(x, fs, plate, t0_s) -> bool:
+    """Whether the force undone from a known plate and low-passed at its resonance holds more than one contact: the
+    sensed peak stands on the plate's swing, and a second contact of 5 % of the force's peak may be less of it
+    (rig 9:000, a 3.85 kHz plate: 4.9 %, one contact found on the sensed force)."""
+    y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
+    return detect_contact(y, fs, t0_s=t0_s).n_impacts > 1
 
 
 def _undone_result(it, fs, undone, findings, messages, kept_problems, t0_s, scale, spikes, mains_source):
