@@ -369,14 +369,7 @@ def test_the_session_s_plate_keeps_a_tc_its_own_trace_could_not_undo(tmp_path):
     """Rig 1001:023 (a 6.7 kHz plate, damping 0.12, at 123 kHz, nothing of it stated): ball2-001's trace alone
     identifies the plate too poorly to undo it (TC withheld for the plate's ringing); the plate the session
     identifies from all its 34 impacts, within 1 %, undoes it, and TC is kept, right (ballimpact.session_plate)."""
-    import pandas as pd
-
-    rigs, rig_zoo = _rigs()
-    rig = rig_zoo.draw_rig(1001, 23)
-    raw, results = tmp_path / "raw", tmp_path / "results"
-    truths = {t.impact_id: t for t in rig_zoo.write_session(rig, raw)}
-    rigs.run_library(raw, results, rig.session_id)
-    table = pd.read_csv(results / rig.session_id / "impacts.csv").set_index("impact_id")
+    table, truths = _rig_session_table(tmp_path, 1001, 23)
     row = table.loc["ball2-001"]
     assert row["contact_time_status"] == "ok", row["reason"]
     assert abs(row["contact_time_ms"] / (1e3 * truths["ball2-001"].contact_time_s) - 1.0) <= 0.005
@@ -418,15 +411,21 @@ def test_a_second_contact_under_a_plates_swing_is_not_used(tmp_path):
     contact search saw it; the session's plate, used in the impact, fitted its ends through the plate and kept TC
     and COR: a faulty impact in the fit. The force undone from the plate and low-passed at its resonance shows the
     second contact, and the ends are not fitted through the plate then."""
-    import pandas as pd
-
-    rigs, rig_zoo = _rigs()
-    rig = rig_zoo.draw_rig(9, 0)
-    raw, results = tmp_path / "raw", tmp_path / "results"
-    truths = {t.impact_id: t for t in rig_zoo.write_session(rig, raw)}
-    rigs.run_library(raw, results, rig.session_id)
-    table = pd.read_csv(results / rig.session_id / "impacts.csv").set_index("impact_id")
+    table, truths = _rig_session_table(tmp_path, 9, 0)
     assert truths["ball1-006"].fault == "second contact"
     for impact_id, r in table.iterrows():
         if truths[impact_id].fault:
             assert not (r["contact_time_status"] == "ok" and r["cor_status"] == "ok"), impact_id
+
+
+def _rig_session_table(tmp_path, seed: int, index: int):
+    """bench/rigs.py's rig ``seed:index`` written and run through the library: its impacts.csv (by impact id) and
+    the truth of each impact."""
+    import pandas as pd
+
+    rigs, rig_zoo = _rigs()
+    rig = rig_zoo.draw_rig(seed, index)
+    raw, results = tmp_path / "raw", tmp_path / "results"
+    truths = {t.impact_id: t for t in rig_zoo.write_session(rig, raw)}
+    rigs.run_library(raw, results, rig.session_id)
+    return pd.read_csv(results / rig.session_id / "impacts.csv").set_index("impact_id"), truths
