@@ -436,8 +436,8 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
 
 def _second_contact_under_ringing(x, fs, plate, t0_s) -> bool:
     """Whether the force undone from a known plate and low-passed at its resonance holds more than one contact: the
-    sensed peak stands on the plate's swing, and a second contact of 5 % of the force's peak may be less of it
-    (rig 9:000, a 3.85 kHz plate: 4.9 %, one contact found on the sensed force)."""
+    sensed peak stands on the plate's swing, and a second contact of 5 % of the force's peak may be less of it,
+    unseen by the contact search on the sensed force."""
     y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
     return detect_contact(y, fs, t0_s=t0_s).n_impacts > 1
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._checks import finite_samples, positive_scalar
 
-__all__ = ["FrontFit", "front_responses", "fit_front"]
+__all__ = ["FrontFit", "front_responses", "steady_responses", "fit_front"]
 
 FRONT_RISE_MAX = 4.0  # the force's jump rises over at most this many samples (the model's 10 us step) [samples]
 FRONT_START_SPAN = 3.0  # the force's start is looked for up to this many samples before the contact's first [samples]
@@ -55,6 +55,32 @@ class FrontFit(NamedTuple):
             out = out + self.drop * jump(v) + np.where(
                 v >= 0, v * (self.drop_slope + v * (self.drop_curvature + v * self.drop_cubic)), 0.0)
         return out
+
+
+def steady_responses(u, wn: float, zeta: float) -> tuple:
+    """The plate's steady responses to the ramp u and the parabola u^2 applied for all u.
+
+    For the continuous second-order plate of unit static gain: ``u - c`` with c = 2 zeta / wn, and
+    ``u^2 + p1 u + p0`` with p1 = -4 zeta / wn and p0 = 2 (4 zeta^2 - 1) / wn^2 (the polynomials that solve the
+    plate's equation; :func:`front_responses` is them less the oscillation that starts each at rest).
+
+    Parameters
+    ----------
+    u : array_like
+        Time [samples].
+    wn : float
+        The resonance's angular frequency [rad per sample], finite.
+    zeta : float
+        Its damping ratio [-].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The ramp's and the parabola's steady responses [samples, samples^2].
+    """
+    u = np.asarray(u, dtype=float)
+    p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn
+    return u - 2.0 * zeta / wn, u * u + p1 * u + p0
 
 
 def front_responses(u, wn, zeta, rise, *, cubic: bool = False):

@@ -8,11 +8,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .._checks import finite_samples, positive_scalar
-from .front import front_responses
+from .front import front_responses, steady_responses
 
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
-           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_BEFORE", "SENSED_REACH_PERIODS", "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP", "SENSED_FN_UNCERTAINTY",
-           "SENSED_ZETA_UNCERTAINTY", "SensedEnd", "SensedContact", "sensed_end", "sensed_contact"]
+           "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_START_TERMS", "SENSED_BEFORE", "SENSED_REACH_PERIODS",
+           "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP",
+           "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SensedEnd", "SensedContact", "sensed_end",
+           "sensed_contact"]
 
 #: Each end's window reaches this fraction of TC into the contact ... [-]
 SENSED_INSIDE_FRACTION = 0.10
@@ -78,13 +80,12 @@ class SensedContact(NamedTuple):
 
 
 def _start_design(n, ts, wn, zeta, lo):
-    """The plate's responses [n, 5] to a level and a line from the window's first sample ``lo`` (the cloth's light
-    load before the jump, steady) and to a jump, a line and a parabola from ``ts``. A cloth's ramp tied to the
-    first contact ``ts - phase`` trades with the jump, and the fit found a second least two to three samples late;
-    none, and the cloth's load before the jump drew the jump early."""
-    c = 2.0 * zeta / wn
-    u = n - lo
-    return np.column_stack([np.ones_like(n), u - c, front_responses(n - ts, wn, zeta, 0.0)[:, :SENSED_START_TERMS]])
+    """The plate's responses [n, 2 + SENSED_START_TERMS] to a level and a line from the window's first sample ``lo``
+    (the cloth's light load before the jump, steady) and to a jump, a line and a parabola from ``ts``. (A cloth's
+    ramp tied to the first contact ``ts - phase`` trades with the jump, giving a second least two to three samples
+    late; with no term for the cloth's load the jump is drawn early onto it.)"""
+    ramp, _ = steady_responses(n - lo, wn, zeta)
+    return np.column_stack([np.ones_like(n), ramp, front_responses(n - ts, wn, zeta, 0.0)[:, :SENSED_START_TERMS]])
 
 
 def _end_design(n, te, wn, zeta, lo):
@@ -93,12 +94,11 @@ def _end_design(n, te, wn, zeta, lo):
     terms started at ``te`` (:func:`ballimpact.signal.front.front_responses`)."""
     u = n - te
     resp = front_responses(u, wn, zeta, 0.0)
-    c = 2.0 * zeta / wn
-    p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn
+    ramp, parabola = steady_responses(u, wn, zeta)
     wd, v = wn * math.sqrt(1.0 - zeta * zeta), n - lo
     decay = np.exp(-zeta * wn * v)
-    return np.stack([decay * np.cos(wd * v), decay * np.sin(wd * v), -(u - c) + resp[:, 1],
-                     (u * u + p1 * u + p0) - resp[:, 2]], axis=1)
+    return np.stack([decay * np.cos(wd * v), decay * np.sin(wd * v), -ramp + resp[:, 1], parabola - resp[:, 2]],
+                    axis=1)
 
 
 def _window(centre, side, inside, outside, phase, reach):
@@ -109,7 +109,7 @@ def _window(centre, side, inside, outside, phase, reach):
     return int(math.floor(centre - reach - inside)), int(math.ceil(centre + reach + outside))
 
 
-def _fits(y, lo, hi, grid, side, wn, zeta, phase):
+def _fits(y, lo, hi, grid, side, wn, zeta):
     """The residual sum of squares [unit^2] and coefficients of the fit at every candidate of ``grid``."""
     n = np.arange(lo, hi + 1, dtype=float)
     design = np.stack([_start_design(n, g, wn, zeta, lo) if side == "start" else _end_design(n, g, wn, zeta, lo)
@@ -135,9 +135,10 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
     candidate the model is linear in its amplitudes (the responses are analytic:
     :func:`ballimpact.signal.front.front_responses`); the candidate of least residual wins, on a grid of a
     quarter of a sample within ``reach_samples`` of ``index``, then within 2 samples of the best with the window
-    re-anchored on it (until it stays within a sample), then of 0.02 sample within one. The sensed noise is white, so no low-pass is needed and
-    none spreads the ends (:func:`ballimpact.signal.undone_end.undone_end` fits through the undoing and a
-    low-pass instead). Not in the paper; see docs/signal-processing.md, "Plate resonance".
+    re-anchored on it (until it stays within a sample), then of 0.02 sample within one. The sensed noise is white,
+    so no low-pass is needed and none spreads the ends (:func:`ballimpact.signal.undone_end.undone_end` fits
+    through the undoing and a low-pass instead). Not in the paper; see docs/signal-processing.md, "Plate
+    resonance".
 
     Parameters
     ----------
@@ -192,7 +193,7 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
         if lo < 0 or hi >= y.size:
             return None
         grid = np.arange(centre - reach, centre + reach + 1e-9, _COARSE)
-        sse, _, _ = _fits(y, lo, hi, grid, side, wn, zeta, phase)
+        sse, _, _ = _fits(y, lo, hi, grid, side, wn, zeta)
         k = int(np.argmin(sse))
         best = float(grid[k])
         moved = abs(best - centre)
@@ -208,7 +209,7 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
         if lo < 0 or hi >= y.size:
             return None
         fine = np.arange(centre - 1.0, centre + 1.0 + 1e-9, _FINE)
-        sse, coef, design = _fits(y, lo, hi, fine, side, wn, zeta, phase)
+        sse, coef, design = _fits(y, lo, hi, fine, side, wn, zeta)
         k = int(np.argmin(sse))
         if k not in (0, fine.size - 1):
             break

@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._checks import finite_samples, positive_scalar
-from .front import front_responses
+from .front import front_responses, steady_responses
 from .undo import lowpass_kernel, undo_rows, undone_impulse_response
 
 __all__ = ["UndoneEnd", "undone_end"]
@@ -46,9 +46,8 @@ def _end_columns(frequency_hz: float, damping_ratio: float, fs: float, taps: np.
     n = np.arange(-span - pad, span + pad + 1, dtype=float)
     wn = 2.0 * math.pi * frequency_hz / fs  # [rad / sample]
     zeta = damping_ratio
-    p0, p1 = 2.0 * (4.0 * zeta * zeta - 1.0) / (wn * wn), -4.0 * zeta / wn  # the parabola's steady response
     t = n[None, :] - np.arange(0.0, 1.0 - 1e-9, step)[:, None]  # [frac, n]
-    steady_q = t * t + p1 * t + p0
+    _, steady_q = steady_responses(t, wn, zeta)  # the parabola's steady response
     responses = np.concatenate([np.moveaxis(front_responses(t, wn, zeta, 0.0), -1, 1), steady_q[:, None, :]],
                                axis=1)  # [frac, response, n]: step, ramp, parabola (analytic), the steady parabola
     u = undo_rows(responses, fs, frequency_hz, damping_ratio)
