@@ -429,3 +429,43 @@ def _rig_session_table(tmp_path, seed: int, index: int):
     truths = {t.impact_id: t for t in rig_zoo.write_session(rig, raw)}
     rigs.run_library(raw, results, rig.session_id)
     return pd.read_csv(results / rig.session_id / "impacts.csv").set_index("impact_id"), truths
+
+
+def _rig_impacts(tmp_path, seed: int, index: int, wanted):
+    """bench/rigs.py's rig ``seed:index`` written, and the impacts ``wanted`` processed alone: {id: (result, truth)}."""
+    from ballimpact import processing
+    from ballimpact.session import read_session
+
+    _, rig_zoo = _rigs()
+    rig = rig_zoo.draw_rig(seed, index)
+    truths = {t.impact_id: t for t in rig_zoo.write_session(rig, tmp_path)}
+    session = read_session(tmp_path / rig.session_id)
+    return {row.impact_id: (processing.process_impact(row, session), truths[row.impact_id])
+            for row in session.impacts if row.impact_id in wanted}
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_a_record_of_one_mains_period_keeps_its_tcs_with_the_hums_prior(tmp_path):
+    """Rig 9:013 (18 ms records at 125 kHz under 8 mV of 60 Hz hum with harmonics 2-5, the time constant and a
+    24 kHz plate stated; held-out rig seed 9, looked at since): the five hum components fitted around a window
+    that had grown swung by volts under it, and the window never settled (0b80251). The hum's prior in the
+    baseline fit (signal.baseline) keeps each TC within 0.5 % of the truth."""
+    for impact_id, (result, truth) in _rig_impacts(tmp_path, 9, 13, ("ball2-001", "ball1-002", "ball1-017")).items():
+        error = result.contact_time_ms / (1e3 * truth.contact_time_s) - 1.0
+        assert result.contact_time_status == "ok", (impact_id, result.reason)
+        assert abs(error) <= 0.005, (impact_id, error)
+
+
+@pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
+def test_a_decay_not_measurable_leaves_no_level_after_a_short_records_contact(tmp_path):
+    """Rig 9:162 (21 ms records at 130 kHz, the amplifier's time constant of 12 s not stated; held-out rig seed
+    9, looked at since): the undershoot's kappa, fitted with the hum over 14 ms after the contact, came out below
+    zero and was not applied, but the baseline it was fitted with stayed, and put the record after the contact
+    above zero: the window ran to the record's end, two clean impacts were excluded as truncated and the others'
+    windows never settled (0b80251). The baseline is fitted again without the decay then, and where the kappa
+    flips with each window it is left out (signal.window): each TC within 0.5 % of the truth."""
+    got = _rig_impacts(tmp_path, 9, 162, ("ball1-003", "ball3-012", "ball3-014"))
+    for impact_id, (result, truth) in got.items():
+        error = result.contact_time_ms / (1e3 * truth.contact_time_s) - 1.0
+        assert result.status != "excluded" and result.contact_time_status == "ok", (impact_id, result.reason)
+        assert abs(error) <= 0.005, (impact_id, error)

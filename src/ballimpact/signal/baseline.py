@@ -48,6 +48,7 @@ BIAS_WARN_FRACTION = 1.0e-3  # warn when an uncorrected decay could bias the imp
 BIAS_EXCLUDE_FRACTION = 3.0e-3  # exclude when it could bias the impulse by more [-]
 NYQUIST_MARGIN = 0.45  # harmonics above this fraction of the sample rate are skipped [-]
 MAINS_CANDIDATES_HZ = (50.0, 60.0)  # mains frequencies tried when not given [Hz]
+HUM_PRIOR_SCALE = 3.0  # the hum's coefficients' prior standard deviation, in half ranges of the quiet samples [-]
 ROBUST_SIGMA = 5.0  # quiet samples off the first fit by more noise deviations are dropped [-]
 
 
@@ -143,8 +144,9 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
     y = v[qi]
     p = phi.shape[1]
     keep = np.ones(qi.size, dtype=bool)
+    ridge = _hum_prior(y, pre[qi], post[qi], norms, HUM_PRIOR_SCALE)
     for _ in range(2):
-        ne = _normal_equations(phi, big_phi, y, iv, keep)
+        ne = _normal_equations(phi, big_phi, y, iv, keep, ridge)
         kappa, curv = _best_kappa(ne, kappa_given, use_post)
         rss, theta = _solve_kappa(ne, kappa)
         columns = phi + kappa * big_phi  # the model's columns at this kappa
@@ -270,11 +272,37 @@ def _design(v, fs, t, t_mid, trig, freqs, qi, post_q, start_u, use_post):
     return phi, norms, big_phi, iv
 
 
-def _normal_equations(phi, big_phi, y, iv, keep):
-    """Coefficients of the normal equations, quadratic in kappa, of the kept samples."""
+def _normal_equations(phi, big_phi, y, iv, keep, ridge=None):
+    """Coefficients of the normal equations, quadratic in kappa, of the kept samples; ``ridge`` (one per column,
+    or None) is added to the diagonal of the constant term: the prior's precision, in the columns' scale."""
     a, b_, y_, i_ = (phi, big_phi, y, iv) if keep.all() else (phi[keep], big_phi[keep], y[keep], iv[keep])
-    return (a.T @ a, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
+    p0 = a.T @ a
+    if ridge is not None:
+        p0[np.diag_indices_from(p0)] += ridge
+    return (p0, a.T @ b_ + b_.T @ a, b_.T @ b_, a.T @ y_, a.T @ i_ + b_.T @ y_, b_.T @ i_,
             float(y_ @ y_), 2.0 * float(y_ @ i_), float(i_ @ i_))
+
+
+def _hum_prior(y, pre_q, post_q, norms, scale):
+    """The precision of the hum's prior on each normalised column [1/V^2 times the noise variance]: None when there
+    is no hum column. Each cos and sin coefficient is given a prior of mean 0 and standard deviation ``scale``
+    times the largest half range (1st to 99th percentile) of a quiet stretch about its median [V]: a stationary hum
+    shows its size on the quiet samples, and a combination of harmonics that nearly cancels on them (a record of
+    about a mains period) cannot grow under the contact beyond it."""
+    if norms.size <= 2 or not math.isfinite(scale):
+        return None
+    half = 0.0
+    for sel in (pre_q, post_q):
+        if np.count_nonzero(sel) >= MIN_QUIET_SAMPLES:
+            lo, hi = np.percentile(y[sel], [1.0, 99.0])
+            half = max(half, 0.5 * (hi - lo))
+    d = np.diff(y[pre_q]) if np.count_nonzero(pre_q) > 3 else np.diff(y)
+    sigma2 = robust_noise(d) ** 2 / 2.0
+    if not (half > 0 and sigma2 > 0):
+        return None
+    ridge = np.zeros(norms.size)
+    ridge[2:] = sigma2 / (scale * half * norms[2:]) ** 2
+    return ridge
 
 
 def _solve_kappa(ne, k):

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..problems import Problem, ProblemKind
-from .baseline import (BaselineFit, choose_tau, decay_correct, fit_baseline, integral_start, integral_to,
-                       running_integral)
+from .baseline import (UNDERSHOOT_SIGNIFICANCE, BaselineFit, choose_tau, decay_correct, fit_baseline, integral_start,
+                       integral_to, running_integral)
 from .contact import ContactResult, ContactSearch
 
 __all__ = ["event_threshold", "iterate"]
@@ -83,6 +84,7 @@ class _Iteration:
     n_iter: int
     contact_integral: float
     search: ContactSearch  # the contact's search on x (with fit's noise)
+    never_measured: bool = False  # the decay's kappa was never significant on the way (or not fitted)
 
 
 def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask, kappa_given, noise_floor,
@@ -105,7 +107,33 @@ def _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, ma
 
 
 def iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale, noise_floor) -> _Iteration:
-    """Contact window, event mask and baseline (with the decay) fitted in turn until they stop moving."""
+    """Contact window, event mask and baseline (with the decay) fitted in turn until they stop moving.
+
+    Where they do not, and the decay was never measurable on the way (its kappa within UNDERSHOOT_SIGNIFICANCE
+    standard errors of zero at every window: a record too short after the contact for the undershoot, whose
+    insignificant kappa flips with the quiet samples each window leaves), they are fitted again with no decay,
+    which a window does not move: the decay's effect on the impulse is charged as it was (the last window's
+    undershoot not measurable).
+    """
+    it = _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale, noise_floor)
+    if not (it.problems and it.never_measured and tau_s is None and kappa_given is None):
+        return it
+    still = _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, 0.0, scale, noise_floor)
+    if still.problems:
+        return it
+    still.pending, still.tau_problems = it.pending, it.tau_problems
+    still.fit = _measured(still.fit, it.fit)
+    return still
+
+
+def _measured(fit: BaselineFit, free: BaselineFit) -> BaselineFit:
+    """``fit`` (without the decay) giving the undershoot ``free`` measured: its kappa and standard error [1/s]."""
+    coef = {**fit.coef, "kappa_per_s": free.kappa, "kappa_se_per_s": free.kappa_se}
+    return dataclasses.replace(fit, kappa=free.kappa, kappa_se=free.kappa_se, coef=coef)
+
+
+def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale, noise_floor) -> _Iteration:
+    """The iteration of :func:`iterate` (``kappa_given`` 0: no decay)."""
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
     mask = np.zeros(v.size, dtype=bool)
     problems: list[Problem] = []
@@ -116,6 +144,7 @@ def iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given,
     # often gives the same fit and the same signal again, whose contact is then known
     cache: dict = {}
     made_from: tuple = ()  # the fit, tau and the sample the decay's integral starts at of x and search below
+    never_measured = True  # no fit's kappa stood out of its standard errors
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
             fit, mains, ambiguous = _fit_candidates(v, fs, candidates, start_u, end_u, pre_guard, post_guard, mask,
@@ -128,6 +157,15 @@ def iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given,
         contact_integral = integral_to(running, start_u, end_u)
         tau, source, pending, tau_problems = choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
+        never_measured &= not abs(fit.kappa) > UNDERSHOOT_SIGNIFICANCE * fit.kappa_se
+        if not math.isfinite(tau) and kappa_given is None and fit.kappa != 0 and math.isfinite(fit.kappa):
+            # the decay is not corrected: the baseline must not carry the level the rejected kappa put after the
+            # contact (a kappa below zero puts the quiet record after it above the baseline, where it reads as force)
+            fit = _measured(fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
+                                         0.0, noise_floor=noise_floor, cache=cache), fit)
+            y = v - fit.baseline
+            running = running_integral(y, fs, start_u)
+            contact_integral = integral_to(running, start_u, end_u)
         i0 = integral_start(start_u) if math.isfinite(tau) else -1
         if not (made_from and made_from[0] is fit and made_from[1:] == (tau, i0)):
             x = decay_correct(y, running, tau)
@@ -154,4 +192,4 @@ def iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given,
                                     f"{1e3 * b1 / fs:.4g} ms of the record: the decay, drift and hum fitted "
                                     "around each window move it)"))
     return _Iteration(x, fit, tau, source, pending, tau_problems, problems, mains, ambiguous, start_u, end_u, n_iter,
-                      contact_integral, search)
+                      contact_integral, search, never_measured)
