@@ -288,15 +288,18 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                                              post_guard_s)
         problems.extend(found)
         undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
+        fitted: tuple | str = ""  # the contact with its ends fitted through a known plate, or why they were not
         if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
             fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s)  # the contact's
-            if fitted is not None:  # ends fitted through it in the sensed force, where the noise is white
+            if not isinstance(fitted, str):  # ends fitted through it in the sensed force, where the noise is white
                 return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
                                scale, spikes, it.mains, mains_source, it.contact_integral)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
-            problems.append(Problem(ProblemKind.PLATE_RINGING, str(undone), data={"undo_refused": 1.0, **refused}))
+            why = str(undone) + (f"; nor its contact's ends fitted through the plate in the sensed force: {fitted}"
+                                 if isinstance(stated, str) and isinstance(fitted, str) and fitted else "")
+            problems.append(Problem(ProblemKind.PLATE_RINGING, why, data={"undo_refused": 1.0, **refused}))
         elif undone is not None:
             return _undone_result(it, fs, undone, findings, messages, at_ends + staircase, t0_s, scale, spikes,
                                   mains_source)
@@ -402,17 +405,19 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
 def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s):
     """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
-    that fit judges, or None where the fit refuses too. The problems a plate's ringing causes
+    that fit judges, or why not (str: "" where the fit was not tried). The problems a plate's ringing causes
     (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
     response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
     undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
-    if not getattr(refusal, "undoable", True) or _second_contact_under_ringing(it.x, fs, plate, t0_s):
-        return None
+    if not getattr(refusal, "undoable", True):
+        return ""
+    if _second_contact_under_ringing(it.x, fs, plate, t0_s):
+        return "the force undone and low-passed at the resonance holds a second contact"
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
                          cloth_phase_samples=cloth_phase_s * fs)
     if isinstance(fit, str):
-        return None
+        return fit
     tc_u = fit.end - fit.start
     nan = math.nan
     kept = [p if p.kind not in PLATE_KINDS else replace(p, effects={"contact_time": 0.0, "kcal": nan, "peak": nan},
