@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from ballimpact.rig import Rig, RigEstimate
-from ballimpact.session_plate import SESSION_PLATE_MAX_SPREAD, retry_candidates, session_plate
+from ballimpact.session_plate import (SESSION_MAINS_MIN_IMPACTS, SESSION_PLATE_MAX_SPREAD, retry_candidates,
+                                      session_mains, session_plate)
 
 
 def _rig(fn, low, high, zeta=0.05, source="identified"):
@@ -31,3 +32,25 @@ def test_impacts_retried_are_those_a_plate_s_ringing_alone_withheld():
              "plate_ringing", "peak_on_ringing;contact_end_undetermined", ""]
     # b: no evidence of the plate; c: a fault besides; d: TC ok; f: nothing found
     assert retry_candidates(ids, status, codes) == ["a", "e"]
+
+
+def _mains_rig(value, low, high, n_impacts=10, source="identified"):
+    return Rig(estimates={"mains_hz": RigEstimate(value, low, high, source=source, n_impacts=n_impacts)})
+
+
+def test_the_sessions_mains_is_used_where_every_impact_that_resolved_its_hum_agrees():
+    assert session_mains(_mains_rig(60.0, 60.0, 60.0)) == 60.0
+    assert session_mains(_mains_rig(60.0, 50.0, 60.0)) is None  # some impacts found 50 Hz: not known
+    assert session_mains(_mains_rig(60.0, 60.0, 60.0, n_impacts=SESSION_MAINS_MIN_IMPACTS - 1)) is None
+    assert session_mains(_mains_rig(50.0, 50.0, 50.0, source="stated")) is None  # the impacts used it already
+    assert session_mains(_mains_rig(0.0, float("nan"), float("nan"), n_impacts=0, source="none")) is None
+
+
+def test_impacts_retried_with_the_sessions_mains_are_those_an_unresolved_hum_withheld_without_a_fault():
+    ids = ["a", "b", "c", "d"]
+    status = ["withheld", "withheld", "excluded", "ok"]
+    codes = ["mains_unresolved;contact_end_undetermined", "contact_end_undetermined",
+             "mains_unresolved;clipping", "mains_unresolved"]
+    # b: no hum finding; c: clipped (a fault) besides; d: TC ok
+    assert retry_candidates(ids, status, codes, plate=False, mains=True) == ["a"]
+    assert retry_candidates(ids, status, codes, plate=False, mains=False) == []

@@ -224,28 +224,34 @@ def _with_columns(ds, columns: dict):
 
 
 def _with_session_plate(ds, session, order, mains_hz=None):
-    """``ds`` with the impacts whose TC a plate's ringing withheld processed again with the plate the session
-    identified from all its impacts, as if stated, where that keeps their TC and COR (:mod:`ballimpact.session_plate`);
-    the others as they were. ``session`` (:class:`ballimpact.session.Session`) is left as it is."""
+    """``ds`` with the impacts whose TC a plate's ringing, or a hum their own record could not resolve, withheld
+    processed again with the plate and the mains frequency the session identified from all its impacts, as if
+    stated, where that keeps their TC and COR (:mod:`ballimpact.session_plate`); the others as they were.
+    ``session`` (:class:`ballimpact.session.Session`) is left as it is; ``mains_hz`` is config's (None: none)."""
     from . import archive, processing, session_plate
 
-    ids = session_plate.retry_candidates(ds["impact_id"].values, ds["contact_time_status"].values,
-                                         ds["reason_code"].values)
+    columns = (ds["impact_id"].values, ds["contact_time_status"].values, ds["reason_code"].values)
+    if not session_plate.retry_candidates(*columns, mains=True):
+        return ds
+    rig = _session_rig(ds, session.meta)
+    plate = session_plate.session_plate(rig)
+    mains = session_plate.session_mains(rig) if mains_hz is None and session.meta.mains_hz is None else None
+    ids = session_plate.retry_candidates(*columns, plate=plate is not None, mains=mains is not None)
     if not ids:
         return ds
-    plate = session_plate.session_plate(_session_rig(ds, session.meta))
-    if plate is None:
-        return ds
+    given = mains_hz if mains_hz is not None else mains
     session = dataclasses.replace(session, meta=dataclasses.replace(
-        session.meta, plate_resonance=plate, **({} if mains_hz is None else {"mains_hz": float(mains_hz)})))
+        session.meta, **({} if plate is None else {"plate_resonance": plate}),
+        **({} if given is None else {"mains_hz": float(given)})))
     kept = [r for r in processing.iter_process(session, impact_ids=ids)
             if r.contact_time_status == "ok" and r.cor_status == "ok"]
     if not kept:
         return ds
     rows = {row.impact_id: row for row in session.impacts}
+    used = ", ".join(([f"plate ({plate[0]:.6g} Hz, damping ratio {plate[1]:.3g})"] if plate else [])
+                     + ([f"mains ({mains:g} Hz)"] if mains else []))
     for r in kept:
-        logger.info("%s (%s): TC kept with the session's plate (%.6g Hz, damping ratio %.3g)", r.impact_id, r.ball,
-                    *plate)
+        logger.info("%s (%s): TC kept with the session's %s", r.impact_id, r.ball, used)
     new = archive.impacts_dataset(kept, trace_info={r.impact_id: _trace_info(session, rows[r.impact_id])
                                                     for r in kept})
     replaced = {r.impact_id for r in kept}

@@ -473,7 +473,8 @@ def _identified_note(est: RigEstimate, scale: float, unit: str) -> str:
 
 
 def _mains_estimate(stated, mains_hz, sources) -> RigEstimate:
-    """The mains frequency: stated, or the one most impacts' hum was found at."""
+    """The mains frequency: stated, or the one most impacts' hum was found at (the interval: the lowest and highest
+    found)."""
     if stated:
         return RigEstimate(float(stated), float(stated), float(stated), "stated")
     f = np.asarray(mains_hz, dtype=float)
@@ -483,7 +484,8 @@ def _mains_estimate(stated, mains_hz, sources) -> RigEstimate:
     values, counts = np.unique(f[found], return_counts=True)
     best = float(values[np.argmax(counts)])
     note = ", ".join(f"{v:g} Hz in {c}" for v, c in zip(values, counts))
-    return RigEstimate(best, best, best, "identified", int(found.sum()), f"hum found at {note} of the impacts")
+    return RigEstimate(best, float(values[0]), float(values[-1]), "identified", int(found.sum()),
+                       f"hum found at {note} of the impacts")
 
 
 def identify_rig(impacts: dict, sample_rate_hz: float, *, stated_plate=None, stated_time_constant_s=None,

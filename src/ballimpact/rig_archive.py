@@ -58,7 +58,11 @@ def session_rig(ds: xr.Dataset, meta) -> Rig:
         "raw_time_s": ds["raw_time_s"].values, "raw_voltage_V": ds["raw_voltage_V"].values,
         "contact_time_ms": floats_of(ds, "contact_time_ms"), "noise_rms_V": floats_of(ds, "noise_rms_V"),
         "hum_amplitude_V": floats_of(ds, "hum_amplitude_V"), "mains_hz": floats_of(ds, "mains_frequency_hz"),
-        "mains_source": _texts(ds, "mains_source"), "tau_s": floats_of(ds, "amplifier_time_constant_s"),
+        # an impact whose hum was not resolved (50 and 60 Hz alike, or a hum bending under the contact) lends no
+        # mains frequency
+        "mains_source": [s if ProblemKind.MAINS_UNRESOLVED.value not in c.split(";") else "unresolved"
+                         for s, c in zip(_texts(ds, "mains_source"), codes)],
+        "tau_s": floats_of(ds, "amplifier_time_constant_s"),
         "tau_se_s": floats_of(ds, "amplifier_time_constant_se_s"),
         "tau_source": _texts(ds, "amplifier_time_constant_source"),
         "kcal_N_per_V": floats_of(ds, "kcal_N_per_V"), "sample_rate_hz": floats_of(ds, "sample_rate_hz"),

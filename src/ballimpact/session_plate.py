@@ -1,4 +1,4 @@
-"""The session's identified plate, undone in the impacts whose own trace could not tell it from the force."""
+"""The session's identified plate and mains, used in the impacts whose own trace could not tell them."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ from .rig import Rig
 from .signal.ringing import PLATE_EVIDENCE
 from .signal.undone import PLATE_KINDS
 
-__all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "RETRY_KINDS", "session_plate", "retry_candidates"]
+__all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "SESSION_MAINS_MIN_IMPACTS", "RETRY_KINDS",
+           "session_plate", "session_mains", "retry_candidates"]
 
 #: The session's plate is used in the impacts when its resonance's 95 % interval is this narrow or narrower, as a
 #: fraction of the resonance on either side [-]: the undoing charges TC for the plate 1 % off in fn
@@ -24,6 +25,11 @@ SESSION_ZETA_MAX_SPREAD = 0.25
 #: undoing judges again (ballimpact.signal.undone.PLATE_KINDS), and the cloth's phase completed on them.
 RETRY_KINDS = PLATE_KINDS | {ProblemKind.CLOTH_PHASE_COMPLETED}
 _EVIDENCE = frozenset(k.value for k in PLATE_EVIDENCE)
+#: The session's mains frequency is used in the impacts whose own quiet record could not tell 50 from 60 Hz when at
+#: least this many impacts resolved their hum, all at that frequency [-]
+SESSION_MAINS_MIN_IMPACTS = 3
+_MAINS = ProblemKind.MAINS_UNRESOLVED.value
+_FAULTS = frozenset(c.code for c in CHECKS.values() if c.fault)
 #: The codes of checks that cannot bias TC and are no fault (an alias's, say: kCAL and the peak): beside the plate's,
 #: they leave TC to the plate alone.
 _NOT_TC = frozenset(c.code for c in CHECKS.values() if not c.fault and "contact_time" not in c.biases)
@@ -61,25 +67,53 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
     return float(fn.value), float(zeta.value)
 
 
-def retry_candidates(impact_ids, contact_time_status, reason_code) -> list[str]:
-    """The impacts to process again with the session's plate: TC withheld for problems a plate's ringing causes
-    alone (:data:`RETRY_KINDS`, beside findings of checks that cannot bias TC and are no fault), one of them
-    evidence of the plate (ringing, a peak on it, the force below zero).
+def session_mains(rig: Rig, *, min_impacts: int = SESSION_MAINS_MIN_IMPACTS) -> float | None:
+    """The mains frequency the session identified from all its impacts [Hz], to use in each: or None where it was
+    stated, found in fewer than ``min_impacts`` impacts that resolved their hum, or not at one frequency in all
+    of them (``rig["mains_hz"]``'s interval spans the frequencies found).
+
+    Parameters
+    ----------
+    rig : ballimpact.rig.Rig
+        The session's rig (:func:`ballimpact.rig_archive.session_rig`).
+    min_impacts : int
+        Fewest impacts that resolved their hum [-].
+
+    Returns
+    -------
+    float or None
+    """
+    mains = rig["mains_hz"]
+    if mains.source != "identified" or not (mains.value > 0) or mains.n_impacts < min_impacts:
+        return None
+    return float(mains.value) if mains.low == mains.high == mains.value else None
+
+
+def retry_candidates(impact_ids, contact_time_status, reason_code, *, plate: bool = True,
+                     mains: bool = False) -> list[str]:
+    """The impacts to process again with the session's plate (``plate``): TC withheld for problems a plate's
+    ringing causes alone (:data:`RETRY_KINDS`, beside findings of checks that cannot bias TC and are no fault), one
+    of them evidence of the plate (ringing, a peak on it, the force below zero); and with its mains (``mains``): TC
+    withheld, among other findings that are no fault, for a hum the trace's quiet record could not resolve.
 
     Parameters
     ----------
     impact_ids, contact_time_status, reason_code : sequence of str
         Per impact, its id, TC's status and its ``;``-separated codes.
+    plate, mains : bool
+        Whether the session's plate, and its mains frequency, are there to use.
 
     Returns
     -------
     list of str
     """
-    allowed = {k.value for k in RETRY_KINDS} | _NOT_TC
+    allowed = {k.value for k in RETRY_KINDS} | _NOT_TC | ({_MAINS} if mains else set())
     out = []
     for impact_id, status, codes in zip(impact_ids, contact_time_status, reason_code):
         found = {c for c in str(codes).split(";") if c}
-        if str(status) != "ok" and found and found <= allowed and found & _EVIDENCE:
+        if str(status) == "ok" or not found:
+            continue
+        if (plate and found <= allowed and found & _EVIDENCE) or (mains and _MAINS in found and not found & _FAULTS):
             out.append(str(impact_id))
     return out
 
