@@ -5,13 +5,14 @@ from __future__ import annotations
 import pytest
 
 from ballimpact.rig import Rig, RigEstimate
-from ballimpact.session_plate import (SESSION_MAINS_MIN_IMPACTS, SESSION_PLATE_MAX_SPREAD, retry_candidates,
-                                      session_mains, session_plate)
+from ballimpact.session_plate import (SESSION_MAINS_MIN_IMPACTS, SESSION_PLATE_MAX_SPREAD, SESSION_ZETA_CHARGE,
+                                      retry_candidates, session_mains, session_plate, session_plate_uncertainty)
+from ballimpact.signal.sensed_ends import SENSED_FN_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY
 
 
-def _rig(fn, low, high, zeta=0.05, source="identified"):
+def _rig(fn, low, high, zeta=0.05, source="identified", zeta_interval=(0.04, 0.06)):
     return Rig(estimates={"plate_resonance_hz": RigEstimate(fn, low, high, source=source, n_impacts=30),
-                          "plate_damping_ratio": RigEstimate(zeta, 0.04, 0.06, source=source, n_impacts=30)})
+                          "plate_damping_ratio": RigEstimate(zeta, *zeta_interval, source=source, n_impacts=30)})
 
 
 def test_an_identified_plate_known_to_its_charge_is_used_and_no_other():
@@ -54,3 +55,14 @@ def test_impacts_retried_with_the_sessions_mains_are_those_an_unresolved_hum_wit
     # b: no hum finding; c: clipped (a fault) besides; d: TC ok
     assert retry_candidates(ids, status, codes, plate=False, mains=True) == ["a"]
     assert retry_candidates(ids, status, codes, plate=False, mains=False) == []
+
+
+@pytest.mark.parametrize(("interval", "charged"), [
+    ((0.049, 0.051), SESSION_ZETA_CHARGE[1]),  # 2 % either side: twice that is under the floor
+    ((0.046, 0.0515), 2 * 0.08),  # the larger side, 8 %, twice
+    ((0.04, 0.06), SENSED_ZETA_UNCERTAINTY),  # 20 % either side: no more than a stated plate's charge
+])
+def test_the_sessions_plate_is_charged_twice_its_damping_ratios_interval_within_bounds(interval, charged):
+    fn_charge, zeta_charge = session_plate_uncertainty(_rig(5000.0, 4990.0, 5010.0, zeta_interval=interval))
+    assert fn_charge == SENSED_FN_UNCERTAINTY
+    assert zeta_charge == pytest.approx(charged, rel=1e-9)

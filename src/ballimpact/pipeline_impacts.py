@@ -241,7 +241,8 @@ def _with_session_plate(ds, session, order, mains_hz=None):
         return ds
     given = mains_hz if mains_hz is not None else mains
     session = dataclasses.replace(session, meta=dataclasses.replace(
-        session.meta, **({} if plate is None else {"plate_resonance": plate}),
+        session.meta, **({} if plate is None else {"plate_resonance": plate,
+                                                   "plate_uncertainty": session_plate.session_plate_uncertainty(rig)}),
         **({} if given is None else {"mains_hz": float(given)})))
     kept = [r for r in processing.iter_process(session, impact_ids=ids)
             if r.contact_time_status == "ok" and r.cor_status == "ok"]

@@ -334,7 +334,8 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
             cond = condition_voltage(raw, fs, polarity=meta.polarity,
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s,
-                                     plate=meta.plate_resonance, cloth_phase_s=cloth_phase_s(res.vin_m_s))
+                                     plate=meta.plate_resonance, plate_uncertainty=meta.plate_uncertainty,
+                                     cloth_phase_s=cloth_phase_s(res.vin_m_s))
         except ValueError as exc:
             res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None

@@ -8,10 +8,11 @@ from .checks import CHECKS
 from .problems import ProblemKind
 from .rig import Rig
 from .signal.ringing import PLATE_EVIDENCE
+from .signal.sensed_ends import SENSED_FN_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY
 from .signal.undone import PLATE_KINDS
 
-__all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "SESSION_MAINS_MIN_IMPACTS", "RETRY_KINDS",
-           "session_plate", "session_mains", "retry_candidates"]
+__all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "SESSION_ZETA_CHARGE", "SESSION_MAINS_MIN_IMPACTS",
+           "RETRY_KINDS", "session_plate", "session_plate_uncertainty", "session_mains", "retry_candidates"]
 
 #: The session's plate is used in the impacts when its resonance's 95 % interval is this narrow or narrower, as a
 #: fraction of the resonance on either side [-]: the undoing charges TC for the plate 1 % off in fn
@@ -20,6 +21,10 @@ SESSION_PLATE_MAX_SPREAD = 0.01
 #: ... and its damping ratio's this narrow or narrower: the undoing and the ends fitted through the plate charge TC
 #: for it this far off either way (PLATE_ZETA_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY) [-]
 SESSION_ZETA_MAX_SPREAD = 0.25
+#: The contact's ends fitted through the session's plate charge TC for its damping ratio off by this many times its
+#: interval's half-width, and by at least ... [-] (twice: an identified interval holds the truth less often than
+#: its 95 % says; docs/rig.md)
+SESSION_ZETA_CHARGE = (2.0, 0.10)
 #: An impact whose TC its own processing withheld for these findings alone, one of them evidence of the plate,
 #: is processed again with the session's plate, as if stated: the problems a plate's ringing causes, which the
 #: undoing judges again (ballimpact.signal.undone.PLATE_KINDS), and the cloth's phase completed on them.
@@ -65,6 +70,28 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
             or max(zeta.high - zeta.value, zeta.value - zeta.low) > max_zeta_spread * zeta.value:
         return None
     return float(fn.value), float(zeta.value)
+
+
+def session_plate_uncertainty(rig: Rig) -> tuple[float, float]:
+    """How far the session's identified plate (:func:`session_plate`) is charged off in the impacts that use it,
+    as fractions of its resonance and damping ratio [-]: the resonance as a stated one's
+    (:data:`ballimpact.signal.sensed_ends.SENSED_FN_UNCERTAINTY`, which its interval must lie within to be used),
+    the damping ratio :data:`SESSION_ZETA_CHARGE` times its interval's half-width, at least its floor and at most
+    a stated one's (``SENSED_ZETA_UNCERTAINTY``).
+
+    Parameters
+    ----------
+    rig : ballimpact.rig.Rig
+        The session's rig, whose plate :func:`session_plate` gives.
+
+    Returns
+    -------
+    tuple of float
+    """
+    zeta = rig["plate_damping_ratio"]
+    half = max(zeta.high - zeta.value, zeta.value - zeta.low) / zeta.value
+    times, floor = SESSION_ZETA_CHARGE
+    return SENSED_FN_UNCERTAINTY, min(max(times * half, floor), SENSED_ZETA_UNCERTAINTY)
 
 
 def session_mains(rig: Rig, *, min_impacts: int = SESSION_MAINS_MIN_IMPACTS) -> float | None:

@@ -119,6 +119,9 @@ class SessionMeta:
     bandwidth_hz: float | None = None  # [Hz] optional `daq.bandwidth_hz`: highest frequency at the ADC; None = unknown
     # v1.2: ([Hz], [-]) optional `plate.resonance_hz` and `plate.damping_ratio` (a tap test); None = identify them
     plate_resonance: tuple[float, float] | None = None
+    # ([-], [-]) how far the plate's resonance and damping ratio are charged off either way, as fractions; None = the
+    # defaults for a stated plate (ballimpact.signal.sensed_ends); the session's identified plate sets them
+    plate_uncertainty: tuple[float, float] | None = None
 
 
 @dataclass

@@ -177,7 +177,8 @@ class ConditionedSignal:
 def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, mains_hz: float | str | None = "auto",
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S,
-                      undo_plate: bool = True, plate: tuple | None = None, cloth_phase_s: float = 0.0,
+                      undo_plate: bool = True, plate: tuple | None = None, plate_uncertainty: tuple | None = None,
+                      cloth_phase_s: float = 0.0,
                       _kept: tuple | None = None, _near_ends: tuple = ()) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
 
@@ -220,6 +221,10 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         undone exactly on every trace, neither identified nor refined; where the
         force so undone fails the undone force's checks, the trace is
         conditioned as without it (its plate identified where it rings).
+    plate_uncertainty : tuple of float, optional
+        How far ``plate``'s resonance and damping ratio may be off, as fractions of them [-]: what the contact's
+        ends fitted through it charge TC for (the session's identified plate's own intervals); None charges
+        :data:`ballimpact.signal.sensed_ends.SENSED_FN_UNCERTAINTY` and ``SENSED_ZETA_UNCERTAINTY``.
     cloth_phase_s : float
         The cloth's phase of this impact, 2 mm at its inbound speed [s]
         (``ballimpact.signal.cloth``): a foot of the sensed force no longer
@@ -276,6 +281,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         return condition_voltage(voltage_V, sample_rate_hz, polarity=polarity, mains_hz=mains_hz,
                                  n_harmonics=n_harmonics, t0_s=t0_s, tau_s=tau_s, pre_guard_s=pre_guard_s,
                                  post_guard_s=post_guard_s, undo_plate=undo_plate, plate=plate,
+                                 plate_uncertainty=plate_uncertainty,
                                  cloth_phase_s=cloth_phase_s, _kept=keep, _near_ends=near_ends)
     messages: list[str] = []
     for msg in it.pending:
@@ -290,8 +296,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
         fitted: tuple | str = ""  # the contact with its ends fitted through a known plate, or why they were not
         if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
-            fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s)  # the contact's
-            if not isinstance(fitted, str):  # ends fitted through it in the sensed force, where the noise is white
+            fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s,  # the contact's
+                                    plate_uncertainty)  # ends fitted through it in the sensed force, where the
+            if not isinstance(fitted, str):  # noise is white
                 return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
                                scale, spikes, it.mains, mains_source, it.contact_integral)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
@@ -402,10 +409,11 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
     return undone, findings, stated
 
 
-def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s):
+def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None):
     """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
-    that fit judges, or why not (str: "" where the fit was not tried). The problems a plate's ringing causes
+    that fit judges, or why not (str: "" where the fit was not tried). ``uncertainty``: the plate's relative
+    uncertainties in fn and the damping ratio charged to TC (None: the fit's defaults). The problems a plate's ringing causes
     (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
     response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
     undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
@@ -414,8 +422,9 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     if _second_contact_under_ringing(it.x, fs, plate, t0_s):
         return "the force undone and low-passed at the resonance holds a second contact"
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
+    charged = {} if uncertainty is None else {"fn_uncertainty": uncertainty[0], "zeta_uncertainty": uncertainty[1]}
     fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
-                         cloth_phase_samples=cloth_phase_s * fs)
+                         cloth_phase_samples=cloth_phase_s * fs, **charged)
     if isinstance(fit, str):
         return fit
     tc_u = fit.end - fit.start
