@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ballimpact.signal.baseline import fit_baseline, mains_frequencies
+from ballimpact.signal.baseline import baseline_integral_se, fit_baseline, mains_frequencies
 
 FS = 125_000.0  # [Hz]
 MAINS = 60.0  # [Hz]
@@ -41,3 +41,22 @@ def test_hum_fitted_around_a_long_window_in_a_record_of_one_mains_period_stays_t
     window = slice(int(start_u), int(end_u))
     assert np.max(np.abs(fit.baseline[window] - truth[window])) < 0.1
     assert max(fit.hum_amplitudes) < 0.1
+
+
+def test_the_baselines_integral_under_a_contact_is_known_to_its_standard_error():
+    # 300 records of 17.8 ms, each with a hum of its own (harmonics of random size and phase) under white noise:
+    # the fitted baseline's integral over the window left out is off the true hum's by no more, rms, than the
+    # standard error baseline_integral_se gives from the fit's covariance (with the hum's prior: the posterior's,
+    # which counts the prior's pull as well as the noise), and not by far less (it is no blanket).
+    n = int(17.8e-3 * FS)
+    start_u, end_u = 4.8e-3 * FS, 9.5e-3 * FS
+    window = np.arange(int(np.ceil(start_u)), int(end_u) + 1)
+    ratios = []
+    for seed in range(300):
+        v, truth = _hum(seed, n, noise_V=2e-3)
+        fit = fit_baseline(v, FS, mains_frequencies(MAINS, 5, FS), start_u, end_u, 0.5e-3 * FS, 2e-3 * FS,
+                           with_decay=True, kappa_given=0.0)
+        se = baseline_integral_se({**fit.coef, "coef_cov": fit.cov, "t_mid_s": fit.t_mid}, FS, start_u, end_u)
+        ratios.append(np.sum(fit.baseline[window] - truth[window]) / FS / se)
+    rms = float(np.sqrt(np.mean(np.square(ratios))))
+    assert 0.4 < rms < 1.15

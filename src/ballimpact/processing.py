@@ -24,6 +24,7 @@ from .bandlimit import (  # noqa: F401  (re-exported where they were)
     aliasing_ruled_out, front_rounding, peak_can_be_withheld)
 from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
+from .signal.baseline import baseline_integral_se
 from .signal.conditioning import condition_voltage
 from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect_clipping, detect_saturation
 from .signal.contact import contact_samples, end_standard_uncertainties
@@ -602,11 +603,12 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
     fs, c = res.sample_rate_hz, cond.contact
     start_se, end_se = _end_standard_uncertainties(cond, fs, t0_s)
     kappa_se = cond.baseline_coefficients.get("kappa_se_per_s", 0.0) if cond.tau_source == "estimated" else 0.0
+    baseline_se = baseline_integral_se(cond.baseline_coefficients, fs, (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs)
     return random_uncertainties(
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
         integral_V_s=float(np.trapezoid(res.voltage_V, res.time_s)), peak_V=float(np.max(res.voltage_V)), fs=fs,
-        kappa_se_per_s=kappa_se)
+        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se if math.isfinite(baseline_se) else 0.0)
 
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:

@@ -141,13 +141,14 @@ def gate_uncertainties(gate_interval_in_s: float, gate_interval_out_s: float, re
 
 def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_time_s: float, start_se_s: float,
                          end_se_s: float, noise_V: float, n_contact: int, integral_V_s: float, peak_V: float,
-                         fs: float, kappa_se_per_s: float = 0.0) -> dict:
+                         fs: float, kappa_se_per_s: float = 0.0, baseline_se_V_s: float = 0.0) -> dict:
     """Random standard uncertainties of TC, kCAL, the peak and COR of one impact [-].
 
     TC: the root sum of squares of its ends' standard uncertainties (each from its fit, half a sample uniform
     where the force jumps). kCAL = m (vin + vout) / integral (section 2 of Goodwill & Haake 2004): the gates'
     timing in the impulse, white noise summed over the contact's samples in the integral, and the amplifier's
-    decay constant's standard error, which moves the integral by kappa TC / 2. The peak: kCAL's and one noise
+    decay constant's standard error, which moves the integral by kappa TC / 2, and the baseline's under the
+    contact (its fitted offset, drift and hum as the quiet samples pin them). The peak: kCAL's and one noise
     deviation against the peak voltage. COR = vout / vin: the two speeds' timing.
 
     Parameters
@@ -172,6 +173,9 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
         Sample rate [Hz].
     kappa_se_per_s : float
         Standard error of the decay constant 1 / tau undone [1/s] (0 when given or none).
+    baseline_se_V_s : float
+        Standard error of the baseline's integral over the contact [V s]
+        (:func:`ballimpact.signal.baseline.baseline_integral_se`; 0 when not known).
 
     Returns
     -------
@@ -181,7 +185,8 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
     u_impulse = math.hypot(u_vin, u_vout * cor) / (1.0 + cor) if cor > 0 else math.nan
     u_integral = noise_V * math.sqrt(max(n_contact, 1)) / fs / integral_V_s if integral_V_s > 0 else math.nan
     u_decay = abs(kappa_se_per_s) * contact_time_s / 2.0 if math.isfinite(kappa_se_per_s) else 0.0
-    u_kcal = math.sqrt(u_impulse**2 + u_integral**2 + u_decay**2)
+    u_baseline = baseline_se_V_s / integral_V_s if integral_V_s > 0 and math.isfinite(baseline_se_V_s) else 0.0
+    u_kcal = math.sqrt(u_impulse**2 + u_integral**2 + u_decay**2 + u_baseline**2)
     u_tc = math.hypot(start_se_s, end_se_s) / contact_time_s if contact_time_s > 0 else math.nan
     return {
         "contact_time": u_tc,

@@ -29,6 +29,7 @@ __all__ = [
     "integral_to",
     "mains_frequencies",
     "choose_tau",
+    "baseline_integral_se",
 ]
 
 PRE_GUARD_S = 0.5e-3  # quiet pre-trigger ends this long before the contact start [s]
@@ -68,6 +69,8 @@ class BaselineFit:
     pre: np.ndarray  # pre-contact quiet samples [bool]
     post: np.ndarray  # post-contact quiet samples [bool]
     no_post: str = ""  # why kappa could not be estimated (what the record lacks), "" when it could
+    cov: np.ndarray | None = None  # covariance of offset, drift and hum coefficients at the fitted kappa [unit^2]
+    t_mid: float = 0.0  # the time the drift is counted from [s, from the first sample]
 
 
 def _regions(n, fs, start_u, end_u, pre_guard, post_guard, mask):
@@ -161,6 +164,10 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
     s2 = rss / max(n_keep - n_par, 1)
     coef = theta / norms
     baseline = coef[0] + coef[1] * (t - t_mid) + trig @ coef[2:]
+    try:  # the coefficients' covariance (with the hum's prior: its posterior), at the kappa found
+        cov = s2 * np.linalg.inv(ne[0] + kappa * ne[1] + kappa * kappa * ne[2]) / np.outer(norms, norms)
+    except np.linalg.LinAlgError:
+        cov = None
     if use_post and kappa_given is None:
         kappa_se = math.sqrt(2.0 * s2 / curv) if curv > 0 else math.inf
         if math.isfinite(kappa_se):
@@ -188,7 +195,7 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
         "kappa_se_per_s": float(kappa_se),
     }
     return BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                        noise, amps, bic, quiet, pre, post, no_post)
+                        noise, amps, bic, quiet, pre, post, no_post, cov, float(t_mid))
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
@@ -485,6 +492,25 @@ def mains_frequencies(mains_hz, n_harmonics, fs):
     """The mains frequency and its harmonics up to ``n_harmonics`` times it, below NYQUIST_MARGIN of the sample rate
     ``fs`` [Hz]."""
     return [k * mains_hz for k in range(1, n_harmonics + 1) if k * mains_hz < NYQUIST_MARGIN * fs]
+
+
+def baseline_integral_se(coef: dict, fs: float, start_u: float, end_u: float) -> float:
+    """Standard error of the fitted baseline's integral from ``start_u`` to ``end_u`` [samples, fractional indices]
+    [V s]: the covariance of the offset, drift and hum coefficients (``coef["coef_cov"]`` [V^2 ...], their scatter
+    in the quiet samples' noise at the kappa found; drift counted from ``coef["t_mid_s"]``, hum at
+    ``coef["hum_frequencies_hz"]``) carried through the columns' integrals over the window. Where the quiet samples
+    leave the hum across the contact loose (a record of about one mains period), the baseline under the contact,
+    and the impulse over it, are known only so well. NaN where not known."""
+    cov, freqs = coef.get("coef_cov"), coef.get("hum_frequencies_hz", ())
+    if cov is None or np.shape(cov) != (2 + 2 * len(freqs),) * 2 or not end_u > start_u:
+        return math.nan
+    a, b, t_mid = start_u / fs, end_u / fs, float(coef.get("t_mid_s", 0.0))
+    g = [b - a, 0.5 * ((b - t_mid) ** 2 - (a - t_mid) ** 2)]
+    for f in freqs:
+        w = 2.0 * math.pi * f
+        g += [(math.sin(w * b) - math.sin(w * a)) / w, (math.cos(w * a) - math.cos(w * b)) / w]
+    g = np.asarray(g)
+    return math.sqrt(max(float(g @ np.asarray(cov) @ g), 0.0))
 
 
 def choose_tau(tau_s, fit: BaselineFit, integral: float, duration_s: float, scale: float):

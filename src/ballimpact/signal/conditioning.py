@@ -539,6 +539,8 @@ def _result(x, fit: BaselineFit, tau, source, contact, n_iter, messages, problem
     coef["drift_V_per_s"] = coef["drift_V_per_s"] * scale
     for key in ("hum_cos_V", "hum_sin_V"):
         coef[key] = tuple(c * scale for c in coef[key])
+    coef["coef_cov"] = None if fit.cov is None else fit.cov * scale * scale  # offset, drift, hum [V^2, ...]
+    coef["t_mid_s"] = fit.t_mid
     has_hum = bool(fit.hum_amplitudes)
     coef["mains_hz"] = float(mains) if has_hum else 0.0
     coef["mains_source"] = mains_source if has_hum or mains_source == "given" else "none"
