@@ -185,8 +185,16 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
     noise = max(robust_noise(resid[noise_sel]), noise_floor)  # no less than the ADC's step / sqrt(12)
     bic = n_keep * math.log(max(rss, 1e-300) / n_keep) + n_par * math.log(n_keep) if n_keep else math.inf
     amps = tuple(float(math.hypot(coef[2 + 2 * i], coef[3 + 2 * i])) for i in range(len(freqs)))
-    coef_dict = {
-        "offset_V": float(coef[0] + coef[1] * (t[0] - t_mid)),
+    return BaselineFit(baseline, _coefficients(coef, freqs, float(t[0] - t_mid), kappa, kappa_se), float(kappa),
+                       float(kappa_se), has_post or kappa_given is not None, noise, amps, bic, quiet, pre, post, no_post,
+                       cov, float(t_mid))
+
+
+def _coefficients(coef, freqs, t0_from_mid, kappa, kappa_se) -> dict:
+    """The fitted model as :attr:`BaselineFit.coef` holds it (the offset at the first sample, ``t0_from_mid`` [s]
+    from the drift's origin)."""
+    return {
+        "offset_V": float(coef[0] + coef[1] * t0_from_mid),
         "drift_V_per_s": float(coef[1]),
         "hum_frequencies_hz": tuple(float(f) for f in freqs),
         "hum_cos_V": tuple(float(coef[2 + 2 * i]) for i in range(len(freqs))),
@@ -194,8 +202,6 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
         "kappa_per_s": float(kappa),
         "kappa_se_per_s": float(kappa_se),
     }
-    return BaselineFit(baseline, coef_dict, float(kappa), float(kappa_se), has_post or kappa_given is not None,
-                        noise, amps, bic, quiet, pre, post, no_post, cov, float(t_mid))
 
 
 def _quiet_regions(n, fs, start_u, end_u, pre_guard, post_guard, mask, with_decay, kappa_given):
