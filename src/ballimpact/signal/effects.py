@@ -297,10 +297,10 @@ def ringing_after(x, fs: float, end_u: float, noise_V: float, *, over_s: float =
         coef, *_ = np.linalg.lstsq(basis, seg, rcond=None)
         rss = float(np.sum((seg - basis @ coef) ** 2))
         if best is None or rss < best[0]:
-            cov = np.linalg.pinv(basis.T @ basis) * noise_V**2
-            best = (rss, coef, math.sqrt(max(cov[2, 2], 0.0)))
+            cov = np.linalg.pinv(basis.T @ basis)
+            best = (rss, coef, math.sqrt(max(cov[2, 2], 0.0)) * noise_V)
     rss, coef, level_se = best
-    if rss > RINGING_RESIDUAL * (n - 3) * noise_V**2 or abs(coef[2]) > RINGING_LEVEL_SIGMA * level_se:
+    if rss > RINGING_RESIDUAL * (n - 3) * noise_V * noise_V or abs(coef[2]) > RINGING_LEVEL_SIGMA * level_se:
         return None
     return line_hz, float(math.hypot(coef[0], coef[1]))
 
