@@ -501,8 +501,8 @@ def mains_frequencies(mains_hz, n_harmonics, fs):
 
 
 def baseline_integral_se(coef: dict, fs: float, start_u: float, end_u: float) -> float:
-    """Standard error of the fitted baseline's integral from ``start_u`` to ``end_u`` [samples, fractional indices]
-    [V s]: the covariance of the offset, drift and hum coefficients (``coef["coef_cov"]`` [V^2 ...], their scatter
+    """Standard error [V s] of the fitted baseline's integral from ``start_u`` to ``end_u`` [samples, fractional
+    indices]: the covariance of the offset, drift and hum coefficients (``coef["coef_cov"]`` [V^2 ...], their scatter
     in the quiet samples' noise at the kappa found; drift counted from ``coef["t_mid_s"]``, hum at
     ``coef["hum_frequencies_hz"]``) carried through the columns' integrals over the window. Where the quiet samples
     leave the hum across the contact loose (a record of about one mains period), the baseline under the contact,
