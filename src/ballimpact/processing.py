@@ -608,7 +608,7 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
         integral_V_s=float(np.trapezoid(res.voltage_V, res.time_s)), peak_V=float(np.max(res.voltage_V)), fs=fs,
-        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se if math.isfinite(baseline_se) else 0.0)
+        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se)
 
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:

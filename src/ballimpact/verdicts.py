@@ -175,7 +175,7 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
         Standard error of the decay constant 1 / tau undone [1/s] (0 when given or none).
     baseline_se_V_s : float
         Standard error of the baseline's integral over the contact [V s]
-        (:func:`ballimpact.signal.baseline.baseline_integral_se`; 0 when not known).
+        (:func:`ballimpact.signal.baseline.baseline_integral_se`; 0 or NaN when not known).
 
     Returns
     -------

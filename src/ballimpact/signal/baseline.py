@@ -186,8 +186,8 @@ def _fit_quiet(v, fs, frequencies, regions, start_u, kappa_given, noise_floor) -
     bic = n_keep * math.log(max(rss, 1e-300) / n_keep) + n_par * math.log(n_keep) if n_keep else math.inf
     amps = tuple(float(math.hypot(coef[2 + 2 * i], coef[3 + 2 * i])) for i in range(len(freqs)))
     return BaselineFit(baseline, _coefficients(coef, freqs, float(t[0] - t_mid), kappa, kappa_se), float(kappa),
-                       float(kappa_se), has_post or kappa_given is not None, noise, amps, bic, quiet, pre, post, no_post,
-                       cov, float(t_mid))
+                       float(kappa_se), has_post or kappa_given is not None, noise, amps, bic, quiet, pre, post,
+                       no_post, cov, float(t_mid))
 
 
 def _coefficients(coef, freqs, t0_from_mid, kappa, kappa_se) -> dict:

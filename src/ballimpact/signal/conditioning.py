@@ -305,7 +305,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
             why = str(undone) + (f"; nor its contact's ends fitted through the plate in the sensed force: {fitted}"
-                                 if isinstance(stated, str) and isinstance(fitted, str) and fitted else "")
+                                 if fitted else "")
             problems.append(Problem(ProblemKind.PLATE_RINGING, why, data={"undo_refused": 1.0, **refused}))
         elif undone is not None:
             return _undone_result(it, fs, undone, findings, messages, at_ends + staircase, t0_s, scale, spikes,
@@ -413,8 +413,8 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
     that fit judges, or why not (str: "" where the fit was not tried). ``uncertainty``: the plate's relative
-    uncertainties in fn and the damping ratio charged to TC (None: the fit's defaults). The problems a plate's ringing causes
-    (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
+    uncertainties in fn and the damping ratio charged to TC (None: the fit's defaults). The problems a plate's
+    ringing causes (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
     response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
     undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
     if not getattr(refusal, "undoable", True):

@@ -132,6 +132,14 @@ def _measured(fit: BaselineFit, free: BaselineFit) -> BaselineFit:
     return dataclasses.replace(fit, kappa=free.kappa, kappa_se=free.kappa_se, coef=coef)
 
 
+def _less_baseline(v, fs, fit: BaselineFit, start_u, end_u):
+    """The record less ``fit``'s baseline, its running integral from the contact's start and its integral over the
+    contact [unit, unit s, unit s]."""
+    y = v - fit.baseline
+    running = running_integral(y, fs, start_u)
+    return y, running, integral_to(running, start_u, end_u)
+
+
 def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given, scale, noise_floor) -> _Iteration:
     """The iteration of :func:`iterate` (``kappa_given`` 0: no decay)."""
     start_u, end_u = rough.start_s * fs, rough.end_s * fs
@@ -143,7 +151,7 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
     # the fits made, and the last corrected signal and its contact: a window that moved by a fraction of a sample
     # often gives the same fit and the same signal again, whose contact is then known
     cache: dict = {}
-    made_from: tuple = ()  # the fit, tau and the sample the decay's integral starts at of x and search below
+    made_from: tuple = ()  # the fit (its baseline), tau and the sample the decay's integral starts at of x and search
     never_measured = True  # no fit's kappa stood out of its standard errors
     for n_iter in range(1, MAX_ITERATIONS + 1):
         if len(candidates) > 1 and n_iter <= 3:
@@ -152,25 +160,23 @@ def _iterate(v, fs, candidates, rough, pre_guard, post_guard, tau_s, kappa_given
         else:
             fit = fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
                                 kappa_given, noise_floor=noise_floor, cache=cache)
-        y = v - fit.baseline
-        running = running_integral(y, fs, start_u)
-        contact_integral = integral_to(running, start_u, end_u)
+        base = fit  # the fit whose baseline x is made from
+        y, running, contact_integral = _less_baseline(v, fs, base, start_u, end_u)
         tau, source, pending, tau_problems = choose_tau(tau_s, fit, contact_integral, (end_u - start_u) / fs,
                                                          scale)
         never_measured &= not abs(fit.kappa) > UNDERSHOOT_SIGNIFICANCE * fit.kappa_se
         if not math.isfinite(tau) and kappa_given is None and fit.kappa != 0 and math.isfinite(fit.kappa):
             # the decay is not corrected: the baseline must not carry the level the rejected kappa put after the
             # contact (a kappa below zero puts the quiet record after it above the baseline, where it reads as force)
-            fit = _measured(fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True,
-                                         0.0, noise_floor=noise_floor, cache=cache), fit)
-            y = v - fit.baseline
-            running = running_integral(y, fs, start_u)
-            contact_integral = integral_to(running, start_u, end_u)
+            base = fit_baseline(v, fs, candidates[mains], start_u, end_u, pre_guard, post_guard, mask, True, 0.0,
+                                noise_floor=noise_floor, cache=cache)
+            fit = _measured(base, fit)
+            y, running, contact_integral = _less_baseline(v, fs, base, start_u, end_u)
         i0 = integral_start(start_u) if math.isfinite(tau) else -1
-        if not (made_from and made_from[0] is fit and made_from[1:] == (tau, i0)):
+        if not (made_from and made_from[0] is base and made_from[1:] == (tau, i0)):
             x = decay_correct(y, running, tau)
-            search = ContactSearch(x, fs, noise_rms_V=fit.noise)
-            made_from = (fit, tau, i0)
+            search = ContactSearch(x, fs, noise_rms_V=base.noise)
+            made_from = (base, tau, i0)
         c = search.result()
         if not c.found:
             break
