@@ -44,6 +44,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,6 +56,8 @@ __all__ = [
     "stated_resonance",
     "identify_plate_resonance",
     "identify_free_ringing",
+    "FreeRinging",
+    "fit_free_ringing",
     "refine_plate_resonance",
 ]
 
@@ -75,6 +78,7 @@ REFINE_BAND = 1.5  # the refinement minimises the undone force's ringing within 
 REFINE_STEP = (0.05, 0.5)  # its first steps in log(fn) and log(zeta) [-]
 REFINE_TOLERANCE = 2.0e-3  # ... and the step in log(fn) at which it stops [-]
 REFINE_MAX_EVALUATIONS = 80  # ... or after this many undone forces [-]
+FIT_RING_BAND = (1.1, 2.0)  # a known plate refined on its free ringing stays within these factors of its fn, zeta [-]
 
 
 @dataclass(frozen=True)
@@ -305,18 +309,8 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     n = y.size
     if n < MIN_RING_SAMPLES:
         return None
-    t = np.arange(n) / fs
     f_lo, f_hi = MIN_FREQUENCY_FRACTION * fs, MAX_FREQUENCY_FRACTION * fs
-
-    def basis(f, zeta):
-        wn = 2.0 * math.pi * f
-        wd = wn * math.sqrt(max(1.0 - zeta * zeta, 0.0))
-        decay = np.exp(-zeta * wn * t)
-        return np.column_stack([decay * np.cos(wd * t), decay * np.sin(wd * t), np.ones(n)])
-
-    def residual(p):  # the amplitudes and the constant are linear: solved for at each (fn, zeta)
-        b = basis(*p)
-        return (b @ np.linalg.lstsq(b, y, rcond=None)[0] - y) / noise
+    residual = _ringing_residual(np.arange(n) / fs, y, noise)  # amplitudes and constant solved at each (fn, zeta)
 
     spectrum = np.abs(np.fft.rfft(y - y.mean(), 8 * n))  # no taper: a decaying ringing is in the first samples
     freq = np.fft.rfftfreq(8 * n, 1.0 / fs)
@@ -338,6 +332,91 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
     if not (f_lo < f < f_hi and MIN_DAMPING_RATIO < zeta < MAX_DAMPING_RATIO):
         return None  # on a bound: no resonance the fit could place
     return _poles_resonance(f, zeta, fs)
+
+
+class FreeRinging(NamedTuple):
+    """A plate's resonance fitted to one stretch of its free ringing by :func:`fit_free_ringing`."""
+
+    frequency_hz: float  #: undamped natural frequency fn [Hz]
+    damping_ratio: float  #: damping ratio zeta [-]
+    frequency_se_hz: float  #: standard uncertainty of fn from the noise (or the residual, the larger) [Hz]
+    damping_se: float  #: standard uncertainty of zeta, likewise [-]
+    residual_rms: float  #: rms residual of the fit [unit of the stretch]
+    result: object  #: the optimiser's result (scipy.optimize.OptimizeResult)
+
+
+def fit_free_ringing(force, sample_rate_hz: float, noise_rms: float, frequency_hz: float,
+                     damping_ratio: float) -> FreeRinging:
+    """A known plate's resonance refined on a stretch of its free ringing, with standard uncertainties.
+
+    The stretch (no force acts) is ``exp(-zeta wn t) (A cos wd t + B sin wd t) + c`` plus white noise, wd = wn
+    sqrt(1 - zeta^2): the amplitudes and the constant are solved for linearly at each (fn, zeta), which a
+    bounded least-squares fit moves from the plate given (``frequency_hz``, ``damping_ratio``: a stated or a
+    session's plate) within the factors FIT_RING_BAND of its fn and zeta. The uncertainties come from the fit's
+    Jacobian, with the variance of the larger of the noise and the residual. Unlike
+    :func:`identify_free_ringing` it does not search for a resonance: it measures, in one trace, the one the
+    session already knows. Not in the paper; see docs/signal-processing.md, "Plate resonance".
+
+    Parameters
+    ----------
+    force : array_like
+        The baseline-corrected trace after a contact's end, where no force acts [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    noise_rms : float
+        Standard deviation of the trace's white noise [V], > 0.
+    frequency_hz, damping_ratio : float
+        The plate the fit starts from: resonance [Hz] and damping ratio [-].
+
+    Returns
+    -------
+    FreeRinging
+
+    Raises
+    ------
+    ValueError
+        For a non-positive sample rate, noise or resonance, a damping ratio outside (0, 1), non-finite samples,
+        a stretch shorter than MIN_RING_SAMPLES, or a fit that failed or ended on a bound.
+    """
+    from scipy.optimize import least_squares
+
+    fs = positive_scalar("sample_rate_hz", sample_rate_hz)
+    noise = positive_scalar("noise_rms", noise_rms)
+    f0 = positive_scalar("frequency_hz", frequency_hz)
+    if not 0.0 < damping_ratio < 1.0:
+        raise ValueError(f"damping_ratio must be in (0, 1), got {damping_ratio!r}")
+    y = finite_samples("force", force)
+    if y.size < MIN_RING_SAMPLES:
+        raise ValueError(f"a free ringing of {y.size} samples is too short to fit (need {MIN_RING_SAMPLES})")
+    residual = _ringing_residual(np.arange(y.size) / fs, y, noise)
+    lo = [f0 / FIT_RING_BAND[0], damping_ratio / FIT_RING_BAND[1]]
+    hi = [min(f0 * FIT_RING_BAND[0], 0.5 * fs), min(damping_ratio * FIT_RING_BAND[1], 0.99)]
+    best = least_squares(residual, [f0, damping_ratio], bounds=(lo, hi), x_scale=[f0 * 0.01, damping_ratio * 0.1])
+    f, zeta = (float(v) for v in best.x)
+    inside = all(a * (1 + 1e-6) < v < b * (1 - 1e-6) for a, v, b in zip(lo, (f, zeta), hi))
+    if not (best.success and inside):
+        raise ValueError(f"the free ringing's fit from {f0:.4g} Hz, zeta {damping_ratio:.3g} failed or ended on a "
+                         f"bound ({f:.4g} Hz, zeta {zeta:.3g})")
+    variance = max(2.0 * float(best.cost) / max(y.size - 5, 1), 1.0)  # in noise variances (five parameters)
+    jac = np.asarray(best.jac, dtype=float)
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * variance
+    except np.linalg.LinAlgError as exc:
+        raise ValueError("the free ringing does not determine the resonance (singular fit)") from exc
+    return FreeRinging(f, zeta, math.sqrt(max(cov[0, 0], 0.0)), math.sqrt(max(cov[1, 1], 0.0)),
+                       math.sqrt(variance) * noise, best)
+
+
+def _ringing_residual(t: np.ndarray, y: np.ndarray, noise: float):
+    """The residual [noise deviations] of a damped sinusoid and a constant at (fn [Hz], zeta [-]), its amplitudes
+    solved for linearly."""
+    def residual(p):
+        wn = 2.0 * math.pi * p[0]
+        wd = wn * math.sqrt(max(1.0 - p[1] * p[1], 0.0))
+        decay = np.exp(-p[1] * wn * t)
+        b = np.column_stack([decay * np.cos(wd * t), decay * np.sin(wd * t), np.ones(t.size)])
+        return (b @ np.linalg.lstsq(b, y, rcond=None)[0] - y) / noise
+    return residual
 
 
 def _poles_resonance(frequency_hz: float, damping_ratio: float, fs: float) -> PlateResonance:

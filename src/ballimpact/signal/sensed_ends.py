@@ -8,13 +8,17 @@ from typing import NamedTuple
 import numpy as np
 
 from .._checks import finite_samples, positive_scalar
+from .contact import detect_contact
 from .front import front_responses, steady_responses
+from .plate import fit_free_ringing
+from .undo import lowpass_zero_phase, undo_plate_resonance
 
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
            "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_START_TERMS", "SENSED_BEFORE", "SENSED_REACH_PERIODS",
            "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP",
-           "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SensedEnd", "SensedContact", "sensed_end",
-           "sensed_contact"]
+           "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SENSED_RING_GAP", "SENSED_RING_PERIODS",
+           "SENSED_RING_MAX_RESIDUAL", "SENSED_RING_COVERAGE", "SENSED_MIN_END_SIGMA", "SensedEnd", "SensedContact",
+           "sensed_end", "sensed_contact"]
 
 #: Each end's window reaches this fraction of TC into the contact ... [-]
 SENSED_INSIDE_FRACTION = 0.10
@@ -44,7 +48,8 @@ SENSED_MAX_RESIDUAL = 4.0
 #: ... a start's, this many (the pre-buckling spike beyond the jump's window leaves up to tens; what the force's
 #: shape does to the start is charged as the windows' difference) [-]
 SENSED_MAX_START_RESIDUAL = 30.0
-#: The fitted TC this fraction or more from the contact found on the sensed force: another contact's ends [-]
+#: A fitted start this fraction of TC or more from the one found on the sensed force, or (the plate not measured in
+#: the trace) a fitted TC this far from the one found there: another contact's ends [-]
 SENSED_MAX_MOVE = 0.05
 #: A start whose fitted jump is below this fraction of the sensed peak is no ball's jump (a fit to the noise before
 #: a start found early) [-]
@@ -53,6 +58,17 @@ SENSED_MIN_JUMP = 0.05
 #: way is charged to TC [-]
 SENSED_FN_UNCERTAINTY = 0.01
 SENSED_ZETA_UNCERTAINTY = 0.25
+#: A known plate is measured in the trace's free ringing from this many samples after the fitted end [samples] ...
+SENSED_RING_GAP = 2
+#: ... over three of its decay times, at least the first and at most the second of these many periods [-] ...
+SENSED_RING_PERIODS = (3.0, 10.0)
+#: ... and used where its fit leaves at most this many noise deviations rms (one mode, no force there) [-] ...
+SENSED_RING_MAX_RESIDUAL = 1.5
+#: ... its fn and zeta then charged at this many of their standard uncertainties either way [-]
+SENSED_RING_COVERAGE = 2.0
+#: An end whose line and parabola stand below this many noise deviations at its window's inside edge holds no ball's
+#: force there: the window lies after the contact (a ball's end stands tens to hundreds out of the noise) [-]
+SENSED_MIN_END_SIGMA = 10.0
 _COARSE, _FINE = 0.25, 0.02  # grids of the candidates [samples]
 _ITERATIONS = 10  # the window re-anchored on the best at most this many times
 
@@ -66,6 +82,7 @@ class SensedEnd(NamedTuple):
     first: int  #: first sample of the fit's window [-]
     last: int  #: last sample of the fit's window [-]
     jump: float = math.nan  #: the start's fitted jump [unit of the signal] (NaN at an end)
+    level: float = math.nan  #: an end's fitted force at its window's inside edge [unit of the signal] (NaN at a start)
 
 
 class SensedContact(NamedTuple):
@@ -234,23 +251,34 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
     se = math.sqrt(max(sigma2 * float(inv[0, 0]), 0.0)) / float(scale[0])
     at = float(fine[k]) - (phase if side == "start" else 0.0)
     jump = float(coef[k][2]) if side == "start" else math.nan
-    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi), jump)
+    level = math.nan if side == "start" else float(coef[k][2] * inside + coef[k][3] * inside * inside)
+    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi), jump, level)
 
 
 def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, start_u: float,
                    end_u: float, *, noise_rms: float, cloth_phase_samples: float = 0.0,
                    fn_uncertainty: float = SENSED_FN_UNCERTAINTY,
-                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY) -> SensedContact | str:
+                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY, refine: bool = True) -> SensedContact | str:
     """A contact's ends fitted through a known plate in the sensed force (:func:`sensed_end`), with TC's bounds.
 
-    Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact; fitted again
-    reaching SENSED_INSIDE_SHORT, and with the plate's resonance and damping ratio off by ``fn_uncertainty``
-    and ``zeta_uncertainty`` either way, TC moves: the largest move is a bound on what the model leaves out
-    (the force's shape beyond a parabola, the plate known only so well). An end's fit whose rms residual
-    exceeds SENSED_MAX_RESIDUAL noise deviations, or a start's SENSED_MAX_START_RESIDUAL, is refused: the sensed
-    force is then not that plate's response to such a force (another mode, a baseline wrong there, a second
-    contact); so is a start whose jump is under SENSED_MIN_JUMP of the peak, and a TC SENSED_MAX_MOVE or more
-    from the contact found.
+    Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact (the end from
+    ``end_u``, or where that fails from the end of the force undone and low-passed at the resonance: a swing of
+    the plate can end the sensed force periods early). With ``refine``, the plate is then measured in this trace:
+    fitted to the free ringing after the end (:func:`ballimpact.signal.plate.fit_free_ringing`, from
+    SENSED_RING_GAP samples after it over SENSED_RING_PERIODS of its periods, or three decay times), and where that
+    fit leaves at most SENSED_RING_MAX_RESIDUAL noise deviations (one mode, no force) the ends are fitted again
+    through it, its fn and zeta then uncertain by SENSED_RING_COVERAGE of their standard uncertainties instead of
+    ``fn_uncertainty`` and ``zeta_uncertainty`` (twice, from the end fitted again). Fitted again with the window
+    reaching SENSED_INSIDE_SHORT, and with the plate off by its uncertainties either way, TC moves: the largest
+    move is a bound on what the model leaves out (the force's shape beyond a parabola, the plate known only so
+    well). Refused: an end's fit whose rms residual exceeds SENSED_MAX_RESIDUAL noise deviations, or a start's
+    SENSED_MAX_START_RESIDUAL (the sensed force is then not that plate's response to such a force: another mode,
+    a baseline wrong there, a second contact); a start whose jump is under SENSED_MIN_JUMP of the peak; an end
+    whose line and parabola stand under SENSED_MIN_END_SIGMA noise deviations at the window's inside edge (a
+    window after the contact); a start SENSED_MAX_MOVE of TC or more from ``start_u``; and, the plate not measured
+    in the trace, a TC that far from the contact found (with it measured, the free ringing after the end shows no
+    force there).
+    Not in the paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
     ----------
@@ -267,7 +295,9 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     cloth_phase_samples : float
         The cloth's phase before the ball's jump [samples] (0: none).
     fn_uncertainty, zeta_uncertainty : float
-        Relative uncertainties of the resonance and the damping ratio [-].
+        Relative uncertainties of the resonance and the damping ratio [-], where the trace does not measure them.
+    refine : bool
+        Measure the plate in the trace's free ringing after the end.
 
     Returns
     -------
@@ -277,42 +307,121 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     tc = end_u - start_u
     if not (tc > 0 and noise_rms > 0):
         return "no contact of positive length, or no noise level, to fit its ends by"
-    fits = {}
-    period = sample_rate_hz / frequency_hz
-    start_in = min(max(SENSED_START_PERIODS * period, SENSED_MIN_START), max(SENSED_INSIDE_FRACTION * tc,
-                                                                                SENSED_MIN_START))
-    windows = {"": (int(round(start_in)), max(int(round(SENSED_INSIDE_FRACTION * tc)), SENSED_MIN_INSIDE)),
-               "short": (max(int(round(0.75 * start_in)), 3), max(int(round(SENSED_INSIDE_SHORT * tc)),
-                                                                 SENSED_MIN_INSIDE))}
-    variants = {name: (frequency_hz, damping_ratio, w) for name, w in windows.items()}
-    for sign in (-1.0, 1.0):
-        variants[f"fn{sign:+.0f}"] = (frequency_hz * (1.0 + sign * fn_uncertainty), damping_ratio, windows[""])
-        variants[f"zeta{sign:+.0f}"] = (frequency_hz, min(damping_ratio * (1.0 + sign * zeta_uncertainty), 0.99),
-                                        windows[""])
-    for name, (fn, zeta, (inside_start, inside_end)) in variants.items():
-        guess = (start_u, end_u) if not name else (fits[""][0].index, fits[""][1].index)
-        reach = None if not name else 2.0
-        pair = (sensed_end(x, sample_rate_hz, fn, zeta, guess[0], "start", inside_samples=inside_start,
-                           noise_rms=noise_rms, cloth_phase_samples=cloth_phase_samples, reach_samples=reach),
-                sensed_end(x, sample_rate_hz, fn, zeta, guess[1], "end", inside_samples=inside_end,
-                           noise_rms=noise_rms, reach_samples=reach))
-        if pair[0] is None or pair[1] is None:
-            return (f"the {'start' if pair[0] is None else 'end'} fits no jump (or line) through the plate in the "
-                    "sensed force" + (f" ({name})" if name else ""))
+    x = np.asarray(x, dtype=float)
+    plate, charged = (frequency_hz, damping_ratio), (fn_uncertainty, zeta_uncertainty)
+    windows = _windows(sample_rate_hz / frequency_hz, tc)
+    main = _fitted_pair(x, sample_rate_hz, plate, (start_u, end_u), windows[""], noise_rms, cloth_phase_samples)
+    if main is None:
+        main = _fitted_pair(x, sample_rate_hz, plate, (start_u, _undone_end(x, sample_rate_hz, plate)),
+                            windows[""], noise_rms, cloth_phase_samples)
+    if main is None:
+        return "the start or the end fits no jump (or line) through the plate in the sensed force"
+    measured = False
+    for _ in range(2 if refine else 0):  # the plate measured in the free ringing after the end, twice
+        ring = _free_ringing(x, sample_rate_hz, plate, main[1].index, noise_rms)
+        again = None if ring is None else _fitted_pair(x, sample_rate_hz, ring[0], (main[0].index, main[1].index),
+                                                       windows[""], noise_rms, cloth_phase_samples)
+        if again is None:
+            break
+        (plate, charged), main, measured = ring, again, True
+    fits = {"": main}
+    for name, (fn, zeta, window) in _variants(plate, charged, windows).items():
+        for reach in (2.0, None):  # near the main fit's ends, else as far as they were looked for
+            pair = _fitted_pair(x, sample_rate_hz, (fn, zeta), (main[0].index, main[1].index), window, noise_rms,
+                                cloth_phase_samples, reach=reach)
+            if pair is not None:
+                break
+        if pair is None:
+            return f"the start or the end fits no jump (or line) through the plate in the sensed force ({name})"
         fits[name] = pair
-    start, end = fits[""]
-    peak = float(np.max(np.asarray(x, dtype=float)[max(int(start_u), 0):max(int(end_u) + 1, 1)], initial=0.0))
+    refused = _refusal(x, main, start_u, end_u, noise_rms, measured)
+    if refused:
+        return refused
+    start, end = main
+    tc_fit = end.index - start.index
+    bias = max(abs((e.index - s.index) - tc_fit) for s, e in fits.values())
+    return SensedContact(start.index, end.index, start.se, end.se, float(bias),
+                         max(start.residual, end.residual) / noise_rms)
+
+
+def _windows(period: float, tc: float) -> dict:
+    """Samples inside the contact of the start's and the end's windows: the main ones and the short ones."""
+    start_in = min(max(SENSED_START_PERIODS * period, SENSED_MIN_START), max(SENSED_INSIDE_FRACTION * tc,
+                                                                             SENSED_MIN_START))
+    return {"": (int(round(start_in)), max(int(round(SENSED_INSIDE_FRACTION * tc)), SENSED_MIN_INSIDE)),
+            "short": (max(int(round(0.75 * start_in)), 3), max(int(round(SENSED_INSIDE_SHORT * tc)),
+                                                              SENSED_MIN_INSIDE))}
+
+
+def _variants(plate, charged, windows) -> dict:
+    """The fits TC's bound is read from: the short windows, and the plate off by its uncertainties either way."""
+    fn, zeta = plate
+    out = {"short": (fn, zeta, windows["short"])}
+    for sign in (-1.0, 1.0):
+        out[f"fn{sign:+.0f}"] = (fn * (1.0 + sign * charged[0]), zeta, windows[""])
+        out[f"zeta{sign:+.0f}"] = (fn, min(zeta * (1.0 + sign * charged[1]), 0.99), windows[""])
+    return out
+
+
+def _fitted_pair(x, fs, plate, guess, window, noise_rms, cloth_phase_samples, reach=None):
+    """The start's and the end's :func:`sensed_end` through ``plate`` (fn [Hz], zeta [-]), or None."""
+    if not math.isfinite(guess[1]):
+        return None
+    start = sensed_end(x, fs, plate[0], plate[1], guess[0], "start", inside_samples=window[0], noise_rms=noise_rms,
+                       cloth_phase_samples=cloth_phase_samples, reach_samples=reach)
+    end = sensed_end(x, fs, plate[0], plate[1], guess[1], "end", inside_samples=window[1], noise_rms=noise_rms,
+                     reach_samples=reach)
+    return None if start is None or end is None else (start, end)
+
+
+def _undone_end(x, fs, plate) -> float:
+    """The end of the contact found on the force undone from ``plate`` and low-passed at its resonance [samples]
+    (NaN: none)."""
+    y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
+    found = detect_contact(y, fs)
+    return found.end_s * fs if found.n_impacts >= 1 and math.isfinite(found.end_s) else math.nan
+
+
+def _free_ringing(x, fs, plate, end, noise_rms):
+    """The plate measured in the free ringing after ``end`` [samples]: ((fn, zeta), (their relative
+    uncertainties)), or None where the stretch is too short or is not one mode's ringing."""
+    fn, zeta = plate
+    period = fs / fn
+    decay = 3.0 / (zeta * 2.0 * math.pi * fn / fs)  # three decay times [samples]
+    first = int(math.ceil(end)) + SENSED_RING_GAP
+    last = min(first + int(min(max(decay, SENSED_RING_PERIODS[0] * period), SENSED_RING_PERIODS[1] * period)),
+               x.size)
+    try:
+        ring = fit_free_ringing(x[first:last], fs, noise_rms, fn, zeta)
+    except ValueError:
+        return None
+    if not ring.residual_rms <= SENSED_RING_MAX_RESIDUAL * noise_rms:
+        return None
+    return ((ring.frequency_hz, ring.damping_ratio),
+            (SENSED_RING_COVERAGE * ring.frequency_se_hz / ring.frequency_hz,
+             SENSED_RING_COVERAGE * ring.damping_se / ring.damping_ratio))
+
+
+def _refusal(x, main, start_u, end_u, noise_rms, measured) -> str:
+    """Why the main fit cannot stand (see :func:`sensed_contact`), or ""."""
+    start, end = main
+    tc = end_u - start_u
+    peak = float(np.max(x[max(int(start_u), 0):max(int(end_u) + 1, 1)], initial=0.0))
     if not start.jump >= SENSED_MIN_JUMP * peak:
         return (f"its start fitted through the plate jumps by {100 * start.jump / peak:.2g} % of the peak only (less "
                 f"than {100 * SENSED_MIN_JUMP:g} %): no ball's jump there")
+    if not end.level >= SENSED_MIN_END_SIGMA * noise_rms:
+        return (f"its end fitted through the plate leaves {end.level / noise_rms:.2g} noise deviations of force inside "
+                f"its window (less than {SENSED_MIN_END_SIGMA:g}): the window lies after the contact")
     for side, fit, limit in (("start", start, SENSED_MAX_START_RESIDUAL), ("end", end, SENSED_MAX_RESIDUAL)):
         if fit.residual > limit * noise_rms:
             return (f"its {side}'s fit through the plate leaves {fit.residual / noise_rms:.2g} noise deviations rms "
                     f"(more than {limit:g}): the sensed force is not that plate's response to the force there")
-    residual = max(start.residual, end.residual) / noise_rms
+    if not abs(start.index - start_u) < SENSED_MAX_MOVE * tc:
+        return (f"its start fitted through the plate lies {100 * (start.index - start_u) / tc:+.2g} % of TC from the "
+                f"contact found on the sensed force (at most {100 * SENSED_MAX_MOVE:g} %)")
     tc_fit = end.index - start.index
-    if not abs(tc_fit / tc - 1.0) < SENSED_MAX_MOVE:
+    if not (measured or abs(tc_fit / tc - 1.0) < SENSED_MAX_MOVE):
         return (f"its ends fitted through the plate give a TC {100 * (tc_fit / tc - 1.0):+.2g} % from the contact "
                 f"found on the sensed force (at most {100 * SENSED_MAX_MOVE:g} %)")
-    bias = max(abs((e.index - s.index) - tc_fit) for s, e in fits.values())
-    return SensedContact(start.index, end.index, start.se, end.se, float(bias), float(residual))
+    return ""
