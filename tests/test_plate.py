@@ -13,8 +13,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from ballimpact.signal.conditioning import condition_voltage
-from ballimpact.signal.plate import (PlateResonance, fit_free_ringing, identify_free_ringing, identify_plate_resonance,
-                                     refine_plate_resonance)
+from ballimpact.signal.plate import (PlateResonance, fit_trace_ringing, identify_free_ringing,
+                                     identify_plate_resonance, refine_plate_resonance)
 from ballimpact.signal.undo import lowpass_spread_samples, lowpass_zero_phase, undo_plate_resonance, undone_noise_gain
 from ballimpact.problems import ProblemKind
 
@@ -924,7 +924,7 @@ def test_free_ringing_fit_measures_a_known_plate_within_its_uncertainty(fn_hz, z
     noise, n = 2e-3, int(8 * fs / fn_hz)
     z_f, z_z = [], []
     for seed in range(60):
-        fit = fit_free_ringing(_free_ringing(fn_hz, zeta, fs, n, noise, seed), fs, noise, 1.03 * fn_hz, 0.8 * zeta)
+        fit = fit_trace_ringing(_free_ringing(fn_hz, zeta, fs, n, noise, seed), fs, noise, 1.03 * fn_hz, 0.8 * zeta)
         z_f.append((fit.frequency_hz - fn_hz) / fit.frequency_se_hz)
         z_z.append((fit.damping_ratio - zeta) / fit.damping_se)
         assert fit.residual_rms <= 1.3 * noise
@@ -936,8 +936,8 @@ def test_free_ringing_fit_measures_a_known_plate_within_its_uncertainty(fn_hz, z
 
 def test_free_ringing_fit_raises_where_it_cannot_measure():
     with pytest.raises(ValueError, match="too short"):
-        fit_free_ringing(np.zeros(8), 1e5, 1e-3, 5e3, 0.05)
+        fit_trace_ringing(np.zeros(8), 1e5, 1e-3, 5e3, 0.05)
     with pytest.raises(ValueError, match="damping_ratio"):
-        fit_free_ringing(np.zeros(100), 1e5, 1e-3, 5e3, 1.2)
+        fit_trace_ringing(np.zeros(100), 1e5, 1e-3, 5e3, 1.2)
     with pytest.raises(ValueError, match="failed or ended on a bound"):  # a ringing at twice the plate given
-        fit_free_ringing(_free_ringing(10e3, 0.05, 1e5, 200, 1e-3, 0), 1e5, 1e-3, 5e3, 0.05)
+        fit_trace_ringing(_free_ringing(10e3, 0.05, 1e5, 200, 1e-3, 0), 1e5, 1e-3, 5e3, 0.05)

@@ -7,7 +7,7 @@ import pytest
 from ballimpact.rig import Rig, RigEstimate
 from ballimpact.session_plate import (SESSION_MAINS_MIN_IMPACTS, SESSION_PLATE_MAX_SPREAD, SESSION_ZETA_CHARGE,
                                       retry_candidates, session_mains, session_plate, session_plate_uncertainty)
-from ballimpact.signal.sensed_ends import SENSED_FN_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY
+from ballimpact.signal.sensed_ends import SENSED_FN_UNCERTAINTY
 
 
 def _rig(fn, low, high, zeta=0.05, source="identified", zeta_interval=(0.04, 0.06)):
@@ -17,7 +17,7 @@ def _rig(fn, low, high, zeta=0.05, source="identified", zeta_interval=(0.04, 0.0
 
 def test_an_identified_plate_known_to_its_charge_is_used_and_no_other():
     assert session_plate(_rig(5000.0, 4980.0, 5030.0)) == (5000.0, 0.05)
-    # an interval wider than SESSION_PLATE_MAX_SPREAD on either side: the 1 % charge would not cover it
+    # an interval wider than SESSION_PLATE_MAX_SPREAD on either side: too little known to start from
     wide = 5000.0 * (1 + 1.2 * SESSION_PLATE_MAX_SPREAD)
     assert session_plate(_rig(5000.0, 4990.0, wide)) is None
     assert session_plate(_rig(5000.0, 5000.0, 5000.0, source="stated")) is None  # the impacts used it already
@@ -60,9 +60,14 @@ def test_impacts_retried_with_the_sessions_mains_are_those_an_unresolved_hum_wit
 @pytest.mark.parametrize(("interval", "charged"), [
     ((0.049, 0.051), SESSION_ZETA_CHARGE[1]),  # 2 % either side: twice that is under the floor
     ((0.046, 0.0515), 2 * 0.08),  # the larger side, 8 %, twice
-    ((0.04, 0.06), SENSED_ZETA_UNCERTAINTY),  # 20 % either side: no more than a stated plate's charge
+    ((0.04, 0.06), 2 * 0.2),  # 20 % either side: twice that, more than a stated plate's charge
 ])
 def test_the_sessions_plate_is_charged_twice_its_damping_ratios_interval_within_bounds(interval, charged):
     fn_charge, zeta_charge = session_plate_uncertainty(_rig(5000.0, 4990.0, 5010.0, zeta_interval=interval))
-    assert fn_charge == SENSED_FN_UNCERTAINTY
+    assert fn_charge == SENSED_FN_UNCERTAINTY  # 0.2 % either side: twice that is under a stated plate's 1 %
     assert zeta_charge == pytest.approx(charged, rel=1e-9)
+
+
+def test_the_sessions_plate_known_to_a_few_per_cent_is_charged_twice_its_resonances_interval():
+    fn_charge, _ = session_plate_uncertainty(_rig(5000.0, 4900.0, 5150.0))
+    assert fn_charge == pytest.approx(2 * 0.03, rel=1e-9)  # the larger side, 3 %, twice

@@ -8,19 +8,20 @@ from .checks import CHECKS
 from .problems import ProblemKind
 from .rig import Rig
 from .signal.ringing import PLATE_EVIDENCE
-from .signal.sensed_ends import SENSED_FN_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY
+from .signal.sensed_ends import SENSED_FN_UNCERTAINTY
 from .signal.undone import PLATE_KINDS
 
 __all__ = ["SESSION_PLATE_MAX_SPREAD", "SESSION_ZETA_MAX_SPREAD", "SESSION_ZETA_CHARGE", "SESSION_MAINS_MIN_IMPACTS",
            "RETRY_KINDS", "session_plate", "session_plate_uncertainty", "session_mains", "retry_candidates"]
 
 #: The session's plate is used in the impacts when its resonance's 95 % interval is this narrow or narrower, as a
-#: fraction of the resonance on either side [-]: the undoing charges TC for the plate 1 % off in fn
-#: (ballimpact.signal.undone.PLATE_FN_UNCERTAINTY), which then covers the interval.
-SESSION_PLATE_MAX_SPREAD = 0.01
-#: ... and its damping ratio's this narrow or narrower: the undoing and the ends fitted through the plate charge TC
-#: for it this far off either way (PLATE_ZETA_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY) [-]
-SESSION_ZETA_MAX_SPREAD = 0.25
+#: fraction of the resonance on either side [-]: each impact measures it again in its own free ringing
+#: (ballimpact.signal.sensed_ends), and where it cannot, its ends fitted through the plate charge TC for the
+#: interval. It is undone as a stated plate only where the interval lies within the undoing's charge
+#: (ballimpact.signal.undone.PLATE_FN_UNCERTAINTY, 1 %).
+SESSION_PLATE_MAX_SPREAD = 0.05
+#: ... and its damping ratio's this narrow or narrower [-]
+SESSION_ZETA_MAX_SPREAD = 0.5
 #: The contact's ends fitted through the session's plate charge TC for its damping ratio off by this many times its
 #: interval's half-width, and by at least ... [-] (twice: an identified interval holds the truth less often than
 #: its 95 % says; docs/rig.md)
@@ -74,10 +75,9 @@ def session_plate(rig: Rig, *, max_spread: float = SESSION_PLATE_MAX_SPREAD,
 
 def session_plate_uncertainty(rig: Rig) -> tuple[float, float]:
     """How far the session's identified plate (:func:`session_plate`) is charged off in the impacts that use it,
-    as fractions of its resonance and damping ratio [-]: the resonance as a stated one's
-    (:data:`ballimpact.signal.sensed_ends.SENSED_FN_UNCERTAINTY`, which its interval must lie within to be used),
-    the damping ratio :data:`SESSION_ZETA_CHARGE` times its interval's half-width, at least its floor and at most
-    a stated one's (``SENSED_ZETA_UNCERTAINTY``).
+    as fractions of its resonance and damping ratio [-], where an impact cannot measure it in its own free ringing:
+    each :data:`SESSION_ZETA_CHARGE` times its interval's half-width, the resonance at least as far as a stated
+    one's (:data:`ballimpact.signal.sensed_ends.SENSED_FN_UNCERTAINTY`), the damping ratio at least the floor.
 
     Parameters
     ----------
@@ -88,10 +88,11 @@ def session_plate_uncertainty(rig: Rig) -> tuple[float, float]:
     -------
     tuple of float
     """
-    zeta = rig["plate_damping_ratio"]
+    fn, zeta = rig["plate_resonance_hz"], rig["plate_damping_ratio"]
     half = max(zeta.high - zeta.value, zeta.value - zeta.low) / zeta.value
+    half_fn = max(fn.high - fn.value, fn.value - fn.low) / fn.value
     times, floor = SESSION_ZETA_CHARGE
-    return SENSED_FN_UNCERTAINTY, min(max(times * half, floor), SENSED_ZETA_UNCERTAINTY)
+    return max(times * half_fn, SENSED_FN_UNCERTAINTY), max(times * half, floor)
 
 
 def session_mains(rig: Rig, *, min_impacts: int = SESSION_MAINS_MIN_IMPACTS) -> float | None:

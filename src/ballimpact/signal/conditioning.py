@@ -96,7 +96,8 @@ from .ringing import ringing_problems
 from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
 from .sensed_ends import sensed_contact
-from .undone import PLATE_KINDS, lowpassed_spike, plate_undone, stated_plate_undone, undone_peak_spread
+from .undone import (PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
+                     stated_plate_undone, undone_peak_spread)
 from .window import iterate
 
 __all__ = ["ConditioningWarning", "ConditionedSignal", "condition_voltage"]
@@ -293,7 +294,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         found, staircase = _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_s is not None,
                                              post_guard_s)
         problems.extend(found)
-        undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s)
+        undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s,
+                                                 plate_uncertainty)
         fitted: tuple | str = ""  # the contact with its ends fitted through a known plate, or why they were not
         if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
             fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s,  # the contact's
@@ -304,6 +306,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
+            if not getattr(undone, "undoable", True):  # a known plate above what the samples resolve
+                refused["aliases"] = 1.0
             why = str(undone) + (f"; nor its contact's ends fitted through the plate in the sensed force: {fitted}"
                                  if fitted else "")
             problems.append(Problem(ProblemKind.PLATE_RINGING, why, data={"undo_refused": 1.0, **refused}))
@@ -392,12 +396,19 @@ def _contact_problems(it, fs, contact, candidates, adc_step, t0_s, scale, tau_gi
     return problems, staircase
 
 
-def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s=0.0):
+def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s=0.0, uncertainty=None):
     """The plate undone (see :func:`ballimpact.signal.undone.plate_undone`): (y, contact, plate, cutoff), why it
     was refused (str) or None (not tried); the findings of the undone force kept (its peak withheld, or the
-    effects of two identifications apart); and why a stated plate was refused (str), or None."""
+    effects of two identifications apart); and why a stated plate was refused (str), or None. A known plate whose
+    resonance is ``uncertainty`` (relative fn, zeta) off by more than the undoing charges (PLATE_FN_UNCERTAINTY)
+    is not undone: only its contact's ends are fitted through it."""
     findings = []
     undone = stated = None
+    if plate is not None and uncertainty is not None and uncertainty[0] > PLATE_FN_UNCERTAINTY:
+        stated = Refusal(f"the plate at {plate[0] / 1e3:.4g} kHz (damping ratio {plate[1]:.2g}) is known to "
+                         f"{100 * uncertainty[0]:.2g} % in fn only, more than the undoing charges "
+                         f"({100 * PLATE_FN_UNCERTAINTY:g} %): not undone")
+        plate = None
     if undo_plate and plate is not None:  # stated (plate.resonance_hz, plate.damping_ratio): used exactly ...
         undone, findings = stated_plate_undone(it.x, fs, it.fit, contact, t0_s, plate, cloth_phase_s=cloth_phase_s)
         stated = undone if isinstance(undone, str) else None

@@ -15,7 +15,7 @@ from .ringing import RING_LINE_MIN_HZ
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
            "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "DEPARTURE_SWING", "end_slopes", "line_amplitude_after",
            "ringing_effects", "rounding_effects", "level_effects", "ringing_after", "finding_effects",
-           "departure_before_start"]
+           "aliased_plate_effects", "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -362,6 +362,10 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
         return replace(problem, effects=ringing_effects(voltage_V, fs, start_u, end_u, noise_V, found[0], 0.0))
     if problem.kind is not ProblemKind.PLATE_RINGING:
         return problem
+    if problem.data.get("aliases") and math.isfinite(float(problem.data.get("refused_hz", math.nan))):
+        return replace(problem, effects=aliased_plate_effects(voltage_V, fs, start_u, end_u,
+                                                              float(problem.data["refused_hz"]),
+                                                              float(problem.data["refused_zeta"])))
     if "line_hz" in problem.data:
         return replace(problem, effects=line_effects(problem))
     if "undo_refused" in problem.data:
@@ -383,6 +387,45 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
                 and all(p.kind is ProblemKind.PEAK_ON_RINGING for p in ringing):
             return replace(problem, effects=_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
     return problem
+
+
+def aliased_plate_effects(x, fs: float, start_u: float, end_u: float, frequency_hz: float,
+                          damping_ratio: float) -> dict:
+    """TC's bound from a known plate above what the samples resolve (its ringing aliases; it cannot be undone).
+
+    Through a plate of unit static gain a smooth force is sensed as itself delayed by 2 zeta / wn, plus terms in
+    its curvature over wn^2 (negligible for a resonance several times 1 / TC): both ends move alike, and TC not.
+    What differs is the start, a jump, whose whole height the plate's response first reaches half its period
+    after it, and what is left at the end of the ringing the jump excited, at most the peak times
+    exp(-zeta wn TC), moving the end by that over the force's slope there (:func:`end_slopes`). TC's bound is
+    their sum over TC [-]; kCAL and the peak: not known (NaN). Not in the paper.
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage, proportional to the sensed force [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's start and end in samples from ``x[0]`` [samples].
+    frequency_hz, damping_ratio : float
+        The plate's resonance [Hz] and damping ratio [-].
+
+    Returns
+    -------
+    dict
+        ``{"contact_time": bound, "kcal": nan, "peak": nan}`` [-]; the bound NaN where the slope at the end is
+        not known.
+    """
+    x = np.asarray(x, dtype=float)
+    tc = (end_u - start_u) / fs
+    _, s_end = end_slopes(x, fs, start_u, end_u)
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    peak = float(np.max(x[i0:i1 + 1])) if 0 <= i0 < i1 < x.size else math.nan
+    wn = 2.0 * math.pi * frequency_hz
+    left = peak * math.exp(-damping_ratio * wn * tc) / s_end if s_end > 0 else math.nan
+    bound = (0.5 / frequency_hz + left) / tc if tc > 0 else math.nan
+    return {"contact_time": float(bound), "kcal": math.nan, "peak": math.nan}
 
 
 def _unseen_ringing_effects(x, fs: float, start_u: float, end_u: float, noise_V: float) -> dict:

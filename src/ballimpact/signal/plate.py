@@ -57,7 +57,7 @@ __all__ = [
     "identify_plate_resonance",
     "identify_free_ringing",
     "FreeRinging",
-    "fit_free_ringing",
+    "fit_trace_ringing",
     "refine_plate_resonance",
 ]
 
@@ -335,7 +335,7 @@ def identify_free_ringing(force, sample_rate_hz: float, noise_rms: float) -> Pla
 
 
 class FreeRinging(NamedTuple):
-    """A plate's resonance fitted to one stretch of its free ringing by :func:`fit_free_ringing`."""
+    """A plate's resonance fitted to one stretch of its free ringing by :func:`fit_trace_ringing`."""
 
     frequency_hz: float  #: undamped natural frequency fn [Hz]
     damping_ratio: float  #: damping ratio zeta [-]
@@ -345,7 +345,7 @@ class FreeRinging(NamedTuple):
     result: object  #: the optimiser's result (scipy.optimize.OptimizeResult)
 
 
-def fit_free_ringing(force, sample_rate_hz: float, noise_rms: float, frequency_hz: float,
+def fit_trace_ringing(force, sample_rate_hz: float, noise_rms: float, frequency_hz: float,
                      damping_ratio: float) -> FreeRinging:
     """A known plate's resonance refined on a stretch of its free ringing, with standard uncertainties.
 
@@ -390,7 +390,7 @@ def fit_free_ringing(force, sample_rate_hz: float, noise_rms: float, frequency_h
         raise ValueError(f"a free ringing of {y.size} samples is too short to fit (need {MIN_RING_SAMPLES})")
     residual = _ringing_residual(np.arange(y.size) / fs, y, noise)
     lo = [f0 / FIT_RING_BAND[0], damping_ratio / FIT_RING_BAND[1]]
-    hi = [min(f0 * FIT_RING_BAND[0], 0.5 * fs), min(damping_ratio * FIT_RING_BAND[1], 0.99)]
+    hi = [f0 * FIT_RING_BAND[0], min(damping_ratio * FIT_RING_BAND[1], 0.99)]  # above fs / 2: its alias's samples
     best = least_squares(residual, [f0, damping_ratio], bounds=(lo, hi), x_scale=[f0 * 0.01, damping_ratio * 0.1])
     f, zeta = (float(v) for v in best.x)
     inside = all(a * (1 + 1e-6) < v < b * (1 - 1e-6) for a, v, b in zip(lo, (f, zeta), hi))

@@ -10,8 +10,8 @@ import numpy as np
 from .._checks import finite_samples, positive_scalar
 from .contact import detect_contact
 from .front import front_responses, steady_responses
-from .plate import fit_free_ringing
-from .undo import lowpass_zero_phase, undo_plate_resonance
+from .plate import fit_trace_ringing
+from .undo import lowpass_zero_phase, plate_undoable, undo_plate_resonance
 
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
            "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_START_TERMS", "SENSED_BEFORE", "SENSED_REACH_PERIODS",
@@ -264,7 +264,7 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact (the end from
     ``end_u``, or where that fails from the end of the force undone and low-passed at the resonance: a swing of
     the plate can end the sensed force periods early). With ``refine``, the plate is then measured in this trace:
-    fitted to the free ringing after the end (:func:`ballimpact.signal.plate.fit_free_ringing`, from
+    fitted to the free ringing after the end (:func:`ballimpact.signal.plate.fit_trace_ringing`, from
     SENSED_RING_GAP samples after it over SENSED_RING_PERIODS of its periods, or three decay times), and where that
     fit leaves at most SENSED_RING_MAX_RESIDUAL noise deviations (one mode, no force) the ends are fitted again
     through it, its fn and zeta then uncertain by SENSED_RING_COVERAGE of their standard uncertainties instead of
@@ -377,6 +377,8 @@ def _fitted_pair(x, fs, plate, guess, window, noise_rms, cloth_phase_samples, re
 def _undone_end(x, fs, plate) -> float:
     """The end of the contact found on the force undone from ``plate`` and low-passed at its resonance [samples]
     (NaN: none)."""
+    if not plate_undoable(plate[0], plate[1], fs):
+        return math.nan
     y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
     found = detect_contact(y, fs)
     return found.end_s * fs if found.n_impacts >= 1 and math.isfinite(found.end_s) else math.nan
@@ -392,7 +394,7 @@ def _free_ringing(x, fs, plate, end, noise_rms):
     last = min(first + int(min(max(decay, SENSED_RING_PERIODS[0] * period), SENSED_RING_PERIODS[1] * period)),
                x.size)
     try:
-        ring = fit_free_ringing(x[first:last], fs, noise_rms, fn, zeta)
+        ring = fit_trace_ringing(x[first:last], fs, noise_rms, fn, zeta)
     except ValueError:
         return None
     if not ring.residual_rms <= SENSED_RING_MAX_RESIDUAL * noise_rms:
