@@ -113,3 +113,12 @@ def test_an_end_window_after_the_contact_is_refused():
         assert abs((fit.end - fit.start) / (e_true - s_true) - 1) < 0.01
     else:
         assert re.search("after the contact|fits no jump", fit)
+
+
+def test_a_plate_charged_beyond_its_own_size_does_not_raise():
+    """Uncertainties of 100 % and more (a session's plate barely known) leave the variants' plates physical."""
+    fs, fn, zeta, tc_s = 100e3, 5e3, 0.05, 4.0e-3
+    x, s_true, e_true = _sensed(fs, fn, zeta, tc_s, noise=5e-4, seed=7)
+    fit = sensed_contact(x, fs, fn, zeta, s_true, e_true, noise_rms=5e-4, fn_uncertainty=1.5,
+                         zeta_uncertainty=2.0, refine=False)
+    assert isinstance(fit, (SensedContact, str))

@@ -358,8 +358,8 @@ def _variants(plate, charged, windows) -> dict:
     fn, zeta = plate
     out = {"short": (fn, zeta, windows["short"])}
     for sign in (-1.0, 1.0):
-        out[f"fn{sign:+.0f}"] = (fn * (1.0 + sign * charged[0]), zeta, windows[""])
-        out[f"zeta{sign:+.0f}"] = (fn, min(zeta * (1.0 + sign * charged[1]), 0.99), windows[""])
+        out[f"fn{sign:+.0f}"] = (fn * (1.0 + sign * min(charged[0], 0.5)), zeta, windows[""])
+        out[f"zeta{sign:+.0f}"] = (fn, min(zeta * (1.0 + sign * min(charged[1], 0.9)), 0.99), windows[""])
     return out
 
 
@@ -386,7 +386,8 @@ def _undone_end(x, fs, plate) -> float:
 
 def _free_ringing(x, fs, plate, end, noise_rms):
     """The plate measured in the free ringing after ``end`` [samples]: ((fn, zeta), (their relative
-    uncertainties)), or None where the stretch is too short or is not one mode's ringing."""
+    uncertainties)), or None where the stretch is too short, is not one mode's ringing, or measures the plate no
+    better than a stated one is known (SENSED_FN_UNCERTAINTY, SENSED_ZETA_UNCERTAINTY)."""
     fn, zeta = plate
     period = fs / fn
     decay = 3.0 / (zeta * 2.0 * math.pi * fn / fs)  # three decay times [samples]
@@ -399,9 +400,11 @@ def _free_ringing(x, fs, plate, end, noise_rms):
         return None
     if not ring.residual_rms <= SENSED_RING_MAX_RESIDUAL * noise_rms:
         return None
-    return ((ring.frequency_hz, ring.damping_ratio),
-            (SENSED_RING_COVERAGE * ring.frequency_se_hz / ring.frequency_hz,
-             SENSED_RING_COVERAGE * ring.damping_se / ring.damping_ratio))
+    charged = (SENSED_RING_COVERAGE * ring.frequency_se_hz / ring.frequency_hz,
+               SENSED_RING_COVERAGE * ring.damping_se / ring.damping_ratio)
+    if not (charged[0] <= SENSED_FN_UNCERTAINTY and charged[1] <= SENSED_ZETA_UNCERTAINTY):
+        return None  # measured no better than a stated plate is known
+    return (ring.frequency_hz, ring.damping_ratio), charged
 
 
 def _refusal(x, main, start_u, end_u, noise_rms, measured) -> str:
