@@ -45,9 +45,11 @@ SENSED_REACH_PERIODS = 0.5
 #: An end's fit whose rms residual exceeds this many noise deviations is no line and parabola falling to zero
 #: through the plate (the free ringing and a smooth force leave about one) [-] ...
 SENSED_MAX_RESIDUAL = 4.0
-#: ... a start's, this many (the pre-buckling spike beyond the jump's window leaves up to tens; what the force's
-#: shape does to the start is charged as the windows' difference) [-]
-SENSED_MAX_START_RESIDUAL = 30.0
+#: ... a start's, this fraction of its fitted jump (the pre-buckling spike beyond the jump's window leaves up to
+#: hundreds of noise deviations where a plate's period spans a few samples, a fifth of the jump at most, the
+#: start still within a sample; what the force's shape does to the start is charged as the windows' difference,
+#: a window half as long again among them) [-]
+SENSED_MAX_START_RESIDUAL = 0.25
 #: A fitted start this fraction of TC or more from the one found on the sensed force, or (the plate not measured in
 #: the trace) a fitted TC this far from the one found there: another contact's ends [-]
 SENSED_MAX_MOVE = 0.05
@@ -269,15 +271,15 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     fit leaves at most SENSED_RING_MAX_RESIDUAL noise deviations (one mode, no force) the ends are fitted again
     through it, its fn and zeta then uncertain by SENSED_RING_COVERAGE of their standard uncertainties instead of
     ``fn_uncertainty`` and ``zeta_uncertainty`` (twice, from the end fitted again). Fitted again with the window
-    reaching SENSED_INSIDE_SHORT, and with the plate off by its uncertainties either way, TC moves: the largest
-    move is a bound on what the model leaves out (the force's shape beyond a parabola, the plate known only so
-    well). Refused: an end's fit whose rms residual exceeds SENSED_MAX_RESIDUAL noise deviations, or a start's
-    SENSED_MAX_START_RESIDUAL (the sensed force is then not that plate's response to such a force: another mode,
-    a baseline wrong there, a second contact); a start whose jump is under SENSED_MIN_JUMP of the peak; an end
-    whose line and parabola stand under SENSED_MIN_END_SIGMA noise deviations at the window's inside edge (a
-    window after the contact); a start SENSED_MAX_MOVE of TC or more from ``start_u``; and, the plate not measured
-    in the trace, a TC that far from the contact found (with it measured, the free ringing after the end shows no
-    force there).
+    reaching SENSED_INSIDE_SHORT, with the start's half as long again, and with the plate off by its
+    uncertainties either way, TC moves: the largest move is a bound on what the model leaves out (the force's
+    shape beyond a parabola, the plate known only so well). Refused: an end's fit whose rms residual exceeds
+    SENSED_MAX_RESIDUAL noise deviations, or a start's SENSED_MAX_START_RESIDUAL of its jump (the sensed force
+    is then not that plate's response to such a force: another mode, a baseline wrong there, a second contact);
+    a start whose jump is under SENSED_MIN_JUMP of the peak; an end whose line and parabola stand under
+    SENSED_MIN_END_SIGMA noise deviations at the window's inside edge (a window after the contact); a start
+    SENSED_MAX_MOVE of TC or more from ``start_u``; and, the plate not measured in the trace, a TC that far from
+    the contact found (with it measured, the free ringing after the end shows no force there).
     Not in the paper; see docs/signal-processing.md, "Plate resonance".
 
     Parameters
@@ -348,15 +350,17 @@ def _windows(period: float, tc: float) -> dict:
     """Samples inside the contact of the start's and the end's windows: the main ones and the short ones."""
     start_in = min(max(SENSED_START_PERIODS * period, SENSED_MIN_START), max(SENSED_INSIDE_FRACTION * tc,
                                                                              SENSED_MIN_START))
-    return {"": (int(round(start_in)), max(int(round(SENSED_INSIDE_FRACTION * tc)), SENSED_MIN_INSIDE)),
+    main = (int(round(start_in)), max(int(round(SENSED_INSIDE_FRACTION * tc)), SENSED_MIN_INSIDE))
+    return {"": main,
             "short": (max(int(round(0.75 * start_in)), 3), max(int(round(SENSED_INSIDE_SHORT * tc)),
-                                                              SENSED_MIN_INSIDE))}
+                                                              SENSED_MIN_INSIDE)),
+            "long start": (int(round(1.5 * start_in)), main[1])}
 
 
 def _variants(plate, charged, windows) -> dict:
     """The fits TC's bound is read from: the short windows, and the plate off by its uncertainties either way."""
     fn, zeta = plate
-    out = {"short": (fn, zeta, windows["short"])}
+    out = {"short": (fn, zeta, windows["short"]), "long start": (fn, zeta, windows["long start"])}
     for sign in (-1.0, 1.0):
         out[f"fn{sign:+.0f}"] = (fn * (1.0 + sign * min(charged[0], 0.5)), zeta, windows[""])
         out[f"zeta{sign:+.0f}"] = (fn, min(zeta * (1.0 + sign * min(charged[1], 0.9)), 0.99), windows[""])
@@ -418,10 +422,13 @@ def _refusal(x, main, start_u, end_u, noise_rms, measured) -> str:
     if not end.level >= SENSED_MIN_END_SIGMA * noise_rms:
         return (f"its end fitted through the plate leaves {end.level / noise_rms:.2g} noise deviations of force inside "
                 f"its window (less than {SENSED_MIN_END_SIGMA:g}): the window lies after the contact")
-    for side, fit, limit in (("start", start, SENSED_MAX_START_RESIDUAL), ("end", end, SENSED_MAX_RESIDUAL)):
-        if fit.residual > limit * noise_rms:
-            return (f"its {side}'s fit through the plate leaves {fit.residual / noise_rms:.2g} noise deviations rms "
-                    f"(more than {limit:g}): the sensed force is not that plate's response to the force there")
+    if end.residual > SENSED_MAX_RESIDUAL * noise_rms:
+        return (f"its end's fit through the plate leaves {end.residual / noise_rms:.2g} noise deviations rms (more "
+                f"than {SENSED_MAX_RESIDUAL:g}): the sensed force is not that plate's response to the force there")
+    if start.residual > SENSED_MAX_START_RESIDUAL * start.jump:
+        return (f"its start's fit through the plate leaves {100 * start.residual / start.jump:.2g} % of its jump rms "
+                f"(more than {100 * SENSED_MAX_START_RESIDUAL:g} %): the sensed force is not that plate's response "
+                "to a jump there")
     if not abs(start.index - start_u) < SENSED_MAX_MOVE * tc:
         return (f"its start fitted through the plate lies {100 * (start.index - start_u) / tc:+.2g} % of TC from the "
                 f"contact found on the sensed force (at most {100 * SENSED_MAX_MOVE:g} %)")
