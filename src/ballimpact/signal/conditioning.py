@@ -300,9 +300,14 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
             fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s,  # the contact's
                                     plate_uncertainty)  # ends fitted through it in the sensed force, where the
-            if not isinstance(fitted, str):  # noise is white
-                return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
-                               scale, spikes, it.mains, mains_source, it.contact_integral)
+        elif stated is None and isinstance(undone, str) and problems \
+                and math.isfinite(getattr(undone, "resonance_hz", math.nan)):  # noise is white; or the trace's own
+            fitted = _sensed_result(it, fs, contact, problems, undone,  # plate, refused, measured again in its
+                                    (undone.resonance_hz, undone.damping_ratio), t0_s, cloth_phase_s,  # free
+                                    measured=True)  # ringing (without that, not known well enough to fit through)
+        if fitted and not isinstance(fitted, str):
+            return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
+                           scale, spikes, it.mains, mains_source, it.contact_integral)
         if isinstance(undone, str):  # tried and refused: the ringing problems stay, and why the undoing did not help
             hz = getattr(undone, "resonance_hz", math.nan)  # the resonance refused (signal.undone.Refusal)
             refused = {"refused_hz": hz, "refused_zeta": undone.damping_ratio} if math.isfinite(hz) else {}
@@ -420,14 +425,16 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
     return undone, findings, stated
 
 
-def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None):
+def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None, *,
+                   measured=False):
     """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
     that fit judges, or why not (str: "" where the fit was not tried). ``uncertainty``: the plate's relative
     uncertainties in fn and the damping ratio charged to TC (None: the fit's defaults). The problems a plate's
     ringing causes (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
     response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
-    undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known)."""
+    undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known).
+    ``measured``: the plate (the trace's own identification) must be measured in the trace's free ringing."""
     if not getattr(refusal, "undoable", True):
         return ""
     if _second_contact_under_ringing(it.x, fs, plate, t0_s):
@@ -435,7 +442,7 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     charged = {} if uncertainty is None else {"fn_uncertainty": uncertainty[0], "zeta_uncertainty": uncertainty[1]}
     fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
-                         cloth_phase_samples=cloth_phase_s * fs, **charged)
+                         cloth_phase_samples=cloth_phase_s * fs, must_measure=measured, **charged)
     if isinstance(fit, str):
         return fit
     tc_u = fit.end - fit.start

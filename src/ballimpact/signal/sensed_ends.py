@@ -260,7 +260,8 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
 def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, start_u: float,
                    end_u: float, *, noise_rms: float, cloth_phase_samples: float = 0.0,
                    fn_uncertainty: float = SENSED_FN_UNCERTAINTY,
-                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY, refine: bool = True) -> SensedContact | str:
+                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY, refine: bool = True,
+                   must_measure: bool = False) -> SensedContact | str:
     """A contact's ends fitted through a known plate in the sensed force (:func:`sensed_end`), with TC's bounds.
 
     Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact (the end from
@@ -300,6 +301,9 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         Relative uncertainties of the resonance and the damping ratio [-], where the trace does not measure them.
     refine : bool
         Measure the plate in the trace's free ringing after the end.
+    must_measure : bool
+        Refuse where the plate could not be so measured (a plate identified from this trace alone, whose own
+        uncertainty is not known).
 
     Returns
     -------
@@ -326,6 +330,9 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         if again is None:
             break
         (plate, charged), main, measured = ring, again, True
+    if must_measure and not measured:
+        return ("the plate could not be measured in the free ringing after the contact (one mode, known better than "
+                f"{100 * SENSED_FN_UNCERTAINTY:g} % in fn and {100 * SENSED_ZETA_UNCERTAINTY:g} % in zeta)")
     fits = {"": main}
     for name, (fn, zeta, window) in _variants(plate, charged, windows).items():
         for reach in (2.0, None):  # near the main fit's ends, else as far as they were looked for
