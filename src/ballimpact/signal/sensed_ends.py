@@ -272,7 +272,7 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
     fit leaves at most SENSED_RING_MAX_RESIDUAL noise deviations (one mode, no force) the ends are fitted again
     through it, its fn and zeta then uncertain by SENSED_RING_COVERAGE of their standard uncertainties instead of
     ``fn_uncertainty`` and ``zeta_uncertainty`` (twice, from the end fitted again). Fitted again with the window
-    reaching SENSED_INSIDE_SHORT, with the start's half as long again, and with the plate off by its
+    reaching SENSED_INSIDE_SHORT, with each end's half as long again, and with the plate off by its
     uncertainties either way, TC moves: the largest move is a bound on what the model leaves out (the force's
     shape beyond a parabola, the plate known only so well). Refused: an end's fit whose rms residual exceeds
     SENSED_MAX_RESIDUAL noise deviations, or a start's SENSED_MAX_START_RESIDUAL of its jump (the sensed force
@@ -361,13 +361,14 @@ def _windows(period: float, tc: float) -> dict:
     return {"": main,
             "short": (max(int(round(0.75 * start_in)), 3), max(int(round(SENSED_INSIDE_SHORT * tc)),
                                                               SENSED_MIN_INSIDE)),
-            "long start": (int(round(1.5 * start_in)), main[1])}
+            "long start": (int(round(1.5 * start_in)), main[1]),
+            "long end": (main[0], int(round(1.5 * main[1])))}
 
 
 def _variants(plate, charged, windows) -> dict:
     """The fits TC's bound is read from: the short windows, and the plate off by its uncertainties either way."""
     fn, zeta = plate
-    out = {"short": (fn, zeta, windows["short"]), "long start": (fn, zeta, windows["long start"])}
+    out = {name: (fn, zeta, windows[name]) for name in ("short", "long start", "long end")}
     for sign in (-1.0, 1.0):
         out[f"fn{sign:+.0f}"] = (fn * (1.0 + sign * min(charged[0], 0.5)), zeta, windows[""])
         out[f"zeta{sign:+.0f}"] = (fn, min(zeta * (1.0 + sign * min(charged[1], 0.9)), 0.99), windows[""])
