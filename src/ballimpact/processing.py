@@ -21,6 +21,7 @@ import numpy as np
 
 from .bandlimit import (  # noqa: F401  (re-exported where they were)
     ALIAS_SLOW_FRACTION, PEAK_WITHHOLD_MAX_ROUNDING, PLATE_IS_BANDWIDTH_TOLERANCE, alias_free, aliasing_problem,
+    aliasing_ruled_out,
     aliasing_ruled_out, front_rounding, peak_can_be_withheld)
 from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
@@ -336,7 +337,8 @@ def _conditioned_trace(res: ImpactResult, row: ImpactRow, session: Session):
                                      mains_hz="auto" if meta.mains_hz is None else meta.mains_hz,
                                      n_harmonics=HUM_HARMONICS, tau_s=meta.time_constant_s, t0_s=trace.t0_s,
                                      plate=meta.plate_resonance, plate_uncertainty=meta.plate_uncertainty,
-                                     cloth_phase_s=cloth_phase_s(res.vin_m_s))
+                                     cloth_phase_s=cloth_phase_s(res.vin_m_s),
+                                     fit_own_plate=aliasing_ruled_out(meta.bandwidth_hz, fs))
         except ValueError as exc:
             res.find(Problem(ProblemKind.TRACE_UNUSABLE, f"unusable trace: {exc}"))
             return None

@@ -179,7 +179,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
                       n_harmonics: int = 3, t0_s: float = 0.0, tau_s: float | None = None,
                       pre_guard_s: float = PRE_GUARD_S, post_guard_s: float = POST_GUARD_S,
                       undo_plate: bool = True, plate: tuple | None = None, plate_uncertainty: tuple | None = None,
-                      cloth_phase_s: float = 0.0,
+                      cloth_phase_s: float = 0.0, fit_own_plate: bool = True,
                       _kept: tuple | None = None, _near_ends: tuple = ()) -> ConditionedSignal:
     """Remove polarity, offset, mains hum and charge-amplifier decay from a plate voltage.
 
@@ -232,6 +232,12 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         than it before an undone force's jump is the cloth's, which the
         contact's start completed from the jump counts; 0 (default) or NaN
         where the speed is not known.
+    fit_own_plate : bool
+        Where a plate this trace identified itself is not undone, fit the
+        contact's ends through it (measured again in its free ringing). Only
+        where no resonance can alias into the samples
+        (:func:`ballimpact.bandlimit.aliasing_ruled_out`): an alias's ringing
+        fits the samples after the contact, but not the force's response.
     _kept, _near_ends : tuple of int
         Internal, set when this function calls itself again: samples at a
         contact end not to be replaced as spikes, and lower spikes near the
@@ -282,8 +288,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         return condition_voltage(voltage_V, sample_rate_hz, polarity=polarity, mains_hz=mains_hz,
                                  n_harmonics=n_harmonics, t0_s=t0_s, tau_s=tau_s, pre_guard_s=pre_guard_s,
                                  post_guard_s=post_guard_s, undo_plate=undo_plate, plate=plate,
-                                 plate_uncertainty=plate_uncertainty,
-                                 cloth_phase_s=cloth_phase_s, _kept=keep, _near_ends=near_ends)
+                                 plate_uncertainty=plate_uncertainty, cloth_phase_s=cloth_phase_s,
+                                 fit_own_plate=fit_own_plate, _kept=keep, _near_ends=near_ends)
     messages: list[str] = []
     for msg in it.pending:
         warnings.warn(msg, ConditioningWarning, stacklevel=2 if _kept is None else 3)
@@ -300,7 +306,7 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
             fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s,  # the contact's
                                     plate_uncertainty)  # ends fitted through it in the sensed force, where the
-        elif stated is None and isinstance(undone, str) and problems \
+        elif fit_own_plate and stated is None and isinstance(undone, str) and problems \
                 and math.isfinite(getattr(undone, "resonance_hz", math.nan)):  # noise is white; or the trace's own
             fitted = _sensed_result(it, fs, contact, problems, undone,  # plate, refused, measured again in its
                                     (undone.resonance_hz, undone.damping_ratio), t0_s, cloth_phase_s,  # free
