@@ -302,15 +302,8 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         problems.extend(found)
         undone, findings, stated = _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phase_s,
                                                  plate_uncertainty)
-        fitted: tuple | str = ""  # the contact with its ends fitted through a known plate, or why they were not
-        if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:  # a known plate:
-            fitted = _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s,  # the contact's
-                                    plate_uncertainty)  # ends fitted through it in the sensed force, where the
-        elif fit_own_plate and stated is None and isinstance(undone, str) and problems \
-                and math.isfinite(getattr(undone, "resonance_hz", math.nan)):  # noise is white; or the trace's own
-            fitted = _sensed_result(it, fs, contact, problems, undone,  # plate, refused, measured again in its
-                                    (undone.resonance_hz, undone.damping_ratio), t0_s, cloth_phase_s,  # free
-                                    measured=True)  # ringing (without that, not known well enough to fit through)
+        fitted = _through_plate(it, fs, contact, problems, stated, undone, plate, t0_s, cloth_phase_s,
+                                plate_uncertainty, fit_own_plate)
         if fitted and not isinstance(fitted, str):
             return _result(it.x, it.fit, it.tau, it.source, fitted[0], it.n_iter, messages, fitted[1], t0_s,
                            scale, spikes, it.mains, mains_source, it.contact_integral)
@@ -429,6 +422,20 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
         if undone is None and not getattr(refused, "undoable", True):  # a stated plate the samples cannot undo
             undone = refused  # stands as a finding, though the sensed force shows no ringing (it aliases)
     return undone, findings, stated
+
+
+def _through_plate(it, fs, contact, problems, stated, undone, plate, t0_s, cloth_phase_s, uncertainty, own):
+    """The contact with its ends fitted through a known plate not undone (:func:`_sensed_result`), or why not (str,
+    "" where not tried): a stated or the session's plate whose undoing was refused (``stated``); or, with ``own``,
+    the plate the trace identified itself and could not undo (``undone``), measured again in its free ringing
+    (without that, not known well enough to fit through)."""
+    if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:
+        return _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s, uncertainty)
+    if own and stated is None and isinstance(undone, str) and problems \
+            and math.isfinite(getattr(undone, "resonance_hz", math.nan)):
+        return _sensed_result(it, fs, contact, problems, undone, (undone.resonance_hz, undone.damping_ratio), t0_s,
+                              cloth_phase_s, measured=True)
+    return ""
 
 
 def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None, *,

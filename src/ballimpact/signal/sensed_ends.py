@@ -237,8 +237,19 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
         return None
     m = hi - lo + 1
     resid2 = float(sse[k]) / max(m - design.shape[-1] - 1, 1)
-    # the model's change with the end, its amplitudes held (central differences on the fine grid), beside its
-    # linear columns: the end's variance in white noise of the larger of the sensed noise and the fit's residual
+    se = _end_se(design, coef, k, max(float(noise_rms) ** 2, resid2))
+    if se is None:
+        return None
+    at = float(fine[k]) - (phase if side == "start" else 0.0)
+    jump, level = ((float(coef[k][2]), math.nan) if side == "start"  # the jump; an end's force inside its window
+                   else (math.nan, float(coef[k][2] * inside + coef[k][3] * inside * inside)))
+    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi), jump, level)
+
+
+def _end_se(design, coef, k: int, sigma2: float) -> float | None:
+    """The standard uncertainty of the end at fine candidate ``k`` [samples] in white noise of variance ``sigma2``:
+    the model's change with the end, its amplitudes held (central differences on the fine grid), beside its linear
+    columns; None where they do not determine it."""
     d_end = (design[k + 1] - design[k - 1]) @ coef[k] / (2.0 * _FINE)
     jac = np.column_stack([d_end, design[k]])
     scale = np.sqrt(np.sum(jac * jac, axis=0))
@@ -249,12 +260,7 @@ def sensed_end(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: flo
         inv = np.linalg.inv(jn.T @ jn)
     except np.linalg.LinAlgError:
         return None
-    sigma2 = max(float(noise_rms) ** 2, resid2)
-    se = math.sqrt(max(sigma2 * float(inv[0, 0]), 0.0)) / float(scale[0])
-    at = float(fine[k]) - (phase if side == "start" else 0.0)
-    jump = float(coef[k][2]) if side == "start" else math.nan
-    level = math.nan if side == "start" else float(coef[k][2] * inside + coef[k][3] * inside * inside)
-    return SensedEnd(at, se, math.sqrt(resid2), int(lo), int(hi), jump, level)
+    return math.sqrt(max(sigma2 * float(inv[0, 0]), 0.0)) / float(scale[0])
 
 
 def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, start_u: float,
