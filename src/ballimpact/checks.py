@@ -260,14 +260,14 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                  "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
                  "noise deviations over the end's slope (kCAL and the peak not estimated). A known plate (stated, the "
                  "session's, or one the trace identified itself, then only where its free ringing measures it "
-                 "again and aliasing is ruled out) that is not undone has the contact's ends fitted through it in the sensed force, "
-                 "the plate measured in the trace's free ringing after the end where one mode explains it: TC gets "
-                 "how far it moves with the fit's windows and the plate off by SENSED_RING_COVERAGE of its "
-                 "standard uncertainties so measured (else by SENSED_FN_UNCERTAINTY and SENSED_ZETA_UNCERTAINTY, "
-                 "or the session's intervals), and the ringing's other findings then bias kCAL and the peak only. "
-                 "A stated plate above what the samples resolve (its ringing aliases): TC gets half its period "
-                 "plus what the jump's ringing leaves at the end over the slope there "
-                 "(ballimpact.signal.effects.aliased_plate_effects); kCAL and the peak not estimated."),
+                 "again and aliasing is ruled out) that is not undone has the contact's ends fitted through it in "
+                 "the sensed force, the plate measured in the trace's free ringing after the end where one mode "
+                 "explains it: TC gets how far it moves with the fit's windows and the plate off by "
+                 "SENSED_RING_COVERAGE of its standard uncertainties so measured (else by SENSED_FN_UNCERTAINTY "
+                 "and SENSED_ZETA_UNCERTAINTY, or the session's intervals), and the ringing's other findings then "
+                 "bias kCAL and the peak only. A stated plate above what the samples resolve (its ringing "
+                 "aliases): TC gets half its period plus what the jump's ringing leaves at the end over the slope "
+                 "there (ballimpact.signal.effects.aliased_plate_effects); kCAL and the peak not estimated."),
     Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,
           thresholds=(_t("signal.ringing", "NEGATIVE_FRACTION", "of the peak", "depth"),
                       _t("signal.ringing", "NEGATIVE_SIGMA", "standard errors", "significance")),

@@ -21,7 +21,6 @@ import numpy as np
 
 from .bandlimit import (  # noqa: F401  (re-exported where they were)
     ALIAS_SLOW_FRACTION, PEAK_WITHHOLD_MAX_ROUNDING, PLATE_IS_BANDWIDTH_TOLERANCE, alias_free, aliasing_problem,
-    aliasing_ruled_out,
     aliasing_ruled_out, front_rounding, peak_can_be_withheld)
 from .checks import QUANTITIES, check_of
 from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion

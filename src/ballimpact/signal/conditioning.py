@@ -86,7 +86,6 @@ from ..problems import Problem, ProblemKind
 from .baseline import (BaselineFit, MAINS_CANDIDATES_HZ, MIN_QUIET_SAMPLES, POST_GUARD_S, PRE_GUARD_S, fit_baseline,
                        mains_frequencies, rough_trend)
 from .contact import ContactResult, detect_contact
-from .undo import lowpass_zero_phase, undo_plate_resonance
 from .end_checks import adc_step_problems, curve_end_contact, end_problems, plateau_end_problems
 from .integrity import (baseline_bend_problems, baseline_step_problems, edge_event_problems, end_event_problems,
                         level_problems, mains_problems, short_record_hum)
@@ -95,7 +94,7 @@ from .plate import PlateResonance
 from .ringing import ringing_problems
 from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
-from .sensed_ends import sensed_contact
+from .sensed_ends import resonance_lowpassed_contact, sensed_contact
 from .undone import (PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
                      stated_plate_undone, undone_peak_spread)
 from .window import iterate
@@ -444,9 +443,10 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
     that fit judges, or why not (str: "" where the fit was not tried). ``uncertainty``: the plate's relative
     uncertainties in fn and the damping ratio charged to TC (None: the fit's defaults). The problems a plate's
-    ringing causes (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads through the plate's
-    response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says why the plate was not
-    undone); kCAL and the peak, read on the force the plate still rings in, stay withheld (effects not known).
+    ringing causes (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads
+    through the plate's response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says
+    why the plate was not undone); kCAL and the peak, read on the force the plate still rings in, stay withheld
+    (effects not known).
     ``measured``: the plate (the trace's own identification) must be measured in the trace's free ringing."""
     if not getattr(refusal, "undoable", True):
         return ""
@@ -483,8 +483,7 @@ def _second_contact_under_ringing(x, fs, plate, t0_s) -> bool:
     """Whether the force undone from a known plate and low-passed at its resonance holds more than one contact: the
     sensed peak stands on the plate's swing, and a second contact of 5 % of the force's peak may be less of it,
     unseen by the contact search on the sensed force."""
-    y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
-    return detect_contact(y, fs, t0_s=t0_s).n_impacts > 1
+    return resonance_lowpassed_contact(x, fs, plate[0], plate[1], t0_s=t0_s).n_impacts > 1
 
 
 def _undone_result(it, fs, undone, findings, messages, kept_problems, t0_s, scale, spikes, mains_source):

@@ -18,7 +18,7 @@ __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE",
            "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP",
            "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SENSED_RING_GAP", "SENSED_RING_PERIODS",
            "SENSED_RING_MAX_RESIDUAL", "SENSED_RING_COVERAGE", "SENSED_MIN_END_SIGMA", "SensedEnd", "SensedContact",
-           "sensed_end", "sensed_contact"]
+           "sensed_end", "sensed_contact", "resonance_lowpassed_contact"]
 
 #: Each end's window reaches this fraction of TC into the contact ... [-]
 SENSED_INSIDE_FRACTION = 0.10
@@ -392,13 +392,45 @@ def _fitted_pair(x, fs, plate, guess, window, noise_rms, cloth_phase_samples, re
     return None if start is None or end is None else (start, end)
 
 
+def resonance_lowpassed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, *,
+                                t0_s: float = 0.0):
+    """The contact found on the force undone from a known plate and low-passed at its resonance.
+
+    Its ringing gone and what is left of it above the resonance smoothed away, this force shows where the contact
+    ends and whether it holds another (:func:`ballimpact.signal.contact.detect_contact`), though its ends are
+    spread by the low-pass: the sensed force can end on a swing periods early, and a second contact can hide in
+    a swing.
+
+    Parameters
+    ----------
+    x : array_like
+        The conditioned sensed voltage [V].
+    sample_rate_hz : float
+        Sample rate [Hz].
+    frequency_hz, damping_ratio : float
+        The plate's resonance [Hz] and damping ratio [-].
+    t0_s : float
+        Time of ``x[0]`` [s].
+
+    Returns
+    -------
+    ballimpact.signal.contact.ContactResult
+
+    Raises
+    ------
+    ValueError
+        Where the sampled plate has no inverse (:func:`ballimpact.signal.undo.plate_undoable`).
+    """
+    y = lowpass_zero_phase(undo_plate_resonance(x, sample_rate_hz, frequency_hz, damping_ratio), sample_rate_hz,
+                           frequency_hz)
+    return detect_contact(y, sample_rate_hz, t0_s=t0_s)
+
+
 def _undone_end(x, fs, plate) -> float:
-    """The end of the contact found on the force undone from ``plate`` and low-passed at its resonance [samples]
-    (NaN: none)."""
+    """The end of :func:`resonance_lowpassed_contact` [samples] (NaN: none, or a plate the samples cannot undo)."""
     if not plate_undoable(plate[0], plate[1], fs):
         return math.nan
-    y = lowpass_zero_phase(undo_plate_resonance(x, fs, plate[0], plate[1]), fs, plate[0])
-    found = detect_contact(y, fs)
+    found = resonance_lowpassed_contact(x, fs, plate[0], plate[1])
     return found.end_s * fs if found.n_impacts >= 1 and math.isfinite(found.end_s) else math.nan
 
 
