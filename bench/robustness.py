@@ -16,8 +16,10 @@ right for >= 98 % of the non-faulty traces on one-factor rigs and >= 85 % on
 random combinations with an ideal plate or a plate at 3 kHz or above.
 
 Prints the table, per factor class (a trace counts in every row it belongs to),
-the targets' shares, the findings that withheld right numbers, and the worst
-offenders with their SEED:INDEX for ``--replay``. Writes
+the targets' shares, the findings that withheld right numbers, TC withheld by
+how many findings withheld it without an estimate of their effect, how honest
+the standard uncertainties of the ok quantities are (error over uncertainty),
+and the worst offenders with their SEED:INDEX for ``--replay``. Writes
 bench/out/robustness-s<SEED>-n<N>.{md,csv} (per trace).
 """
 
@@ -92,7 +94,31 @@ def run_one(args):
         "peak_note": getattr(result, "peak_note", ""),
         "codes": getattr(result, "reason_code", ""), "status": getattr(result, "status", ""),
         **{f"{q}_outcome": outcomes.get(q, "") for q in QUANTITIES},
+        **{f"{q}_u_pct": 100 * _relative_u(result, q) for q in QUANTITIES},
+        "tc_unestimated": " ".join(_unestimated(result, "contact_time")),
     }
+
+
+def _relative_u(result, q: str) -> float:
+    """The standard uncertainty the processing gave quantity ``q`` of QUANTITIES, relative to its value [-]."""
+    value, u = {"tc": ("contact_time_ms", "contact_time_u_ms"), "kcal": ("kcal_N_per_V", "kcal_u_N_per_V"),
+                "peak": ("peak_force_N", "peak_force_u_N")}[q]
+    v, uv = getattr(result, value, math.nan), getattr(result, u, math.nan)
+    return abs(uv / v) if result is not None and v else math.nan
+
+
+def _unestimated(result, quantity: str) -> list:
+    """The codes of the findings (not faults) that can bias ``quantity`` and did not estimate their effect on it:
+    each withholds it by itself, whatever the budget."""
+    from ballimpact.checks import check_of
+
+    out = []
+    for p in getattr(result, "problems", []):
+        check = check_of(p.kind)
+        if not check.fault and quantity in tuple(check.biases) + tuple(p.data.get("also_biases", ())) \
+                and not math.isfinite(float(p.effects.get(quantity, math.nan))):
+            out.append(check.code)
+    return list(dict.fromkeys(out))
 
 
 def time_constants(records):
@@ -190,7 +216,8 @@ def targets(records):
     for k, target in goal.items():
         n, ok = cells.get(k, (0, 0))
         if n:
-            lines.append(f"| {k} | {n} | {ok} ({100 * ok / n:.1f} %) | {'-' if target is None else f'>= {100 * target:.0f} %'} |")
+            goal_text = "-" if target is None else f">= {100 * target:.0f} %"
+            lines.append(f"| {k} | {n} | {ok} ({100 * ok / n:.1f} %) | {goal_text} |")
     wrong = {q: sum(r[f"{q}_outcome"] == "ok_wrong" for r in records if r["measurable"]) for q in QUANTITIES}
     lines += ["", "ok but wrong: " + ", ".join(f"{q} {n}" for q, n in wrong.items())
               + f"; faulty used in a fit: {sum(r['category'] == 'faulty_ok' for r in records)}"]
@@ -209,6 +236,39 @@ def withheld_by_code(records, k):
     lines = ["", "#### TC withheld but right, by the codes of the findings (a trace counts under each of its codes)",
              "", "| code | traces |", "|---|---|"]
     lines += [f"| {c} | {n} |" for c, n in sorted(codes.items(), key=lambda kv: -kv[1])[:k]]
+    return "\n".join(lines)
+
+
+def calibration(records):
+    """How honest the standard uncertainties are: on the non-faulty traces whose quantity is ok,
+    z = error / standard uncertainty, by target class (about 5 % beyond 2 for an honest normal error)."""
+    lines = ["", "#### ok quantities: error / standard uncertainty (honest: about 5 % beyond 2, 1 % beyond 2.6)", "",
+             "| class | quantity | ok | median abs(z) | 95th percentile | beyond 2 |", "|---|---|---|---|---|---|"]
+    for k in ("one factor", "random, ideal plate or >= 3 kHz", "random, plate < 3 kHz"):
+        for q in QUANTITIES:
+            z = sorted(abs(r[f"{q}_err_pct"]) / r[f"{q}_u_pct"] for r in records
+                       if r["measurable"] and r["category"] != "crash" and target_class(r) == k
+                       and r[f"{q}_outcome"].startswith("ok_") and r[f"{q}_u_pct"] > 0)
+            if z:
+                lines.append(f"| {k} | {q} | {len(z)} | {z[len(z) // 2]:.2f} | {z[int(0.95 * (len(z) - 1))]:.2f} | "
+                             f"{100 * sum(v > 2 for v in z) / len(z):.1f} % |")
+    return "\n".join(lines)
+
+
+def withheld_by_vetoes(records):
+    """TC withheld on non-faulty traces, by how many findings withheld it without an estimate of their effect (0:
+    the budget alone), and whether it was right: what estimating one check's effect better could give back."""
+    cells = defaultdict(lambda: defaultdict(int))
+    for r in records:
+        if r["measurable"] and r["category"] != "crash" and r["tc_outcome"].startswith("withheld"):
+            n = len(r["tc_unestimated"].split())
+            cells[(target_class(r), r["tc_outcome"])]["0" if n == 0 else "1" if n == 1 else "2+"] += 1
+    if not cells:
+        return ""
+    lines = ["", "#### TC withheld, by the findings that withheld it without an estimate of their effect", "",
+             "| class | TC | budget alone | one such finding | two or more |", "|---|---|---|---|---|"]
+    for (k, outcome), c in sorted(cells.items()):
+        lines.append(f"| {k} | {outcome.replace('_', ' ')} | {c['0']} | {c['1']} | {c['2+']} |")
     return "\n".join(lines)
 
 
@@ -293,7 +353,8 @@ def main(argv=None):
                f"workers, process_impact {sum(r['process_s'] for r in records) / n * 1e3:.0f} ms per trace on "
                f"average ({sum(r['process_cpu_s'] for r in records) / n * 1e3:.0f} ms CPU)")
     text = (markdown(records, title) + "\n" + targets(records) + "\n\n" + summary + "\n"
-            + withheld_by_code(records, args.worst) + "\n" + time_constants(records) + "\n"
+            + withheld_by_code(records, args.worst) + "\n" + withheld_by_vetoes(records) + "\n"
+            + calibration(records) + "\n" + time_constants(records) + "\n"
             + offenders(records, args.worst) + "\n")
     print(text)
     stem = OUT / f"robustness-s{args.seed}-n{n}"
