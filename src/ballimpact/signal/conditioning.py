@@ -95,7 +95,7 @@ from .ringing import ringing_problems
 from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
 from .sensed_ends import resonance_lowpassed_contact, sensed_contact
-from .undone import (PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
+from .undone import (DECAY_KINDS, PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
                      stated_plate_undone, undone_peak_spread)
 from .window import iterate
 
@@ -314,8 +314,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             why = str(undone) + (f"; nor its contact's ends fitted through the plate in the sensed force: {fitted}"
                                  if fitted else "")
             problems.append(Problem(ProblemKind.PLATE_RINGING, why, data={"undo_refused": 1.0, **refused}))
-        elif undone is not None:
-            return _undone_result(it, fs, undone, findings, messages, at_ends + staircase, t0_s, scale, spikes,
+        elif undone is not None:  # the amplifier's decay's problems stay: the plate's undoing does not judge them
+            decay = [p for p in problems if p.kind in DECAY_KINDS]
+            return _undone_result(it, fs, undone, findings, messages, at_ends + staircase + decay, t0_s, scale, spikes,
                                   mains_source)
         problems.extend(plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
     problems = _last_problems(it.x, fs, it.fit.noise, contact, problems, t0_s)

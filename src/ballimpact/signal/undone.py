@@ -75,6 +75,9 @@ PLATE_KINDS = frozenset({ProblemKind.PLATE_RINGING, ProblemKind.PEAK_ON_RINGING,
                          ProblemKind.PEAK_BETWEEN_SAMPLES, ProblemKind.CONTACT_END_UNDETERMINED,
                          ProblemKind.CONTACT_JUMP_UNRESOLVED,
                          ProblemKind.IMPULSE_UNRESOLVED})  # a plate's first overshoot is a single-sample top too
+#: Problems of the amplifier's decay, which bias kCAL and the peak only and cannot fake a plate's ringing: beside
+#: those of PLATE_KINDS they leave the plate's undoing to be tried, and they stay with the force undone.
+DECAY_KINDS = frozenset({ProblemKind.UNDERSHOOT_NOT_MEASURABLE, ProblemKind.DECAY_NOT_CORRECTED})
 
 
 def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s, *, cloth_phase_s: float = 0.0):
@@ -82,7 +85,8 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     when it is not tried; why it was refused, in words (str), when it was; and, as :func:`stated_plate_undone`,
     the findings the force kept leaves (a list of Problems, with their effects where known).
 
-    Tried only when every problem is one plate ringing causes and one shows the
+    Tried only when every problem is one plate ringing causes (or one of the
+    amplifier's decay, DECAY_KINDS, which stays with the force undone) and one shows the
     ringing itself, on one contact that ends PLATE_ID_AFTER_S before the
     record does (the inverse's backward pass starts from rest there). The
     resonance is identified twice, from the contact (less two samples after its
@@ -164,7 +168,7 @@ def plate_undone(x, fs, fit: BaselineFit, contact: ContactResult, problems, t0_s
     the peak, bounds in those budgets; fitted ends that the kernel's spread
     does not explain are charged to TC by the excess.
     """
-    kinds = {p.kind for p in problems}
+    kinds = {p.kind for p in problems} - DECAY_KINDS
     if not kinds or not kinds <= PLATE_KINDS or not kinds & PLATE_EVIDENCE:
         return None, []
     if not _plate_can_be_undone(x, fs, contact, t0_s):
