@@ -245,6 +245,25 @@ ZOO_PEAK_OK_BUT_WRONG_MENDED = [
 ]
 
 
+#: Zoo traces whose kCAL came out ok and 2.9-3.1 % low on 7fa9353 (seeds 816 and 818, held out until looked at): the
+#: contact's end undetermined and found 50-127 % late, the integral taken over what followed the contact. The end's
+#: findings now bias kCAL by the signal over the span the end may move, and withhold it where no span is known
+#: (name, seed, index, what).
+ZOO_KCAL_OK_BUT_WRONG_MENDED = [
+    ("end-in-the-noise-kcal-5.5kHz", 818, 1132, "an end 0.2 ms into the noise, TC +50 %: kCAL -3.1 % ok"),
+    ("end-no-line-pins-kcal", 816, 2762, "no line pins the end, TC +127 %: kCAL -2.9 % ok"),
+]
+
+
+@pytest.mark.parametrize("name, seed, index, what", ZOO_KCAL_OK_BUT_WRONG_MENDED,
+                         ids=[c[0] for c in ZOO_KCAL_OK_BUT_WRONG_MENDED])
+def test_zoo_kcal_ok_but_wrong_mended(name, seed, index, what, tmp_path):
+    trace = zoo.trace_for(seed, index)
+    result, judgement = zoo.run_trace(trace, tmp_path)
+    assert_invariant(trace, result, judgement)
+    assert judgement.outcomes["kcal"] == "withheld_wrong", (what, judgement.errors, result.reason)
+
+
 @pytest.mark.parametrize("name, seed, index, what", ZOO_PEAK_OK_BUT_WRONG_MENDED,
                          ids=[c[0] for c in ZOO_PEAK_OK_BUT_WRONG_MENDED])
 def test_zoo_peak_ok_but_wrong_mended(name, seed, index, what, tmp_path):

@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from ballimpact.checks import CHECKS, QUANTITIES, TOLERANCES, check_of, get_check
 from ballimpact.signal.effects import (end_slopes, level_effects, line_amplitude_after, ringing_effects,
-                                       rounding_effects)
+                                       rounding_effects, window_effects)
 from ballimpact.problems import Problem, ProblemKind
 from ballimpact.session_checks import apply_session_flags, plate_overshoot, plate_overshoot_columns
 from ballimpact.verdicts import COVERAGE, gate_uncertainties, judge_quantities, random_uncertainties
@@ -201,6 +201,23 @@ def test_ringing_effects_bound_the_shift_of_a_triangle_s_end():
     assert first_order <= effects["contact_time"] <= 3 * first_order  # the slopes read less the line's share
     assert_allclose(effects["peak"], amp, rtol=0.02)
     assert effects["kcal"] < 1e-3
+
+
+def test_window_effects_bound_what_an_end_moved_by_a_span_takes_into_the_integral():
+    fs, level = 200e3, 0.01  # a level of 1 % of the peak standing after the end
+    t, x, s_u, e_u = _triangle(fs)
+    for span in (0.05e-3, 0.5e-3):
+        y = x + np.where((t > 4e-3) & (t <= 4e-3 + span), level, 0.0)
+        # analytic, against the triangle's integral (peak TC / 2 = 2 ms): outside, the level over the span; inside,
+        # the fade's last stretch (slope 1 / 3 ms), span^2 / 6 ms; the larger of the two
+        outside, inside = level * span / 2e-3, span**2 / 6e-3 / 2e-3
+        assert_allclose(window_effects(y, fs, s_u, e_u, 0.0, span), max(outside, inside), rtol=0.03)
+        # at the start only what stands before it counts: nothing there
+        assert window_effects(y, fs, s_u, e_u, 0.0, span, at_start=True) == pytest.approx(0.0, abs=1e-12)
+    # white noise adds two standard errors of its sum over the span
+    assert_allclose(window_effects(x, fs, s_u, e_u, 0.001, 0.5e-3, at_start=True),
+                    2 * 0.001 * np.sqrt(0.5e-3 * fs) / fs / 2e-3, rtol=0.02)
+    assert math.isnan(window_effects(x, fs, s_u, e_u, 0.0, math.inf))
 
 
 def test_level_effects_bound_what_a_level_under_a_triangle_moves():

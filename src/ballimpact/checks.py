@@ -214,7 +214,7 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
           test="tests/test_conditioning.py -k few"),
     Check(ProblemKind.CONTACT_END_UNDETERMINED, "contact end undetermined",
           "each end's fit: its spread, its standard uncertainty, the force's curve and what stands after it",
-          (_TC,),
+          (_TC, _K),
           thresholds=(_t("signal.end_checks", "END_SE_MAX_FRACTION", "of TC", "expanded uncertainty of the ends"),
                       _t("signal.end_checks", "SPREAD_MAX_FRACTION", "of TC", "an end's spread"),
                       _t("signal.end_checks", "END_CHECK_SIGMA", "standard errors", "force standing after an end"),
@@ -226,7 +226,11 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                  "the span from the earliest departure to the start as completed bounds the start's shift (TC); a "
                  "start read on a plate-undone force with no jump to complete it from (ballimpact.signal.cloth."
                  "hidden_cloth_phase): the cloth's 2 mm at the inbound speed; a finding about the start's foot where "
-                 "the start is completed from the force's jump (ballimpact.signal.cloth.first_contact): none"),
+                 "the start is completed from the force's jump (ballimpact.signal.cloth.first_contact): none. kCAL: "
+                 "the signal's integral over the span the end may move by (its refit's move, the curve's lateness, "
+                 "twice its fit's standard uncertainty, the stretch checked beyond it, a departure or the cloth's "
+                 "phase before the start; ballimpact.signal.effects.window_effects) against the contact's; where no "
+                 "such span is known (an end in the noise, or no line pinning it) kCAL is withheld with TC"),
     Check(ProblemKind.CONTACT_JUMP_UNRESOLVED, "contact jump unresolved",
           "half a sample at an end where the force jumps, against TC", (_TC,),
           thresholds=(_t("signal.end_checks", "JUMP_MAX_FRACTION", "of TC", "half a sample at most this"),),

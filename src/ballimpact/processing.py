@@ -35,7 +35,7 @@ from .problems import GATE_TIME_KINDS, PEAK_KINDS, TRACE_FILE_KINDS, Problem, Pr
 from .session import ImpactRow, Session
 from .traces import TraceError, read_trace
 from .signal.cloth import cloth_phase_s, first_contact, hidden_cloth_phase, steep_edge
-from .signal.effects import departure_before_start, end_slopes, finding_effects
+from .signal.effects import departure_before_start, end_slopes, finding_effects, window_effects
 from .signal.end_checks import about_start
 from .verdicts import gate_uncertainties, judge_quantities, random_uncertainties
 
@@ -467,7 +467,8 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     if cond.plate is None and not sensed:  # an undone plate's start is fitted through its chain, the low-pass's
         _departure_problem(res, cond, float(t[0]), contact)  # spread included
     if completed is None and not sensed and (cond.plate is not None or _JUMP_FLAGS & set(contact.flags)):
-        _cloth_problem(res, cond)  # read at a jump, or on an undone force, and not completed from a steep edge
+        # read at a jump, or on an undone force, and not completed from a steep edge
+        _cloth_problem(res, cond, float(t[0]))
     tc_ms = contact.contact_time_s * 1e3
     res.contact_time_ms = tc_ms
     if _out_of_bounds("contact_time_ms", tc_ms):
@@ -516,7 +517,8 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     for k, p in enumerate(res.problems):
         if about_start(p):
             moot = abs(start_u - first) / (c.contact_time_s * fs) if start_u - first <= agree else 0.0
-            res.problems[k] = replace(p, effects={"contact_time": moot}, data={**p.data, "moot": "cloth_phase"})
+            res.problems[k] = replace(p, effects={**p.effects, "contact_time": moot},
+                                      data={**p.data, "moot": "cloth_phase"})
     if start_u - first <= agree:
         return c  # the start read on the foot is the first contact: as read
     x = np.asarray(cond.voltage_V, dtype=float)
@@ -549,13 +551,19 @@ def _departure_problem(res: ImpactResult, cond, t0_s: float, contact) -> None:
                      f"contact start not known to better than {1e3 * span:.3g} ms: the signal departs from its "
                      f"noise ({noise * 1e3:.2g} mV) that long before the start found (an anti-aliasing filter's "
                      "ringing ahead of a jump, or a foot of the force)",
-                     data={"departure_s": span}, effects={"contact_time": span / contact.contact_time_s}))
+                     data={"departure_s": span},
+                     effects={"contact_time": span / contact.contact_time_s,
+                              "kcal": window_effects(cond.voltage_V, fs, (contact.start_s - t0_s) * fs,
+                                                     (contact.end_s - t0_s) * fs, cond.noise_rms_V, span,
+                                                     at_start=True)}))
 
 
-def _cloth_problem(res: ImpactResult, cond) -> None:
-    """A finding, with its effect on TC, where a start read at the force's jump or on an undone plate's force, and
-    not completed from a steep edge, may miss the cloth's phase (:func:`ballimpact.signal.cloth.hidden_cloth_phase`)."""
-    c = cond.contact
+def _cloth_problem(res: ImpactResult, cond, t0_s: float) -> None:
+    """A finding, with its effects on TC and kCAL, where a start read at the force's jump or on an undone plate's
+    force, and not completed from a steep edge, may miss the cloth's phase
+    (:func:`ballimpact.signal.cloth.hidden_cloth_phase`; kCAL: the signal before the start over that phase,
+    :func:`ballimpact.signal.effects.window_effects`)."""
+    c, fs = cond.contact, res.sample_rate_hz
     effect = hidden_cloth_phase(res.vin_m_s, c.contact_time_s)
     phase = effect * c.contact_time_s  # [s]; NaN where the speed is not known
     res.find(Problem(ProblemKind.CONTACT_END_UNDETERMINED,
@@ -563,7 +571,10 @@ def _cloth_problem(res: ImpactResult, cond) -> None:
                      "force, with no steep edge to complete it from, where the cloth's light load over the ball's "
                      "first 2 mm of compression may hide "
                      f"({1e3 * phase:.2g} ms at {res.vin_m_s:.1f} m/s)",
-                     data={"cloth_phase_s": phase}, effects={"contact_time": effect}))
+                     data={"cloth_phase_s": phase},
+                     effects={"contact_time": effect,
+                              "kcal": window_effects(cond.voltage_V, fs, (c.start_s - t0_s) * fs,
+                                                     (c.end_s - t0_s) * fs, cond.noise_rms_V, phase, at_start=True)}))
 
 
 def _with_effects(problem: Problem, cond, fs: float, t0_s: float) -> Problem:

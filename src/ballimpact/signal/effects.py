@@ -13,9 +13,9 @@ from .noise import robust_noise
 from .ringing import RING_LINE_MIN_HZ
 
 __all__ = ["END_SLOPE_S", "LINE_FIT_S", "RINGING_AFTER_S", "DEPARTURE_WINDOW_S", "DEPARTURE_SIGMA",
-           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "DEPARTURE_SWING", "end_slopes", "line_amplitude_after",
-           "ringing_effects", "rounding_effects", "level_effects", "ringing_after", "finding_effects",
-           "aliased_plate_effects", "departure_before_start"]
+           "DEPARTURE_CHAIN_SIGMA", "DEPARTURE_GAP_S", "DEPARTURE_SKIP", "DEPARTURE_SWING", "end_slopes",
+           "line_amplitude_after", "ringing_effects", "rounding_effects", "level_effects", "ringing_after",
+           "finding_effects", "aliased_plate_effects", "window_effects", "departure_before_start"]
 
 #: The force's slope at an end is read over this long inside it [s] (as the conditioning reads it).
 END_SLOPE_S = PLATE_SLOPE_S
@@ -308,6 +308,10 @@ def ringing_after(x, fs: float, end_u: float, noise_V: float, *, over_s: float =
 def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end_u: float, noise_V: float):
     """``problem`` with the effects of what it saw estimated, where its check can estimate them.
 
+    A contact end not determined (CONTACT_END_UNDETERMINED) also gets its effect on kCAL where the span the end
+    may move by is known (``span_s`` or ``departure_s`` in its data): :func:`window_effects`; where it is not, kCAL
+    is withheld with TC. The rest, as follows.
+
     A spectral line of the plate (a PLATE_RINGING finding with ``line_hz`` and ``amplitude_fraction`` in its
     data) gets :func:`ringing_effects`; so does signal standing after the contact's end (a CONTACT_END_UNDETERMINED
     finding ``beyond`` the end) where :func:`ringing_after` shows it is a damped line, not force. A plate
@@ -343,6 +347,18 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     -------
     ballimpact.problems.Problem
     """
+    out = _check_effects(problem, siblings, voltage_V, fs, start_u, end_u, noise_V)
+    if out.kind is ProblemKind.CONTACT_END_UNDETERMINED and "kcal" not in out.effects:
+        data = out.data
+        span = float(data.get("span_s", data.get("departure_s", math.nan)))
+        start = "departure_s" in data or "start" in (data.get("end"), data.get("beyond"))
+        kcal = window_effects(voltage_V, fs, start_u, end_u, noise_V, span, at_start=start)
+        out = replace(out, effects={**out.effects, "kcal": kcal})
+    return out
+
+
+def _check_effects(problem, siblings, voltage_V, fs: float, start_u: float, end_u: float, noise_V: float):
+    """:func:`finding_effects` but for kCAL's of a contact end not determined."""
     def line_effects(p):
         x = np.asarray(voltage_V, dtype=float)
         i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
@@ -387,6 +403,48 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
                 and all(p.kind is ProblemKind.PEAK_ON_RINGING for p in ringing):
             return replace(problem, effects=_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
     return problem
+
+
+def window_effects(x, fs: float, start_u: float, end_u: float, noise_V: float, span_s: float, *,
+                   at_start: bool = False) -> float:
+    """A bound of what a contact end that may move by ``span_s`` does to kCAL [-, relative]: the contact's integral
+    gains or loses the signal over that span.
+
+    At the end, the larger magnitude of the signal's integral over ``span_s`` inside and outside it (the force's
+    fade may end earlier, leaving non-force in the contact, or later); at the start, outside it only (the start is
+    where the force jumps: what follows it is force). Each plus two standard errors of white noise ``noise_V``
+    summed over the span, against the contact's integral (kCAL = m (vin + vout) / integral, section 2 of Goodwill
+    & Haake 2004).
+
+    Parameters
+    ----------
+    x : array_like
+        Conditioned voltage, proportional to the force [V].
+    fs : float
+        Sample rate [Hz].
+    start_u, end_u : float
+        The contact's start and end in samples from ``x[0]`` [samples].
+    noise_V : float
+        Noise standard deviation [V].
+    span_s : float
+        How far the end may move [s].
+    at_start : bool
+        The start, not the end.
+
+    Returns
+    -------
+    float
+        The bound [-]; NaN where the span is not finite or the contact's integral is not positive.
+    """
+    x = np.asarray(x, dtype=float)
+    i0, i1 = int(math.ceil(start_u)), int(math.floor(end_u))
+    if not (math.isfinite(span_s) and span_s >= 0 and 0 <= i0 < i1 < x.size):
+        return math.nan
+    integral = float(np.sum(x[i0:i1 + 1]))
+    n = max(int(math.ceil(span_s * fs)), 1)
+    sides = [x[max(i0 - n, 0):i0]] if at_start else [x[max(i1 - n + 1, i0):i1 + 1], x[i1 + 1:i1 + 1 + n]]
+    moved = max(abs(float(np.sum(side))) for side in sides) + 2.0 * max(noise_V, 0.0) * math.sqrt(n)
+    return moved / integral if integral > 0 else math.nan
 
 
 def aliased_plate_effects(x, fs: float, start_u: float, end_u: float, frequency_hz: float,

@@ -101,7 +101,7 @@ def adc_step_problems(x, fs, noise, step, contact: ContactResult, t0_s, scale) -
                                f"{1e6 * per_step:.3g} us ({100 * per_step / tc:.2g} % of TC) to cross a step at its "
                                f"{name}: the {name} is read off a staircase (record with a finer ADC range or more "
                                "bits)",
-                               data={"end": name}))
+                               data={"end": name, "span_s": per_step}))
     return out
 
 
@@ -229,7 +229,7 @@ def _beyond_problems(x, fs, noise, s_u, e_u, curve):
                                f"contact {where} not determined: the corrected signal in the "
                                f"{1e3 * FOOT_CHECK_S:.2g} ms {side} it stands {sigma:.3g} standard errors out of the "
                                f"noise ({seen}, or a baseline wrong there): the force may {may}",
-                               data={"beyond": where}))
+                               data={"beyond": where, "span_s": FOOT_CHECK_S}))
     return out
 
 
@@ -288,7 +288,7 @@ def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scal
                                f"noise threshold it moves by {moved * 1e6:+.3g} us "
                                f"({100 * moved / contact.contact_time_s:+.2g} % of TC); the force fades into the noise "
                                "there",
-                               data={"end": where}))
+                               data={"end": where, "span_s": abs(moved)}))
     out.extend(_beyond_problems(x, fs, fit.noise, s_u, e_u, curve))
     # against the straight line's end (the bent hinge's sits earlier on an end whose slope eases; the threshold
     # was set on the line's)
@@ -300,7 +300,7 @@ def end_problems(x, fs, fit: BaselineFit, contact: ContactResult, s_u, e_u, scal
                            f"contact end not determined to 1 %: the force's curve before it meets zero "
                            f"{late * 1e6:.3g} us later than the line through its last samples "
                            f"({100 * late / contact.contact_time_s:.2g} % of TC); the force flattens into the noise "
-                           "there"))
+                           "there", data={"end": "end", "span_s": late}))
     return out
 
 
@@ -332,4 +332,4 @@ def _hinge_problems(contact: ContactResult) -> list:
                 "the other end's)")
     return [Problem(ProblemKind.CONTACT_END_UNDETERMINED,
                     f"contact {worst} not determined to 1 %: the force fades into the noise there, and {seen}",
-                    data={"end": worst})]
+                    data={"end": worst, "span_s": END_SE_COVERAGE * ses[worst]})]
