@@ -255,22 +255,16 @@ ZOO_KCAL_OK_BUT_WRONG_MENDED = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", ZOO_KCAL_OK_BUT_WRONG_MENDED,
-                         ids=[c[0] for c in ZOO_KCAL_OK_BUT_WRONG_MENDED])
-def test_zoo_kcal_ok_but_wrong_mended(name, seed, index, what, tmp_path):
+_QUANTITY_MENDED = ([(*c, "peak") for c in ZOO_PEAK_OK_BUT_WRONG_MENDED]
+                    + [(*c, "kcal") for c in ZOO_KCAL_OK_BUT_WRONG_MENDED])
+
+
+@pytest.mark.parametrize("name, seed, index, what, quantity", _QUANTITY_MENDED, ids=[c[0] for c in _QUANTITY_MENDED])
+def test_zoo_quantity_ok_but_wrong_mended(name, seed, index, what, quantity, tmp_path):
     trace = zoo.trace_for(seed, index)
     result, judgement = zoo.run_trace(trace, tmp_path)
     assert_invariant(trace, result, judgement)
-    assert judgement.outcomes["kcal"] == "withheld_wrong", (what, judgement.errors, result.reason)
-
-
-@pytest.mark.parametrize("name, seed, index, what", ZOO_PEAK_OK_BUT_WRONG_MENDED,
-                         ids=[c[0] for c in ZOO_PEAK_OK_BUT_WRONG_MENDED])
-def test_zoo_peak_ok_but_wrong_mended(name, seed, index, what, tmp_path):
-    trace = zoo.trace_for(seed, index)
-    result, judgement = zoo.run_trace(trace, tmp_path)
-    assert_invariant(trace, result, judgement)
-    assert judgement.outcomes["peak"] == "withheld_wrong", (what, judgement.errors, result.reason)
+    assert judgement.outcomes[quantity] == "withheld_wrong", (what, judgement.errors, result.reason)
 
 
 @pytest.mark.parametrize("name, seed, index, what, outcome", ZOO_TC_OK_BUT_WRONG_MENDED,
