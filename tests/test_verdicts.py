@@ -138,6 +138,24 @@ def test_gate_uncertainties_are_the_resolution_over_root_six():
     assert_allclose([u_in, u_out], [1e-6 / math.sqrt(6) / 5e-3, 1e-6 / math.sqrt(6) / 1e-2], rtol=1e-12)
 
 
+def test_kcal_budget_holds_the_trapezium_rule_across_a_jump():
+    # a step of height J at a place within its sample interval drawn uniformly: the trapezium rule's error over the
+    # places has a standard deviation of J / (fs sqrt 12), which kCAL's budget charges against the integral
+    from ballimpact.calibration import voltage_impulse
+
+    fs, jump, tc = 50e3, 1.0, 4e-3
+    t = np.arange(-5, int(round(tc * fs)) + 1) / fs
+    errors = [voltage_impulse(t, np.where(t >= a, jump, 0.0), t[0], t[-1]) - jump * (t[-1] - a)
+              for a in np.random.default_rng(3).uniform(0.0, 1.0 / fs, 2000)]
+    integral = jump * t[-1]
+    u = random_uncertainties(u_vin=0.0, u_vout=0.0, cor=0.5, contact_time_s=tc, start_se_s=0.0, end_se_s=0.0,
+                             noise_V=0.0, n_contact=t.size, integral_V_s=integral, peak_V=jump, fs=fs, jump_V=jump)
+    assert_allclose(np.std(errors) / integral, u["kcal"], rtol=0.05)
+    assert u["kcal"] > 0 and random_uncertainties(
+        u_vin=0.0, u_vout=0.0, cor=0.5, contact_time_s=tc, start_se_s=0.0, end_se_s=0.0, noise_V=0.0,
+        n_contact=t.size, integral_V_s=integral, peak_V=jump, fs=fs)["kcal"] == 0.0
+
+
 def test_cor_is_withheld_when_the_timer_is_too_coarse_for_0_002():
     # 30 m/s over 0.1 m: 3.3 ms; a 20 us timer gives u(COR) = COR * hypot(...) ~ 0.003 > 0.001 (2 u > 0.002)
     u_in, u_out = gate_uncertainties(0.1 / 30, 0.1 / 15, 20e-6)

@@ -59,6 +59,11 @@ __all__ = [
     "PEAK_WITHHOLD_MAX_ROUNDING",
 ]
 
+#: kCAL's budget takes the force's largest step between two samples within this long of the contact's start as a
+#: jump whose place within its sample interval is not known (the jump at first contact and the pre-buckling spike,
+#: within the model's buckling time of 0.2 ms of it) [s]
+INTEGRAL_JUMP_S = 0.3e-3
+
 #: Columns of results/<session>/impacts.csv, in order (docs/outputs.md).
 IMPACT_COLUMNS = [
     "impact_id", "ball", "status", "reason", "vin_m_s", "vout_m_s", "cor", "contact_time_ms",
@@ -616,11 +621,13 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
     start_se, end_se = _end_standard_uncertainties(cond, fs, t0_s)
     kappa_se = cond.baseline_coefficients.get("kappa_se_per_s", 0.0) if cond.tau_source == "estimated" else 0.0
     baseline_se = baseline_integral_se(cond.baseline_coefficients, fs, (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs)
+    # the force's jump at first contact and its spike: the largest step between two samples of the contact's start
+    jump = float(np.max(np.abs(np.diff(res.voltage_V[:int(math.ceil(INTEGRAL_JUMP_S * fs)) + 2]))))
     return random_uncertainties(
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
         integral_V_s=float(np.trapezoid(res.voltage_V, res.time_s)), peak_V=float(np.max(res.voltage_V)), fs=fs,
-        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se)
+        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se, jump_V=jump)
 
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:

@@ -141,15 +141,19 @@ def gate_uncertainties(gate_interval_in_s: float, gate_interval_out_s: float, re
 
 def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_time_s: float, start_se_s: float,
                          end_se_s: float, noise_V: float, n_contact: int, integral_V_s: float, peak_V: float,
-                         fs: float, kappa_se_per_s: float = 0.0, baseline_se_V_s: float = 0.0) -> dict:
+                         fs: float, kappa_se_per_s: float = 0.0, baseline_se_V_s: float = 0.0,
+                         jump_V: float = 0.0) -> dict:
     """Random standard uncertainties of TC, kCAL, the peak and COR of one impact [-].
 
     TC: the root sum of squares of its ends' standard uncertainties (each from its fit, half a sample uniform
     where the force jumps). kCAL = m (vin + vout) / integral (section 2 of Goodwill & Haake 2004): the gates'
     timing in the impulse, white noise summed over the contact's samples in the integral, and the amplifier's
-    decay constant's standard error, which moves the integral by kappa TC / 2, and the baseline's under the
-    contact (its fitted offset, drift and hum as the quiet samples pin them). The peak: kCAL's and one noise
-    deviation against the peak voltage. COR = vout / vin: the two speeds' timing.
+    decay constant's standard error, which moves the integral by kappa TC / 2, the baseline's under the
+    contact (its fitted offset, drift and hum as the quiet samples pin them), and the trapezium rule across a jump
+    of the force (its jump at first contact, section 3.2.4, and the pre-buckling spike): across a step of height J
+    at a place within its sample interval that the samples do not tell, the rule errs by J (delta - 1/2) / fs for
+    delta uniform in [0, 1), a standard deviation of J / (fs sqrt 12). The peak: kCAL's and one noise deviation
+    against the peak voltage. COR = vout / vin: the two speeds' timing.
 
     Parameters
     ----------
@@ -176,6 +180,8 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
     baseline_se_V_s : float
         Standard error of the baseline's integral over the contact [V s]
         (:func:`ballimpact.signal.baseline.baseline_integral_se`; 0 or NaN when not known).
+    jump_V : float
+        Height of the force's largest jump between two samples [V] (0: none).
 
     Returns
     -------
@@ -186,7 +192,8 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
     u_integral = noise_V * math.sqrt(max(n_contact, 1)) / fs / integral_V_s if integral_V_s > 0 else math.nan
     u_decay = abs(kappa_se_per_s) * contact_time_s / 2.0 if math.isfinite(kappa_se_per_s) else 0.0
     u_baseline = baseline_se_V_s / integral_V_s if integral_V_s > 0 and math.isfinite(baseline_se_V_s) else 0.0
-    u_kcal = math.sqrt(u_impulse**2 + u_integral**2 + u_decay**2 + u_baseline**2)
+    u_jump = abs(jump_V) / fs / math.sqrt(12.0) / integral_V_s if integral_V_s > 0 and math.isfinite(jump_V) else 0.0
+    u_kcal = math.sqrt(u_impulse**2 + u_integral**2 + u_decay**2 + u_baseline**2 + u_jump**2)
     u_tc = math.hypot(start_se_s, end_se_s) / contact_time_s if contact_time_s > 0 else math.nan
     return {
         "contact_time": u_tc,
