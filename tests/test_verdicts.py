@@ -156,6 +156,16 @@ def test_kcal_budget_holds_the_trapezium_rule_across_a_jump():
         n_contact=t.size, integral_V_s=integral, peak_V=jump, fs=fs)["kcal"] == 0.0
 
 
+def test_peak_budget_holds_the_range_of_a_top_cut_between_two_samples():
+    # force_top reads a spike's top cut by a drop at the middle of the range it can take: uniform over +-half, a
+    # standard deviation of half / sqrt 3, against the peak, beside kCAL's and the noise's
+    kw = dict(u_vin=1e-4, u_vout=2e-4, cor=0.5, contact_time_s=4e-3, start_se_s=3e-6, end_se_s=4e-6, noise_V=1e-3,
+              n_contact=400, integral_V_s=4e-3, peak_V=1.5, fs=100e3)
+    without, cut = random_uncertainties(**kw), random_uncertainties(**kw, peak_half_range_V=0.06)
+    assert_allclose(cut["peak"], math.sqrt(without["peak"] ** 2 + (0.06 / math.sqrt(3.0) / 1.5) ** 2), rtol=1e-12)
+    assert cut["kcal"] == without["kcal"]
+
+
 def test_cor_is_withheld_when_the_timer_is_too_coarse_for_0_002():
     # 30 m/s over 0.1 m: 3.3 ms; a 20 us timer gives u(COR) = COR * hypot(...) ~ 0.003 > 0.001 (2 u > 0.002)
     u_in, u_out = gate_uncertainties(0.1 / 30, 0.1 / 15, 20e-6)

@@ -23,7 +23,7 @@ from .bandlimit import (  # noqa: F401  (re-exported where they were)
     ALIAS_SLOW_FRACTION, PEAK_WITHHOLD_MAX_ROUNDING, PLATE_IS_BANDWIDTH_TOLERANCE, alias_free, aliasing_problem,
     aliasing_ruled_out, front_rounding, peak_can_be_withheld)
 from .checks import QUANTITIES, check_of
-from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
+from .calibration import calibration_factor, contact_summary, force_from_voltage, force_top, integrate_motion
 from .signal.baseline import baseline_integral_se
 from .signal.conditioning import condition_voltage
 from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect_clipping, detect_saturation
@@ -623,11 +623,14 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
     baseline_se = baseline_integral_se(cond.baseline_coefficients, fs, (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs)
     # the force's jump at first contact and its spike: the largest step between two samples of the contact's start
     jump = float(np.max(np.abs(np.diff(res.voltage_V[:int(math.ceil(INTEGRAL_JUMP_S * fs)) + 2]))))
+    # the range a spike's top cut by a drop between two samples can take (as _calibrated reads the peak)
+    top_half = (force_top(res.time_s, res.voltage_V, cond.noise_rms_V)[2]
+                if cond.plate is None and math.isfinite(cond.noise_rms_V) else 0.0)
     return random_uncertainties(
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
         integral_V_s=float(np.trapezoid(res.voltage_V, res.time_s)), peak_V=float(np.max(res.voltage_V)), fs=fs,
-        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se, jump_V=jump)
+        kappa_se_per_s=kappa_se, baseline_se_V_s=baseline_se, jump_V=jump, peak_half_range_V=top_half)
 
 
 def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> ImpactResult:

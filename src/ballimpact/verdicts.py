@@ -142,7 +142,7 @@ def gate_uncertainties(gate_interval_in_s: float, gate_interval_out_s: float, re
 def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_time_s: float, start_se_s: float,
                          end_se_s: float, noise_V: float, n_contact: int, integral_V_s: float, peak_V: float,
                          fs: float, kappa_se_per_s: float = 0.0, baseline_se_V_s: float = 0.0,
-                         jump_V: float = 0.0) -> dict:
+                         jump_V: float = 0.0, peak_half_range_V: float = 0.0) -> dict:
     """Random standard uncertainties of TC, kCAL, the peak and COR of one impact [-].
 
     TC: the root sum of squares of its ends' standard uncertainties (each from its fit, half a sample uniform
@@ -152,8 +152,9 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
     contact (its fitted offset, drift and hum as the quiet samples pin them), and the trapezium rule across a jump
     of the force (its jump at first contact, section 3.2.4, and the pre-buckling spike): across a step of height J
     at a place within its sample interval that the samples do not tell, the rule errs by J (delta - 1/2) / fs for
-    delta uniform in [0, 1), a standard deviation of J / (fs sqrt 12). The peak: kCAL's and one noise deviation
-    against the peak voltage. COR = vout / vin: the two speeds' timing.
+    delta uniform in [0, 1), a standard deviation of J / (fs sqrt 12). The peak: kCAL's, one noise deviation
+    against the peak voltage, and where a spike's top is cut by a drop between two samples, the range it can take
+    there, uniform (its half over sqrt 3). COR = vout / vin: the two speeds' timing.
 
     Parameters
     ----------
@@ -182,6 +183,9 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
         (:func:`ballimpact.signal.baseline.baseline_integral_se`; 0 or NaN when not known).
     jump_V : float
         Height of the force's largest jump between two samples [V] (0: none).
+    peak_half_range_V : float
+        Half the range the peak's top can take between two samples [V]
+        (:func:`ballimpact.calibration.force_top`; 0: the largest sample).
 
     Returns
     -------
@@ -198,6 +202,7 @@ def random_uncertainties(*, u_vin: float, u_vout: float, cor: float, contact_tim
     return {
         "contact_time": u_tc,
         "kcal": u_kcal,
-        "peak": math.hypot(u_kcal, noise_V / peak_V) if peak_V > 0 else math.nan,
+        "peak": math.sqrt(u_kcal**2 + (noise_V / peak_V)**2 + (peak_half_range_V / math.sqrt(3.0) / peak_V)**2)
+        if peak_V > 0 else math.nan,
         "cor": cor * math.hypot(u_vin, u_vout),
     }
