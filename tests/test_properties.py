@@ -326,6 +326,22 @@ def trace_arrays(draw, recorded: np.ndarray) -> np.ndarray:
     return x
 
 
+@pytest.mark.parametrize("amplitude", [1e293, 1e300, 1e307])
+def test_process_impact_on_a_pulse_near_the_float_range_never_raises(process_session, amplitude):
+    # a contact so large that its conditioned samples overflow: the budgets' reading of the peak and the jump must
+    # not raise on them (hypothesis found one with a sample at inf in the contact)
+    session, row, recorded = process_session
+    x = np.zeros(recorded.size)
+    x[2000:2003] = amplitude * np.array([0.5, 1.0, 0.7])
+    session.trace_path(row).write_text("# units: V\nvoltage_V\n" + "\n".join(map(repr, x.tolist())) + "\n",
+                                       encoding="utf-8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with np.errstate(all="ignore"):
+            result = process_impact(row, session)
+    assert isinstance(result, ImpactResult) and result.status in ("ok", "excluded")
+
+
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(data=st.data())
 def test_process_impact_on_arbitrary_trace_never_raises(process_session, data):

@@ -624,8 +624,10 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
     # the force's jump at first contact and its spike: the largest step between two samples of the contact's start
     jump = float(np.max(np.abs(np.diff(res.voltage_V[:int(math.ceil(INTEGRAL_JUMP_S * fs)) + 2]))))
     # the range a spike's top cut by a drop between two samples can take (as _calibrated reads the peak)
+    readable = (res.time_s.size == res.voltage_V.size and np.all(np.isfinite(res.voltage_V))
+                and np.all(np.isfinite(res.time_s)) and np.all(np.diff(res.time_s) > 0))
     top_half = (force_top(res.time_s, res.voltage_V, cond.noise_rms_V)[2]
-                if cond.plate is None and math.isfinite(cond.noise_rms_V) else 0.0)
+                if readable and cond.plate is None and math.isfinite(cond.noise_rms_V) else 0.0)
     return random_uncertainties(
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
