@@ -203,6 +203,8 @@ class ContactSummary:
     final_velocity_m_s : float
         Velocity at the last sample, positive towards the plate [m/s]
         (-VB' when kCAL came from the same impulse).
+    peak_half_range_N : float
+        Half the range the top can take between two samples [N] (:func:`force_top`'s; 0 at the largest sample).
     """
 
     peak_force_N: float
@@ -210,6 +212,7 @@ class ContactSummary:
     max_displacement_m: float
     impulse_N_s: float
     final_velocity_m_s: float
+    peak_half_range_N: float = 0.0
 
 
 def force_top(time_s, force_N, noise_N: float):
@@ -315,13 +318,14 @@ def contact_summary(time_s, force_N, mass_kg: float, vin_m_s: float, *,
     velocity, displacement = integrate_motion(t, f, mass_kg, vin_m_s)
     if noise_N is None:
         k = int(np.argmax(f))
-        peak, t_peak = float(f[k]), float(t[k])
+        peak, t_peak, half = float(f[k]), float(t[k]), 0.0
     else:
-        peak, t_peak, _ = force_top(t, f, noise_N)
+        peak, t_peak, half = force_top(t, f, noise_N)
     return ContactSummary(
         peak_force_N=peak,
         time_to_peak_s=t_peak - float(t[0]),
         max_displacement_m=float(np.max(displacement)),
         impulse_N_s=float(trapezoid(f, t)),
         final_velocity_m_s=float(velocity[-1]),
+        peak_half_range_N=half,
     )

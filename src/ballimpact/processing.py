@@ -23,7 +23,7 @@ from .bandlimit import (  # noqa: F401  (re-exported where they were)
     ALIAS_SLOW_FRACTION, PEAK_WITHHOLD_MAX_ROUNDING, PLATE_IS_BANDWIDTH_TOLERANCE, alias_free, aliasing_problem,
     aliasing_ruled_out, front_rounding, peak_can_be_withheld)
 from .checks import QUANTITIES, check_of
-from .calibration import calibration_factor, contact_summary, force_from_voltage, force_top, integrate_motion
+from .calibration import calibration_factor, contact_summary, force_from_voltage, integrate_motion
 from .signal.baseline import baseline_integral_se
 from .signal.conditioning import condition_voltage
 from .signal.clipping import SATURATION_NEXT_SIGMA, SATURATION_TOP_SIGMA, detect_clipping, detect_saturation
@@ -128,6 +128,7 @@ class ImpactResult:
     plate_resonance_hz: float = math.nan  # the plate resonance undone (ballimpact.plate); NaN when none was
     plate_damping_ratio: float = math.nan
     peak_note: str = ""  # v1.1: why the peak force is withheld on an ok impact
+    peak_half_range_N: float = 0.0  # half the range the peak's top can take between two samples (its budget's)
     # v1.2 per-quantity verdicts (ballimpact.verdicts): standard uncertainty and ok / withheld of each quantity
     contact_time_u_ms: float = math.nan
     kcal_u_N_per_V: float = math.nan
@@ -623,11 +624,8 @@ def _random_uncertainties(res: ImpactResult, row: ImpactRow, meta, cond=None, t0
     baseline_se = baseline_integral_se(cond.baseline_coefficients, fs, (c.start_s - t0_s) * fs, (c.end_s - t0_s) * fs)
     # the force's jump at first contact and its spike: the largest step between two samples of the contact's start
     jump = float(np.max(np.abs(np.diff(res.voltage_V[:int(math.ceil(INTEGRAL_JUMP_S * fs)) + 2]))))
-    # the range a spike's top cut by a drop between two samples can take (as _calibrated reads the peak)
-    readable = (res.time_s.size == res.voltage_V.size and np.all(np.isfinite(res.voltage_V))
-                and np.all(np.isfinite(res.time_s)) and np.all(np.diff(res.time_s) > 0))
-    top_half = (force_top(res.time_s, res.voltage_V, cond.noise_rms_V)[2]
-                if readable and cond.plate is None and math.isfinite(cond.noise_rms_V) else 0.0)
+    # the range a spike's top cut by a drop between two samples can take, as _calibrated read the peak [V]
+    top_half = res.peak_half_range_N / res.kcal_N_per_V if res.peak_half_range_N > 0 else 0.0
     return random_uncertainties(
         u_vin=u_vin, u_vout=u_vout, cor=res.cor, contact_time_s=c.contact_time_s, start_se_s=start_se,
         end_se_s=end_se, noise_V=cond.noise_rms_V, n_contact=res.voltage_V.size,
@@ -672,6 +670,7 @@ def _calibrated(res: ImpactResult, row: ImpactRow, t, cond, contact, meta) -> Im
     res.force_N, res.velocity_m_s, res.displacement_m = force, velocity, displacement
     res.impulse_N_s = row.mass_kg * (res.vin_m_s + res.vout_m_s)
     res.peak_force_N = summary.peak_force_N
+    res.peak_half_range_N = summary.peak_half_range_N
     res.time_to_peak_ms = summary.time_to_peak_s * 1e3
     res.peak_is_spike = bool(summary.time_to_peak_s < BUCKLING_TIME_S)
     res.max_displacement_mm = summary.max_displacement_m * 1e3
