@@ -245,6 +245,9 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                          "a ringing no identification finds, at most"),
                       _t("signal.sensed_ends", "SENSED_FN_UNCERTAINTY", "-", "a known plate's resonance, charged"),
                       _t("signal.sensed_ends", "SENSED_ZETA_UNCERTAINTY", "-", "its damping ratio, charged"),
+                      _t("signal.sensed_ends", "SENSED_OWN_FN_UNCERTAINTY", "-",
+                         "the trace's own identification's resonance, charged where its ringing cannot measure it"),
+                      _t("signal.sensed_ends", "SENSED_OWN_ZETA_UNCERTAINTY", "-", "its damping ratio, likewise"),
                       _t("signal.sensed_ends", "SENSED_MAX_RESIDUAL", "noise deviations",
                          "an end's fit through the plate, at most"),
                       _t("signal.sensed_ends", "SENSED_MAX_START_RESIDUAL", "of its jump",
@@ -263,12 +266,12 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                  "resonance lies in the band the line check looks in; where a peak on "
                  "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
                  "noise deviations over the end's slope (kCAL and the peak not estimated). A known plate (stated, the "
-                 "session's, or one the trace identified itself, then only where its free ringing measures it "
-                 "again and aliasing is ruled out) that is not undone has the contact's ends fitted through it in "
-                 "the sensed force, the plate measured in the trace's free ringing after the end where one mode "
+                 "session's, or one the trace identified itself where aliasing is ruled out) that is not undone "
+                 "has the contact's ends fitted through it in the sensed force, the plate measured in the trace's free ringing after the end where one mode "
                  "explains it: TC gets how far it moves with the fit's windows and the plate off by "
                  "SENSED_RING_COVERAGE of its standard uncertainties so measured (else by SENSED_FN_UNCERTAINTY "
-                 "and SENSED_ZETA_UNCERTAINTY, or the session's intervals), and the ringing's other findings then "
+                 "and SENSED_ZETA_UNCERTAINTY, the session's intervals, or for the trace's own identification "
+                 "SENSED_OWN_FN_UNCERTAINTY and SENSED_OWN_ZETA_UNCERTAINTY), and the ringing's other findings then "
                  "bias kCAL and the peak only. A stated plate above what the samples resolve (its ringing "
                  "aliases): TC gets half its period plus what the jump's ringing leaves at the end over the slope "
                  "there (ballimpact.signal.effects.aliased_plate_effects); kCAL and the peak not estimated."),

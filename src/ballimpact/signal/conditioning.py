@@ -94,7 +94,8 @@ from .plate import PlateResonance
 from .ringing import ringing_problems
 from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
-from .sensed_ends import resonance_lowpassed_contact, sensed_contact
+from .sensed_ends import (SENSED_OWN_FN_UNCERTAINTY, SENSED_OWN_ZETA_UNCERTAINTY, resonance_lowpassed_contact,
+                           sensed_contact)
 from .undone import (DECAY_KINDS, PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
                      stated_plate_undone, undone_peak_spread)
 from .window import iterate
@@ -427,19 +428,18 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
 def _through_plate(it, fs, contact, problems, stated, undone, plate, t0_s, cloth_phase_s, uncertainty, own):
     """The contact with its ends fitted through a known plate not undone (:func:`_sensed_result`), or why not (str,
     "" where not tried): a stated or the session's plate whose undoing was refused (``stated``); or, with ``own``,
-    the plate the trace identified itself and could not undo (``undone``), measured again in its free ringing
-    (without that, not known well enough to fit through)."""
+    the plate the trace identified itself and could not undo (``undone``), measured again in its free ringing or,
+    where that fails, charged at SENSED_OWN_FN_UNCERTAINTY and SENSED_OWN_ZETA_UNCERTAINTY."""
     if isinstance(stated, str) and (undone is None or isinstance(undone, str)) and problems:
         return _sensed_result(it, fs, contact, problems, stated, plate, t0_s, cloth_phase_s, uncertainty)
     if own and stated is None and isinstance(undone, str) and problems \
             and math.isfinite(getattr(undone, "resonance_hz", math.nan)):
         return _sensed_result(it, fs, contact, problems, undone, (undone.resonance_hz, undone.damping_ratio), t0_s,
-                              cloth_phase_s, measured=True)
+                              cloth_phase_s, (SENSED_OWN_FN_UNCERTAINTY, SENSED_OWN_ZETA_UNCERTAINTY))
     return ""
 
 
-def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None, *,
-                   measured=False):
+def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_s, uncertainty=None):
     """A known plate (stated, or the session's) whose undoing was refused: the contact with its ends fitted through
     the plate in the sensed force (:func:`ballimpact.signal.sensed_ends.sensed_contact`) and the problems with what
     that fit judges, or why not (str: "" where the fit was not tried). ``uncertainty``: the plate's relative
@@ -447,8 +447,7 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     ringing causes (:data:`ballimpact.signal.undone.PLATE_KINDS`) no longer bias TC, whose ends the fit reads
     through the plate's response: their effect on TC is the fit's (its bound, in a PLATE_RINGING finding that says
     why the plate was not undone); kCAL and the peak, read on the force the plate still rings in, stay withheld
-    (effects not known).
-    ``measured``: the plate (the trace's own identification) must be measured in the trace's free ringing."""
+    (effects not known)."""
     if not getattr(refusal, "undoable", True):
         return ""
     if _second_contact_under_ringing(it.x, fs, plate, t0_s):
@@ -456,7 +455,7 @@ def _sensed_result(it, fs, contact, problems, refusal, plate, t0_s, cloth_phase_
     s_u, e_u = (contact.start_s - t0_s) * fs, (contact.end_s - t0_s) * fs
     charged = {} if uncertainty is None else {"fn_uncertainty": uncertainty[0], "zeta_uncertainty": uncertainty[1]}
     fit = sensed_contact(it.x, fs, plate[0], plate[1], s_u, e_u, noise_rms=it.fit.noise,
-                         cloth_phase_samples=cloth_phase_s * fs, must_measure=measured, **charged)
+                         cloth_phase_samples=cloth_phase_s * fs, **charged)
     if isinstance(fit, str):
         return fit
     tc_u = fit.end - fit.start

@@ -16,7 +16,8 @@ from .undo import lowpass_zero_phase, plate_undoable, undo_plate_resonance
 __all__ = ["SENSED_INSIDE_FRACTION", "SENSED_INSIDE_SHORT", "SENSED_MIN_INSIDE", "SENSED_OUTSIDE_PERIODS",
            "SENSED_START_PERIODS", "SENSED_MIN_START", "SENSED_START_TERMS", "SENSED_BEFORE", "SENSED_REACH_PERIODS",
            "SENSED_MAX_RESIDUAL", "SENSED_MAX_START_RESIDUAL", "SENSED_MAX_MOVE", "SENSED_MIN_JUMP",
-           "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SENSED_RING_GAP", "SENSED_RING_PERIODS",
+           "SENSED_FN_UNCERTAINTY", "SENSED_ZETA_UNCERTAINTY", "SENSED_OWN_FN_UNCERTAINTY",
+           "SENSED_OWN_ZETA_UNCERTAINTY", "SENSED_RING_GAP", "SENSED_RING_PERIODS",
            "SENSED_RING_MAX_RESIDUAL", "SENSED_RING_COVERAGE", "SENSED_MIN_END_SIGMA", "SensedEnd", "SensedContact",
            "sensed_end", "sensed_contact", "resonance_lowpassed_contact"]
 
@@ -60,6 +61,10 @@ SENSED_MIN_JUMP = 0.05
 #: way is charged to TC [-]
 SENSED_FN_UNCERTAINTY = 0.01
 SENSED_ZETA_UNCERTAINTY = 0.25
+#: A plate the trace identified itself, not measured again in its free ringing, is charged at these fractions: one
+#: trace's identification, its resonance's and damping's errors where the ends' fits through it stand [-]
+SENSED_OWN_FN_UNCERTAINTY = 0.10
+SENSED_OWN_ZETA_UNCERTAINTY = 0.50
 #: A known plate is measured in the trace's free ringing from this many samples after the fitted end [samples] ...
 SENSED_RING_GAP = 2
 #: ... over three of its decay times, at least the first and at most the second of these many periods [-] ...
@@ -266,8 +271,8 @@ def _end_se(design, coef, k: int, sigma2: float) -> float | None:
 def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio: float, start_u: float,
                    end_u: float, *, noise_rms: float, cloth_phase_samples: float = 0.0,
                    fn_uncertainty: float = SENSED_FN_UNCERTAINTY,
-                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY, refine: bool = True,
-                   must_measure: bool = False) -> SensedContact | str:
+                   zeta_uncertainty: float = SENSED_ZETA_UNCERTAINTY,
+                   refine: bool = True) -> SensedContact | str:
     """A contact's ends fitted through a known plate in the sensed force (:func:`sensed_end`), with TC's bounds.
 
     Each end is fitted with its window reaching SENSED_INSIDE_FRACTION of TC into the contact (the end from
@@ -307,9 +312,6 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         Relative uncertainties of the resonance and the damping ratio [-], where the trace does not measure them.
     refine : bool
         Measure the plate in the trace's free ringing after the end.
-    must_measure : bool
-        Refuse where the plate could not be so measured (a plate identified from this trace alone, whose own
-        uncertainty is not known).
 
     Returns
     -------
@@ -336,9 +338,6 @@ def sensed_contact(x, sample_rate_hz: float, frequency_hz: float, damping_ratio:
         if again is None:
             break
         (plate, charged), main, measured = ring, again, True
-    if must_measure and not measured:
-        return ("the plate could not be measured in the free ringing after the contact (one mode, known better than "
-                f"{100 * SENSED_FN_UNCERTAINTY:g} % in fn and {100 * SENSED_ZETA_UNCERTAINTY:g} % in zeta)")
     fits = {"": main}
     for name, (fn, zeta, window) in _variants(plate, charged, windows).items():
         for reach in (2.0, None):  # near the main fit's ends, else as far as they were looked for
