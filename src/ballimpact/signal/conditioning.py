@@ -234,7 +234,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
         where the speed is not known.
     fit_own_plate : bool
         Where a plate this trace identified itself is not undone, fit the
-        contact's ends through it (measured again in its free ringing). Only
+        contact's ends through it (measured again in its free ringing, or
+        charged at SENSED_OWN_FN_UNCERTAINTY and SENSED_OWN_ZETA_UNCERTAINTY
+        where its ringing cannot measure it). Only
         where no resonance can alias into the samples
         (:func:`ballimpact.bandlimit.aliasing_ruled_out`): an alias's ringing
         fits the samples after the contact, but not the force's response.
