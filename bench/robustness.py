@@ -41,6 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 import zoo  # noqa: E402
+from ballimpact.verdicts import unestimated  # noqa: E402
 
 OUT = ROOT / "bench" / "out"
 QUANTITIES = ("tc", "kcal", "peak")
@@ -95,7 +96,7 @@ def run_one(args):
         "codes": getattr(result, "reason_code", ""), "status": getattr(result, "status", ""),
         **{f"{q}_outcome": outcomes.get(q, "") for q in QUANTITIES},
         **{f"{q}_u_pct": 100 * _relative_u(result, q) for q in QUANTITIES},
-        "tc_unestimated": " ".join(_unestimated(result, "contact_time")),
+        "tc_unestimated": " ".join(unestimated(getattr(result, "problems", []), "contact_time")),
     }
 
 
@@ -105,20 +106,6 @@ def _relative_u(result, q: str) -> float:
                 "peak": ("peak_force_N", "peak_force_u_N")}[q]
     v, uv = getattr(result, value, math.nan), getattr(result, u, math.nan)
     return abs(uv / v) if result is not None and v else math.nan
-
-
-def _unestimated(result, quantity: str) -> list:
-    """The codes of the findings (not faults) that can bias ``quantity`` and did not estimate their effect on it:
-    each withholds it by itself, whatever the budget."""
-    from ballimpact.checks import check_of
-
-    out = []
-    for p in getattr(result, "problems", []):
-        check = check_of(p.kind)
-        if not check.fault and quantity in tuple(check.biases) + tuple(p.data.get("also_biases", ())) \
-                and not math.isfinite(float(p.effects.get(quantity, math.nan))):
-            out.append(check.code)
-    return list(dict.fromkeys(out))
 
 
 def time_constants(records):

@@ -14,7 +14,8 @@ from ballimpact.signal.effects import (end_slopes, level_effects, line_amplitude
                                        rounding_effects, window_effects)
 from ballimpact.problems import Problem, ProblemKind
 from ballimpact.session_checks import apply_session_flags, plate_overshoot, plate_overshoot_columns
-from ballimpact.verdicts import COVERAGE, gate_uncertainties, judge_quantities, random_uncertainties
+from ballimpact.verdicts import (COVERAGE, biased_quantities, gate_uncertainties, judge_quantities,
+                                 random_uncertainties, unestimated)
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = {q: 1e-4 for q in QUANTITIES}
@@ -123,6 +124,19 @@ def test_an_estimated_effect_enters_the_budget_as_a_uniform_bound():
 def test_an_unknown_effect_withholds_what_the_check_can_bias():
     v = judge_quantities([_p(ProblemKind.PLATE_RINGING, {"contact_time": math.nan, "kcal": 0.0, "peak": 0.0})],
                          SMALL)
+    assert v.status["contact_time"] == "withheld" and v.status["kcal"] == "ok"
+
+
+def test_unestimated_names_the_findings_that_withhold_a_quantity_by_themselves():
+    ring = _p(ProblemKind.PLATE_RINGING, {"contact_time": math.nan, "kcal": 0.002, "peak": 0.0})
+    peak = _p(ProblemKind.PEAK_ON_RINGING, also_biases=("contact_time",))  # no effects: withholds TC too
+    line = _p(ProblemKind.PLATE_RINGING, {"contact_time": 0.001, "kcal": 0.0, "peak": 0.0})  # estimated
+    fault = _p(ProblemKind.CLIPPING)  # excludes the impact: not a finding that withholds
+    findings = [ring, peak, line, fault]
+    assert biased_quantities(peak) == ("peak", "contact_time")
+    assert unestimated(findings, "contact_time") == ["plate_ringing", "peak_on_ringing"]
+    assert unestimated(findings, "kcal") == [] and unestimated(findings, "cor") == []
+    v = judge_quantities([ring, peak, line], SMALL)  # the rule judge_quantities applies
     assert v.status["contact_time"] == "withheld" and v.status["kcal"] == "ok"
 
 

@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 
 from .checks import QUANTITIES, TOLERANCES, check_of
 
-__all__ = ["COVERAGE", "Verdict", "judge_quantities", "gate_uncertainties", "random_uncertainties"]
+__all__ = ["COVERAGE", "Verdict", "biased_quantities", "judge_quantities", "unestimated", "gate_uncertainties",
+           "random_uncertainties"]
 
 #: Coverage factor of the expanded uncertainty compared with the tolerance (a 95 % interval of a normal error) [-].
 COVERAGE = 2.0
@@ -57,6 +58,41 @@ def _tolerance(quantity: str, peak_is_spike: bool) -> float:
     return TOLERANCES["peak_spike" if quantity == "peak" and peak_is_spike else quantity]
 
 
+def biased_quantities(finding) -> tuple:
+    """The quantities of :data:`ballimpact.checks.QUANTITIES` a finding can bias: its check's, and those its data
+    adds (``also_biases``).
+
+    Parameters
+    ----------
+    finding : ballimpact.problems.Problem
+
+    Returns
+    -------
+    tuple of str
+    """
+    return tuple(dict.fromkeys(tuple(check_of(finding.kind).biases) + tuple(finding.data.get("also_biases", ()))))
+
+
+def unestimated(findings, quantity: str) -> list:
+    """The codes of the findings (not faults) that can bias ``quantity`` and gave no finite estimate of their
+    effect on it: each withholds it by itself, whatever the budget (:func:`judge_quantities`).
+
+    Parameters
+    ----------
+    findings : iterable of ballimpact.problems.Problem
+    quantity : str
+        One of :data:`ballimpact.checks.QUANTITIES`.
+
+    Returns
+    -------
+    list of str
+        Check codes, in the findings' order, once each.
+    """
+    out = [check_of(p.kind).code for p in findings if not check_of(p.kind).fault
+           and quantity in biased_quantities(p) and not math.isfinite(float(p.effects.get(quantity, math.nan)))]
+    return list(dict.fromkeys(out))
+
+
 def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -> Verdict:
     """Per-quantity statuses and budgets of one impact.
 
@@ -89,7 +125,7 @@ def judge_quantities(findings, u_random: dict, *, peak_is_spike: bool = False) -
             for q in check.biases:
                 why[q].append(p.message)
             continue
-        for q in tuple(check.biases) + tuple(p.data.get("also_biases", ())):
+        for q in biased_quantities(p):
             effect = float(p.effects.get(q, math.nan))
             if math.isfinite(effect):
                 var[q] += (abs(effect) / math.sqrt(3.0)) ** 2
