@@ -96,7 +96,7 @@ from .shape import front_lowpass, peak_on_slow_fall
 from .spikes import low_spikes_at_ends, replace_spikes, second_differences, spikes_at_ends
 from .sensed_ends import (SENSED_OWN_FN_UNCERTAINTY, SENSED_OWN_ZETA_UNCERTAINTY, resonance_lowpassed_contact,
                            sensed_contact)
-from .undone import (DECAY_KINDS, PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
+from .undone import (PLATE_FN_UNCERTAINTY, PLATE_KINDS, Refusal, lowpassed_spike, plate_undone,
                      stated_plate_undone, undone_peak_spread)
 from .window import iterate
 
@@ -317,10 +317,9 @@ def condition_voltage(voltage_V, sample_rate_hz: float, *, polarity: int = 1, ma
             why = str(undone) + (f"; nor its contact's ends fitted through the plate in the sensed force: {fitted}"
                                  if fitted else "")
             problems.append(Problem(ProblemKind.PLATE_RINGING, why, data={"undo_refused": 1.0, **refused}))
-        elif undone is not None:  # the amplifier's decay's problems stay: the plate's undoing does not judge them
-            decay = [p for p in problems if p.kind in DECAY_KINDS]
-            return _undone_result(it, fs, undone, findings, messages, at_ends + staircase + decay, t0_s, scale, spikes,
-                                  mains_source)
+        elif undone is not None:  # what the undone force's checks do not judge again stays with it
+            return _undone_result(it, fs, undone, findings, messages, _beside_undone(problems, at_ends + staircase),
+                                  t0_s, scale, spikes, mains_source)
         problems.extend(plateau_end_problems(it.x, fs, it.fit.noise, contact, t0_s))
     problems = _last_problems(it.x, fs, it.fit.noise, contact, problems, t0_s)
     return _result(it.x, it.fit, it.tau, it.source, contact, it.n_iter, messages, problems, t0_s, scale, spikes,
@@ -425,6 +424,17 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
         if undone is None and not getattr(refused, "undoable", True):  # a stated plate the samples cannot undo
             undone = refused  # stands as a finding, though the sensed force shows no ringing (it aliases)
     return undone, findings, stated
+
+
+def _beside_undone(problems, kept):
+    """The findings that stay with a force whose plate was undone: ``kept`` (those of the spikes at the ends and the
+    staircases) and every other finding whose kind the undone force's checks do not judge again (not in
+    :data:`ballimpact.signal.undone.PLATE_KINDS`): the amplifier's decay's, the baseline's, the mains', an unstable
+    window's. A plate's identification is tried only beside plate and decay findings; a stated plate, or the
+    session's, is undone beside any, and a finding of the baseline under the contact (hum not resolved, a window
+    the baseline fit moves) stands for the undone force as for the sensed one."""
+    ids = {id(p) for p in kept}
+    return list(kept) + [p for p in problems if id(p) not in ids and p.kind not in PLATE_KINDS]
 
 
 def _through_plate(it, fs, contact, problems, stated, undone, plate, t0_s, cloth_phase_s, uncertainty, own):
