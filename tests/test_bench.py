@@ -148,6 +148,20 @@ def test_antialias_map_states_a_bandwidth_below_half_the_sample_rate_and_runs_ea
     assert runs[0][3] == ""  # without the key no peak is withheld
 
 
+def test_known_plate_runs_a_trace_of_its_class_twice_and_tabulates_by_outcome():
+    known = bench_module("known_plate")
+    assert known.run_one((704, 0, "one factor")) is None  # 704:0 is a random rig
+    r = known.run_one((704, 294, "random, ideal plate or >= 3 kHz"))  # 6.8 kHz plate at 30 kHz
+    assert r["id"] == "704:294" and not r["aliases"]
+    assert {r["keyless"], r["stated"]} <= set(known.OUTCOMES) and r["stated"] == "ok_right"
+    rows = [{"aliases": False, "keyless": "withheld_right", "stated": "ok_right"},
+            {"aliases": False, "keyless": "withheld_right", "stated": "withheld_right"},
+            {"aliases": True, "keyless": "ok_right", "stated": "ok_right"}]
+    lines = known.table(rows).splitlines()
+    assert lines[2] == "| below fs / 2 | withheld right | 2 | 1 | 0 | 1 | 0 |"
+    assert lines[3] == "| above fs / 2 | ok right | 1 | 1 | 0 | 0 | 0 |" and len(lines) == 4
+
+
 def _trace_rows(spec):
     """Per-trace CSV rows as bench/robustness.py writes them: (index, category, TC, kCAL, peak error in %)."""
     return [{"seed": 3, "index": i, "id": f"3:{i}", "category": cat, "reason": "" if cat.startswith("ok") else
