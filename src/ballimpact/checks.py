@@ -259,22 +259,22 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                       _t("signal.sensed_ends", "SENSED_MIN_END_SIGMA", "noise deviations",
                          "force inside an end's window, at least")),
           test="tests/test_verdicts.py -k faint; tests/test_sensed_ends.py; tests/test_stated_plate.py -k aliases",
-          effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f "
-                 "after the contact, over the force's slope at each end, bounds each end's shift (TC); A over the "
-                 "peak bounds the peak; A / (pi f) over the contact's integral bounds kCAL. A plate identified "
-                 "but not undone carries the line's effects when the line is all the evidence and the plate's "
-                 "resonance lies in the band the line check looks in; where a peak on "
-                 "ringing was all the evidence and no resonance stands out of the noise, TC gets UNSEEN_RING_SIGMA "
-                 "noise deviations over the end's slope (kCAL and the peak not estimated). A known plate (stated, the "
-                 "session's, or one the trace identified itself where aliasing is ruled out) that is not undone "
-                 "has the contact's ends fitted through it in the sensed force, the plate measured in the trace's "
-                 "free ringing after the end where one mode explains it: TC gets how far it moves with the fit's windows and the plate off by "
-                 "SENSED_RING_COVERAGE of its standard uncertainties so measured (else by SENSED_FN_UNCERTAINTY "
-                 "and SENSED_ZETA_UNCERTAINTY, the session's intervals, or for the trace's own identification "
-                 "SENSED_OWN_FN_UNCERTAINTY and SENSED_OWN_ZETA_UNCERTAINTY), and the ringing's other findings then "
-                 "bias kCAL and the peak only. A stated plate above what the samples resolve (its ringing "
-                 "aliases): TC gets half its period plus what the jump's ringing leaves at the end over the slope "
-                 "there (ballimpact.signal.effects.aliased_plate_effects); kCAL and the peak not estimated."),
+          effect=f"a spectral line of amplitude A at f ({_RING}): the larger of A and the sinusoid fitted at f after "
+                 "the contact, over the force's slope at each end, bounds each end's shift (TC); A over the peak "
+                 "bounds the peak; A / (pi f) over the contact's integral bounds kCAL. A plate identified but not "
+                 "undone carries the line's effects when the line is all the evidence and the plate's resonance lies "
+                 "in the band the line check looks in; where a peak on ringing was all the evidence and no resonance "
+                 "stands out of the noise, TC gets UNSEEN_RING_SIGMA noise deviations over the end's slope (kCAL and "
+                 "the peak not estimated). A known plate (stated, the session's, or one the trace identified itself "
+                 "where aliasing is ruled out) that is not undone has the contact's ends fitted through it in the "
+                 "sensed force, the plate measured in the trace's free ringing after the end where one mode explains "
+                 "it: TC gets how far it moves with the fit's windows and the plate off by SENSED_RING_COVERAGE of "
+                 "its standard uncertainties so measured (else by SENSED_FN_UNCERTAINTY and SENSED_ZETA_UNCERTAINTY, "
+                 "the session's intervals, or for the trace's own identification SENSED_OWN_FN_UNCERTAINTY and "
+                 "SENSED_OWN_ZETA_UNCERTAINTY), and the ringing's other findings then bias kCAL and the peak only. A "
+                 "stated plate above what the samples resolve (its ringing aliases): TC gets half its period plus "
+                 "what the jump's ringing leaves at the end over the slope there "
+                 "(ballimpact.signal.effects.aliased_plate_effects); kCAL and the peak not estimated."),
     Check(ProblemKind.NEGATIVE_FORCE, "force below zero", "the corrected signal after the contact", _ALL_SIGNAL,
           thresholds=(_t("signal.ringing", "NEGATIVE_FRACTION", "of the peak", "depth"),
                       _t("signal.ringing", "NEGATIVE_SIGMA", "standard errors", "significance")),
