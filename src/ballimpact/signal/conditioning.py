@@ -429,12 +429,15 @@ def _undone_plate(it, fs, contact, problems, t0_s, undo_plate, plate, cloth_phas
 def _beside_undone(problems, kept):
     """The findings that stay with a force whose plate was undone: ``kept`` (those of the spikes at the ends and the
     staircases) and every other finding whose kind the undone force's checks do not judge again (not in
-    :data:`ballimpact.signal.undone.PLATE_KINDS`): the amplifier's decay's, the baseline's, the mains', an unstable
-    window's. A plate's identification is tried only beside plate and decay findings; a stated plate, or the
-    session's, is undone beside any, and a finding of the baseline under the contact (hum not resolved, a window
-    the baseline fit moves) stands for the undone force as for the sensed one."""
+    :data:`ballimpact.signal.undone.PLATE_KINDS`): the amplifier's decay's, the baseline's, the mains'. A plate's
+    identification is tried only beside plate and decay findings; a stated plate, or the session's, is undone
+    beside any, and a finding of the baseline under the contact (hum not resolved, a step, a level off zero) stands
+    for the undone force as for the sensed one. An unstable window does not: the sensed force's ends move from fit
+    to fit with the plate's ringing (a 24 kHz plate at 125 kHz, its ends 76 samples apart after 8 fits, TC right on
+    the undone force), and the undone force's contact is found again."""
     ids = {id(p) for p in kept}
-    return list(kept) + [p for p in problems if id(p) not in ids and p.kind not in PLATE_KINDS]
+    return list(kept) + [p for p in problems if id(p) not in ids and p.kind not in PLATE_KINDS
+                         and p.kind is not ProblemKind.CONTACT_UNSTABLE]
 
 
 def _through_plate(it, fs, contact, problems, stated, undone, plate, t0_s, cloth_phase_s, uncertainty, own):
