@@ -488,6 +488,33 @@ def test_a_refused_undoing_with_only_a_peak_on_ringing_bounds_tc_by_a_ringing_hi
     assert not finding_effects(refused, [peak, below, refused], x, fs, s_u, e_u, 0.001).effects
 
 
+def test_a_refused_undoing_with_a_line_and_a_peak_on_ringing_bounds_tc_by_the_larger_of_the_two():
+    """No resonance out of the noise, a spectral line and a peak on ringing the evidence: TC gets the larger of the
+    line's bound (a line of A moves each end by A over the triangle's slope there, 1 over 1 ms and 1 over 3 ms,
+    less the 2 A it adds to the chord over END_SLOPE_S) and the ringing hidden in the noise (3 x 0.001 x 3 ms over
+    4 ms); kCAL and the peak stay unknown, as with the peak on ringing alone. A resonance identified and refused,
+    its swing on the peak, leaves TC unknown (what it rings at the end is not bounded by the line)."""
+    from ballimpact.signal.effects import END_SLOPE_S, finding_effects
+
+    fs = 100e3
+    t, x, s_u, e_u = _triangle(fs)
+    refused = Problem(ProblemKind.PLATE_RINGING, "plate resonance not undone: no decaying oscillation identified",
+                      data={"undo_refused": 1.0})
+    peak = Problem(ProblemKind.PEAK_ON_RINGING, "peak force on the plate's ringing")
+    unseen = 3 * 0.001 * 3e-3 / 4e-3
+    a = 0.01
+    line_bound = (a / (1 / 1e-3 - 2 * a / END_SLOPE_S) + a / (1 / 3e-3 - 2 * a / END_SLOPE_S)) / 4e-3
+    assert line_bound > 5 * unseen
+    for fraction, expected, rtol in ((a, line_bound, 0.02), (2e-4, unseen, 0.02)):
+        line = Problem(ProblemKind.PLATE_RINGING, "a line", data={"line_hz": 9300.0, "amplitude_fraction": fraction})
+        effects = finding_effects(refused, [line, peak, refused], x, fs, s_u, e_u, 0.001).effects
+        assert_allclose(effects["contact_time"], expected, rtol=rtol)
+        assert math.isnan(effects["kcal"]) and math.isnan(effects["peak"])
+    identified = Problem(ProblemKind.PLATE_RINGING, "not undone",
+                         data={"undo_refused": 1.0, "refused_hz": 9300.0, "refused_zeta": 0.05})
+    assert not finding_effects(identified, [line, peak, identified], x, fs, s_u, e_u, 0.001).effects
+
+
 def test_a_quantity_withheld_by_its_budget_names_the_check_of_its_largest_effect():
     small = Problem(ProblemKind.PLATE_RINGING, "a faint line", effects={"contact_time": 0.001, "kcal": 0.001,
                                                                        "peak": 0.001})

@@ -455,15 +455,17 @@ def _contact(res: ImpactResult, t, raw, cond, meta):
     # no alias, and no unseen rounding of the front, behind a peak problem
     peak_alone = peak_can_be_withheld(meta.bandwidth_hz, res.sample_rate_hz, contact.contact_time_s,
                                       None if cond.plate is None else cond.plate.frequency_hz)
+    rounded = False  # the band limit's one rounding of the front is charged once, by the first peak problem
     for problem in cond.problems:
         # with daq.bandwidth_hz stated, a peak problem where that band limit may round the front unseen (or alias)
         # may hide a TC too long; without the key, an alias withholds kCAL and the peak (_aliasing_problem) and a
         # rounded front is judged by the ends' own checks, as at 60 kHz or faster; a problem of an undone force's
         # peak is one of its undoing or low-pass, no sign of that rounding (nor is a peak on the ringing of a plate
         # through which the ends were fitted: signal.sensed_ends)
-        if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone \
+        if problem.kind in PEAK_KINDS and meta.bandwidth_hz is not None and not peak_alone and not rounded \
                 and not problem.data.get("undone_peak") and not problem.data.get("ends_fitted"):
             problem = front_rounding(problem, cond, meta.bandwidth_hz, res.sample_rate_hz, float(t[0]))
+            rounded = True
         res.find(_with_effects(problem, cond, res.sample_rate_hz, float(t[0])))
     sensed = "ends_fitted_sensed" in contact.flags  # fitted through a known plate, the cloth's phase included
     completed = None if sensed else _cloth_completion(res, cond, float(t[0]))

@@ -321,8 +321,9 @@ def finding_effects(problem, siblings, voltage_V, fs: float, start_u: float, end
     force below zero, no peak on ringing) and the resonance identified, if any, lies in the band the line check
     looks in (above RING_LINE_MIN_HZ): what was not undone is then the line itself (a 0.59 kHz plate identified and
     refused beside a faint 3 kHz line left its peak 42 % high, ok: zoo 809:3210). Where a peak on ringing
-    was all the evidence and no resonance came out of the noise, TC gets the bound of a ringing hidden in the noise
-    at its end (:func:`_unseen_ringing_effects`). A step in the baseline (a
+    was all the evidence, or it and lines, and no resonance came out of the noise, each quantity gets the larger of
+    the lines' effects and the bound of a ringing hidden in the noise at its end (:func:`_unseen_ringing_effects`:
+    kCAL and the peak not known). A step in the baseline (a
     BASELINE_STEP finding with its ``level_V``) gets :func:`level_effects` of that level where the amplifier's decay
     was given (``decay_given``): an estimated decay takes up a step next to the contact, and the step found is then
     a smaller one elsewhere (``python bench/step_map.py --n 400 --seed 1`` trace 1:114: a step of 3.5 % of the peak
@@ -390,18 +391,20 @@ def _check_effects(problem, siblings, voltage_V, fs: float, start_u: float, end_
         lines = [p for p in ringing if "line_hz" in p.data]
         if float(problem.data.get("refused_hz", math.inf)) < RING_LINE_MIN_HZ:
             return problem  # a resonance below the band the line check looks in: no line can show what it does
-        if lines and len(lines) == len(ringing):
-            tc_s = (end_u - start_u) / fs
-            each = []
-            for p in lines:
-                e = dict(line_effects(p))
-                e["peak"] = e.get("peak", math.nan) * _excited_peak_factor(problem.data, float(p.data["line_hz"]), tc_s)
-                each.append(e)
+        tc_s = (end_u - start_u) / fs
+        each = []
+        for p in lines:
+            e = dict(line_effects(p))
+            e["peak"] = e.get("peak", math.nan) * _excited_peak_factor(problem.data, float(p.data["line_hz"]), tc_s)
+            each.append(e)
+        peaks = [p for p in ringing if p.kind is ProblemKind.PEAK_ON_RINGING]
+        if peaks and "refused_hz" in problem.data:
+            return problem  # a resonance the force excites, its swing on the peak: what it leaves at the end unknown
+        if peaks:  # no resonance out of the noise: a ringing at the end hidden in it, beside any line's
+            each.append(_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
+        if each and len(lines) + len(peaks) == len(ringing):
             return replace(problem, effects={q: float(np.max([e.get(q, math.nan) for e in each]))
                                              for q in ("contact_time", "kcal", "peak")})
-        if ringing and "refused_hz" not in problem.data \
-                and all(p.kind is ProblemKind.PEAK_ON_RINGING for p in ringing):
-            return replace(problem, effects=_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
     return problem
 
 
