@@ -127,8 +127,10 @@ class Rig:
 
     @property
     def aliasing_ruled_out(self) -> bool:
-        """Sampled at 60 kHz or more, or ``daq.bandwidth_hz`` stated."""
-        return self.sample_rate_hz >= 60e3 or "bandwidth" in self.stated
+        """Sampled at 60 kHz or more, or ``daq.bandwidth_hz`` stated at half the sample rate or below (a bandwidth
+        stated above it says the plate aliases: it does not rule aliasing out)."""
+        return self.sample_rate_hz >= 60e3 or ("bandwidth" in self.stated and self.bandwidth_hz is not None
+                                               and self.bandwidth_hz <= 0.5 * self.sample_rate_hz)
 
     @property
     def clear_class(self) -> bool:
@@ -312,6 +314,15 @@ def _volts(rig: Rig, amp_N: np.ndarray, t: np.ndarray, kcal: float, extra_offset
     return -rig.rail_V + codes * lsb
 
 
+def _rail_in_contact(rig: Rig, volts: np.ndarray, t0: float, tc: float) -> bool:
+    """Whether a sample inside the contact [0, tc] [s] sits on the ADC's first or last code (issue 45: clipping
+    inside the contact is a fault, whatever drove the signal there: a plate's overshoot on the rail, an offset)."""
+    lsb = 2 * rig.rail_V / 2**ADC_BITS
+    i0, i1 = max(int(math.ceil(-t0 * rig.sample_rate_hz)), 0), int(math.floor((tc - t0) * rig.sample_rate_hz))
+    inside = volts[i0:min(i1 + 1, volts.size)]
+    return bool(np.any(inside <= -rig.rail_V + 0.5 * lsb) or np.any(inside >= rig.rail_V - 1.5 * lsb))
+
+
 def render_impact(rig: Rig, ball: BallTruth, vin: float, fault: str, impact_id: str, rng):
     """The recorded trace [V] of one impact and its truth; ``fault`` one of FAULT_KINDS or ""."""
     fs = rig.sample_rate_hz
@@ -339,6 +350,8 @@ def render_impact(rig: Rig, ball: BallTruth, vin: float, fault: str, impact_id: 
         extra_offset = rig.polarity * (float(rng.uniform(1.05, 1.6)) * rig.rail_V - peak / kcal) - rig.offset_V
     amp = _amplifier_samples(rig, t0, n, knots, end_s)
     volts = _volts(rig, amp, t0 + np.arange(n) / fs, kcal, extra_offset, rng)
+    if not fault and _rail_in_contact(rig, volts, t0, tc):  # the rig clipped it: a fault, drawn or not
+        fault = "clipped"
     spike = float(sim.time_to_peak_s) < BUCKLING_TIME_S + 0.5 * TIME_STEP_S
     truth = ImpactTruth(impact_id=impact_id, ball=ball.key, fault=fault, vin_m_s=vin, vout_m_s=vout,
                         contact_time_s=tc, kcal_N_per_V=kcal, peak_N=peak, peak_is_spike=spike,

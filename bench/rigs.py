@@ -26,7 +26,9 @@ Scored per rig, from ``impacts.csv`` and ``parameters.csv``:
   model at the true values, with the cloth force the traces carry) at 15-30 m/s: largest relative TC error [%]
   and largest COR error.
 The summary splits the rigs by issue 46's classes: "clear" (aliasing ruled out: fs >= 60 kHz or
-``daq.bandwidth_hz`` stated; and the plate ideal or at 2 kHz or above) and "other", against the issue's targets.
+``daq.bandwidth_hz`` stated at fs / 2 or below, a bandwidth stated above it saying the plate aliases; and the plate
+ideal or at 2 kHz or above) and "other", against the issue's targets. An impact drawn clean whose samples reach
+the ADC's rail inside the contact (a plate's overshoot near the rail) is a clipped one, a fault.
 """
 
 from __future__ import annotations

@@ -285,6 +285,27 @@ def test_rig_zoo_samples_the_force_over_kcal_on_an_ideal_quiet_rig():
     assert truth.contact_time_s == pytest.approx(knots_t[-1]) and truth.fault == ""
 
 
+def test_rig_zoo_calls_a_clean_impact_on_the_rail_inside_its_contact_clipped():
+    """An impact drawn clean whose peak the ADC's rail cuts (here a rail of 0.4 of the peak's volts) is a fault
+    (issue 45: clipping inside the contact), and one below the rail stays clean; the class of aliasing ruled out
+    takes a stated bandwidth at fs / 2 or below only."""
+    import dataclasses
+
+    _, rig_zoo = _rigs()
+    rig = dataclasses.replace(rig_zoo.draw_rig(1000, 1), plate_hz=None, antialias_hz=None, offset_V=0.0,
+                              drift_V_s=0.0, spikes=False, kcal_spread=0.0)
+    ball = rig.balls[0]
+    _, truth = rig_zoo.render_impact(rig, ball, 21.7, "", "x-1", np.random.default_rng(5))
+    assert truth.fault == ""
+    rail = 0.4 * truth.peak_N / truth.kcal_N_per_V
+    _, cut = rig_zoo.render_impact(dataclasses.replace(rig, rail_V=rail), ball, 21.7, "", "x-1",
+                                   np.random.default_rng(5))
+    assert cut.fault == "clipped"
+    slow = dataclasses.replace(rig, sample_rate_hz=40e3, antialias_hz=None, plate_hz=25e3, stated=("bandwidth",))
+    assert not slow.aliasing_ruled_out and not slow.clear_class
+    assert dataclasses.replace(slow, plate_hz=19e3).aliasing_ruled_out
+
+
 @pytest.mark.filterwarnings("ignore:one_blas_thread:UserWarning")
 def test_rigs_score_reads_the_v12_verdicts_and_falls_back_to_status():
     import pandas as pd
