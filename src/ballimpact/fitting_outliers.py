@@ -221,8 +221,9 @@ def _esd_steps(vin, tc, e, mass, kb0, theta, mad_tc, mad_cor, cap, min_sd):
 
 def _most_extreme(vin, tc, e, mass, kb0, keep, theta, s_tc, s_cor, min_sd):
     """One step of the fit-outlier search: each kept impact against the fit of the other
-    kept impacts (leave-one-out refits, batched; their scatter at least ``min_sd``). Returns (index, p, note, theta of the
-    kept impacts' fit) of the impact with the smallest p, or None."""
+    kept impacts (leave-one-out refits, batched; their scatter at least ``min_sd``).
+    Returns (index, p, note, theta of the kept impacts' fit) of the impact with the
+    smallest p, or None."""
     idx = np.flatnonzero(keep)
     m = idx.size
     if m < 6:
