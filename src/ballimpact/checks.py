@@ -288,9 +288,10 @@ CHECKS: dict[str, Check] = {c.code: c for c in (
                       _t("signal.cloth", "STEEP_MIN_SIGMA", "noise deviations", "a jump's least rise")),
           test="tests/test_cloth.py",
           effect="the start is the jump less the cloth's 2 mm at the inbound speed (ballimpact.signal.cloth."
-                 "first_contact; section 3.2.4), uncertain by the jump's location (TC's random uncertainty): none "
-                 "on TC beyond it; what the signal holds between that start and the start read, over the "
-                 "contact's integral, bounds kCAL"),
+                 "first_contact; section 3.2.4), uncertain by the jump's location (TC's random uncertainty); where "
+                 "the jump read at the start lies before the steepest rise by more than twice that, the two "
+                 "readings' distance bounds the start's shift (TC); what the signal holds between that start and "
+                 "the start read, over the contact's integral, bounds kCAL"),
     Check(ProblemKind.IMPULSE_UNRESOLVED, "impulse unresolved",
           "single samples that may be electrical spikes at the contact's ends or top", (_K, _P),
           thresholds=(_t("signal.spikes", "SPIKE_END_IMPULSE", "of the impulse", "a kept sample's share"),),

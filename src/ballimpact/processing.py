@@ -533,12 +533,17 @@ def _cloth_completion(res: ImpactResult, cond, t0_s: float):
     a, b = int(math.ceil(first)), int(math.floor((c.end_s - t0_s) * fs))
     whole, before = float(np.sum(x[a:b + 1])), float(np.sum(x[a:int(math.ceil(start_u))]))
     phase = (jump_u - first) / fs
+    # the jump located twice, read at the start and as the steep edge: where the two disagree beyond the edge's own
+    # uncertainty, the jump is known only to within them, and TC with it
+    apart = max(edge.at_u - jump_u - 2.0 * edge.se_u, 0.0)
     res.find(Problem(ProblemKind.CLOTH_PHASE_COMPLETED,
                      f"contact start completed from the force's jump by the cloth's phase: {1e3 * phase:.2g} ms (2 mm "
                      f"at {res.vin_m_s:.1f} m/s) before it, {1e3 * (start_u - first) / fs:.2g} ms before the start "
-                     "read on its foot",
-                     data={"cloth_phase_s": phase, "shift_s": (start_u - first) / fs},
-                     effects={"contact_time": 0.0, "kcal": abs(before) / whole if whole > 0 else math.nan}))
+                     "read on its foot" + (f"; the jump read at the start {1e3 * (edge.at_u - jump_u) / fs:.2g} ms "
+                                           "before the steepest rise" if apart > 0 else ""),
+                     data={"cloth_phase_s": phase, "shift_s": (start_u - first) / fs, "jump_apart_s": apart / fs},
+                     effects={"contact_time": apart / (c.contact_time_s * fs),
+                              "kcal": abs(before) / whole if whole > 0 else math.nan}))
     flags = tuple(f for f in c.flags if f not in _JUMP_FLAGS) + ("cloth_completed",)
     return replace(c, start_s=t0_s + first / fs, start_index=int(math.ceil(first)), start_se_s=edge.se_u / fs,
                    start_spread_s=math.nan, flags=flags)
