@@ -391,15 +391,15 @@ def _check_effects(problem, siblings, voltage_V, fs: float, start_u: float, end_
         lines = [p for p in ringing if "line_hz" in p.data]
         if float(problem.data.get("refused_hz", math.inf)) < RING_LINE_MIN_HZ:
             return problem  # a resonance below the band the line check looks in: no line can show what it does
+        peaks = [p for p in ringing if p.kind is ProblemKind.PEAK_ON_RINGING]
+        if peaks and "refused_hz" in problem.data:
+            return problem  # a resonance the force excites, its swing on the peak: what it leaves at the end unknown
         tc_s = (end_u - start_u) / fs
         each = []
         for p in lines:
             e = dict(line_effects(p))
             e["peak"] = e.get("peak", math.nan) * _excited_peak_factor(problem.data, float(p.data["line_hz"]), tc_s)
             each.append(e)
-        peaks = [p for p in ringing if p.kind is ProblemKind.PEAK_ON_RINGING]
-        if peaks and "refused_hz" in problem.data:
-            return problem  # a resonance the force excites, its swing on the peak: what it leaves at the end unknown
         if peaks:  # no resonance out of the noise: a ringing at the end hidden in it, beside any line's
             each.append(_unseen_ringing_effects(voltage_V, fs, start_u, end_u, noise_V))
         if each and len(lines) + len(peaks) == len(ringing):
