@@ -379,8 +379,7 @@ ZOO_UNDONE_BESIDE_DECAY = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", ZOO_UNDONE_BESIDE_DECAY,
-                         ids=[c[0] for c in ZOO_UNDONE_BESIDE_DECAY])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_UNDONE_BESIDE_DECAY))
 def test_zoo_plate_undone_beside_the_amplifier_s_decay(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     result, judgement = zoo.run_trace(trace, tmp_path)
@@ -401,8 +400,7 @@ ZOO_OWN_PLATE_UNMEASURED = [
 ]
 
 
-@pytest.mark.parametrize("name, seed, index, what", ZOO_OWN_PLATE_UNMEASURED,
-                         ids=[c[0] for c in ZOO_OWN_PLATE_UNMEASURED])
+@pytest.mark.parametrize("name, seed, index, what", named(ZOO_OWN_PLATE_UNMEASURED))
 def test_zoo_ends_fitted_through_the_trace_s_own_plate(name, seed, index, what, tmp_path):
     trace = zoo.trace_for(seed, index)
     result, judgement = zoo.run_trace(trace, tmp_path)
